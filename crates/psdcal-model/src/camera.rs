@@ -1,0 +1,96 @@
+//! The pinhole (MODEL.md §3, the paper's (P4)–(P6)) with one focal length and
+//! optional skew.
+//!
+//! A sensor-frame point `P_c = (Xc, Yc, Zc)`, `Zc > 0`, has the ideal image
+//! point
+//!
+//! ```text
+//! x = f · Xc/Zc + γ · Yc/Zc + cx
+//! y = f · Yc/Zc + cy
+//! ```
+//!
+//! and, conversely, an ideal point `(x, y)` has the *normalised ray*
+//! `(a, b, 1)` with `b = (y − cy)/f`, `a = (x − cx − γ b)/f`, i.e. the
+//! direction `(x − cx − γ(y − cy)/f, y − cy, f)` of MODEL.md §4.6.
+
+use nalgebra::{Matrix2, Matrix2x3, SMatrix, Unit, Vector2, Vector3};
+
+use crate::params::{Param, SensorModel, N_PARAMS};
+use crate::ModelError;
+
+/// Smallest depth accepted as "in front of the sensor", mm.
+pub const MIN_DEPTH_MM: f64 = 1e-9;
+
+impl SensorModel {
+    /// Ideal image point of a sensor-frame point.
+    pub fn pinhole_project(&self, p_c: &Vector3<f64>) -> Result<Vector2<f64>, ModelError> {
+        if !(p_c.z > MIN_DEPTH_MM) {
+            return Err(ModelError::BehindSensor { zc: p_c.z });
+        }
+        let k = &self.intrinsics;
+        let (a, b) = (p_c.x / p_c.z, p_c.y / p_c.z);
+        Ok(Vector2::new(k.f * a + k.skew * b + k.cx, k.f * b + k.cy))
+    }
+
+    /// Ideal image point, its Jacobian with respect to the sensor-frame point
+    /// (2×3) and to the model parameters (2×11).
+    pub fn pinhole_project_with_jacobians(
+        &self,
+        p_c: &Vector3<f64>,
+    ) -> Result<(Vector2<f64>, Matrix2x3<f64>, SMatrix<f64, 2, N_PARAMS>), ModelError> {
+        let ideal = self.pinhole_project(p_c)?;
+        let k = &self.intrinsics;
+        let inv_z = 1.0 / p_c.z;
+        let (a, b) = (p_c.x * inv_z, p_c.y * inv_z);
+        // ∂(x, y)/∂(a, b) · ∂(a, b)/∂P_c
+        let dab = Matrix2x3::new(inv_z, 0.0, -a * inv_z, 0.0, inv_z, -b * inv_z);
+        let dxy_dab = Matrix2::new(k.f, k.skew, 0.0, k.f);
+        let mut wrt_model = SMatrix::<f64, 2, N_PARAMS>::zeros();
+        wrt_model.set_column(Param::F.index(), &Vector2::new(a, b));
+        wrt_model.set_column(Param::Cx.index(), &Vector2::new(1.0, 0.0));
+        wrt_model.set_column(Param::Cy.index(), &Vector2::new(0.0, 1.0));
+        wrt_model.set_column(Param::Skew.index(), &Vector2::new(b, 0.0));
+        Ok((ideal, dxy_dab * dab, wrt_model))
+    }
+
+    /// Normalised ray coordinates `(a, b)` of an ideal point (ray `(a, b, 1)`).
+    pub fn normalize(&self, ideal: &Vector2<f64>) -> Vector2<f64> {
+        let k = &self.intrinsics;
+        let b = (ideal.y - k.cy) / k.f;
+        Vector2::new((ideal.x - k.cx - k.skew * b) / k.f, b)
+    }
+
+    /// Normalised ray coordinates with their Jacobians with respect to the
+    /// ideal point (2×2) and, holding the ideal point fixed, to the model
+    /// parameters (2×11).
+    pub fn normalize_with_jacobians(
+        &self,
+        ideal: &Vector2<f64>,
+    ) -> (Vector2<f64>, Matrix2<f64>, SMatrix<f64, 2, N_PARAMS>) {
+        let k = &self.intrinsics;
+        let inv_f = 1.0 / k.f;
+        let ab = self.normalize(ideal);
+        let (a, b) = (ab.x, ab.y);
+        let wrt_point = Matrix2::new(inv_f, -k.skew * inv_f * inv_f, 0.0, inv_f);
+        let mut wrt_model = SMatrix::<f64, 2, N_PARAMS>::zeros();
+        // b = (y − cy)/f ; a = (x − cx − γ b)/f
+        let db_df = -b * inv_f;
+        wrt_model.set_column(
+            Param::F.index(),
+            &Vector2::new(-a * inv_f - k.skew * inv_f * db_df, db_df),
+        );
+        wrt_model.set_column(Param::Cx.index(), &Vector2::new(-inv_f, 0.0));
+        wrt_model.set_column(
+            Param::Cy.index(),
+            &Vector2::new(k.skew * inv_f * inv_f, -inv_f),
+        );
+        wrt_model.set_column(Param::Skew.index(), &Vector2::new(-b * inv_f, 0.0));
+        (ab, wrt_point, wrt_model)
+    }
+
+    /// Unit direction, in the sensor frame, of the ray through an ideal point.
+    pub fn ray_direction(&self, ideal: &Vector2<f64>) -> Unit<Vector3<f64>> {
+        let ab = self.normalize(ideal);
+        Unit::new_normalize(Vector3::new(ab.x, ab.y, 1.0))
+    }
+}

@@ -1,0 +1,31 @@
+//! # psdcal-model
+//!
+//! The mathematical model of a pin-cushion position-sensitive device (PSD)
+//! behind a lens, as specified in psdcal's `MODEL.md` §1–3 (after
+//! Rodríguez-Navarro et al., *Sensors* 2016, 16(9), 1484):
+//!
+//! - [`sensor`]: electrode amplitudes ↔ impact point, channel gains (P1, P2, P43);
+//! - [`distortion`]: measured ↔ ideal point, PSD and lens distortion (P7–P16);
+//! - [`camera`]: the pinhole with one focal length and optional skew (P4);
+//! - [`pose`]: Rodrigues poses and their derivatives (P3);
+//! - [`projection`]: template plane ↔ measured point, the maps calibration
+//!   minimises over (P5, P29), with analytic Jacobians.
+//!
+//! Millimetres everywhere, radians inside. See `CONVENTIONS.md` at the root of
+//! the repository for symbols and frames.
+#![warn(missing_docs)]
+
+pub mod camera;
+pub mod distortion;
+mod error;
+pub mod params;
+pub mod pose;
+pub mod projection;
+pub mod sensor;
+
+pub use distortion::CorrectionJacobian;
+pub use error::ModelError;
+pub use params::{Distortion, Intrinsics, Param, SensorModel, UnknownParam, N_PARAMS};
+pub use pose::{Pose, N_POSE};
+pub use projection::{BackProjectionJacobians, ProjectionJacobians};
+pub use sensor::{Amplitudes, ChannelGains, PsdGeometry};
