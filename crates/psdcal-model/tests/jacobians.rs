@@ -1,0 +1,312 @@
+//! The shared Jacobian suite: every analytic Jacobian of the model against
+//! central finite differences (relative 1e-6), over every example model,
+//! pose and point.
+
+mod common;
+
+use common::{
+    check_jacobian, example_models, example_poses, example_template_points, MODEL_SCALES, POSE_SCALES,
+};
+use nalgebra::{DMatrix, DVector, Vector2, Vector3};
+use psdcal_model::sensor::{impact_point_with_gains, electrode_currents, impact_point_gain_jacobian};
+use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel, N_PARAMS};
+
+const REL: f64 = 1e-6;
+
+fn dyn_mat<const R: usize, const C: usize>(m: &nalgebra::SMatrix<f64, R, C>) -> DMatrix<f64> {
+    DMatrix::from_column_slice(R, C, m.as_slice())
+}
+
+fn model_vec(m: &SensorModel) -> DVector<f64> {
+    DVector::from_row_slice(&m.to_array())
+}
+
+fn model_of(v: &DVector<f64>) -> SensorModel {
+    let mut a = [0.0; N_PARAMS];
+    a.copy_from_slice(v.as_slice());
+    SensorModel::from_array(&a)
+}
+
+fn pose_of(v: &DVector<f64>) -> Pose {
+    let mut a = [0.0; 6];
+    a.copy_from_slice(v.as_slice());
+    Pose::from_array(&a)
+}
+
+fn v2(v: Vector2<f64>) -> DVector<f64> {
+    DVector::from_row_slice(v.as_slice())
+}
+
+fn measured_points() -> Vec<Vector2<f64>> {
+    vec![
+        Vector2::new(0.0, 0.0),
+        Vector2::new(0.2, -0.1),
+        Vector2::new(-4.0, -3.5),
+        Vector2::new(3.9, 4.2),
+        Vector2::new(4.4, -4.4),
+        Vector2::new(-2.0, 3.0),
+    ]
+}
+
+#[test]
+fn undistort_jacobians() {
+    for (name, model) in example_models() {
+        for m in measured_points() {
+            let j = model.undistort_with_jacobians(&m);
+            assert!((j.ideal - model.undistort(&m)).norm() == 0.0);
+            check_jacobian(
+                &format!("undistort wrt point [{name} {m:?}]"),
+                &v2(m),
+                &[1.0; 2],
+                &|x| v2(model.undistort(&Vector2::new(x[0], x[1]))),
+                &dyn_mat(&j.wrt_point),
+                REL,
+            );
+            check_jacobian(
+                &format!("undistort wrt model [{name} {m:?}]"),
+                &model_vec(&model),
+                &MODEL_SCALES,
+                &|x| v2(model_of(x).undistort(&m)),
+                &dyn_mat(&j.wrt_model),
+                REL,
+            );
+        }
+    }
+}
+
+#[test]
+fn distort_jacobian_is_inverse_of_undistort() {
+    for (name, model) in example_models() {
+        for m in measured_points() {
+            let ideal = model.undistort(&m);
+            let inv = model.undistort_point_jacobian(&m).try_inverse().unwrap();
+            check_jacobian(
+                &format!("distort wrt point [{name} {m:?}]"),
+                &v2(ideal),
+                &[1.0; 2],
+                &|x| v2(model.distort(&Vector2::new(x[0], x[1])).unwrap()),
+                &dyn_mat(&inv),
+                REL,
+            );
+        }
+    }
+}
+
+#[test]
+fn pinhole_and_normalize_jacobians() {
+    let points = [
+        Vector3::new(0.0, 0.0, 900.0),
+        Vector3::new(-150.0, 80.0, 700.0),
+        Vector3::new(220.0, -310.0, 1400.0),
+    ];
+    for (name, model) in example_models() {
+        for p in points {
+            let (ideal, wrt_p, wrt_model) = model.pinhole_project_with_jacobians(&p).unwrap();
+            assert_eq!(ideal, model.pinhole_project(&p).unwrap());
+            check_jacobian(
+                &format!("pinhole wrt P_c [{name}]"),
+                &DVector::from_row_slice(p.as_slice()),
+                &[1000.0; 3],
+                &|x| v2(model.pinhole_project(&Vector3::new(x[0], x[1], x[2])).unwrap()),
+                &dyn_mat(&wrt_p),
+                REL,
+            );
+            check_jacobian(
+                &format!("pinhole wrt model [{name}]"),
+                &model_vec(&model),
+                &MODEL_SCALES,
+                &|x| v2(model_of(x).pinhole_project(&p).unwrap()),
+                &dyn_mat(&wrt_model),
+                REL,
+            );
+            let (ab, wrt_ideal, wrt_model) = model.normalize_with_jacobians(&ideal);
+            // The normalised ray of a projected point is the point's direction.
+            assert!((ab - Vector2::new(p.x / p.z, p.y / p.z)).norm() < 1e-14);
+            check_jacobian(
+                &format!("normalize wrt ideal [{name}]"),
+                &v2(ideal),
+                &[1.0; 2],
+                &|x| v2(model.normalize(&Vector2::new(x[0], x[1]))),
+                &dyn_mat(&wrt_ideal),
+                REL,
+            );
+            check_jacobian(
+                &format!("normalize wrt model [{name}]"),
+                &model_vec(&model),
+                &MODEL_SCALES,
+                &|x| v2(model_of(x).normalize(&ideal)),
+                &dyn_mat(&wrt_model),
+                REL,
+            );
+        }
+    }
+}
+
+#[test]
+fn rotation_derivatives_at_every_angle() {
+    let axis = Vector3::new(0.3, -0.5, 0.8).normalize();
+    let angles = [
+        0.0, 1e-12, 1e-9, 1e-5, 0.05, 0.0999999, 0.1, 0.1000001, 0.7, 1.5, 3.0, 3.1415,
+    ];
+    for theta in angles {
+        let rvec = axis * theta;
+        let pose = Pose::new(rvec, Vector3::zeros());
+        let (r, dr) = pose.rotation_with_derivatives();
+        assert!((r * r.transpose() - nalgebra::Matrix3::identity()).norm() < 1e-14);
+        assert!((r.determinant() - 1.0).abs() < 1e-14);
+        let mut analytic = DMatrix::zeros(9, 3);
+        for i in 0..3 {
+            analytic.set_column(i, &DVector::from_column_slice(dr[i].as_slice()));
+        }
+        check_jacobian(
+            &format!("rotation wrt rvec at θ = {theta}"),
+            &DVector::from_row_slice(rvec.as_slice()),
+            &[1.0; 3],
+            &|x| {
+                let r = Pose::new(Vector3::new(x[0], x[1], x[2]), Vector3::zeros()).rotation();
+                DVector::from_column_slice(r.as_slice())
+            },
+            &analytic,
+            REL,
+        );
+    }
+}
+
+#[test]
+fn transform_jacobians() {
+    let p = Vector3::new(-140.0, 90.0, 12.0);
+    for pose in example_poses() {
+        let (pc, wrt_pose, wrt_p) = pose.transform_with_jacobians(&p);
+        assert!((pc - pose.transform(&p)).norm() < 1e-12);
+        check_jacobian(
+            "transform wrt pose",
+            &DVector::from_row_slice(&pose.to_array()),
+            &POSE_SCALES,
+            &|x| DVector::from_row_slice(pose_of(x).transform(&p).as_slice()),
+            &dyn_mat(&wrt_pose),
+            REL,
+        );
+        check_jacobian(
+            "transform wrt point",
+            &DVector::from_row_slice(p.as_slice()),
+            &[1000.0; 3],
+            &|x| DVector::from_row_slice(pose.transform(&Vector3::new(x[0], x[1], x[2])).as_slice()),
+            &dyn_mat(&wrt_p),
+            REL,
+        );
+    }
+}
+
+#[test]
+fn projection_jacobians() {
+    for (name, model) in example_models() {
+        for (k, pose) in example_poses().into_iter().enumerate() {
+            for xy in example_template_points() {
+                let label = format!("[{name} pose {k} {xy:?}]");
+                for measured_output in [false, true] {
+                    let project = |m: &SensorModel, p: &Pose, t: &Vector2<f64>| {
+                        if measured_output {
+                            m.project(p, t).unwrap()
+                        } else {
+                            m.project_ideal(p, t).unwrap()
+                        }
+                    };
+                    let (pt, j) = if measured_output {
+                        model.project_with_jacobians(&pose, &xy).unwrap()
+                    } else {
+                        model.project_ideal_with_jacobians(&pose, &xy).unwrap()
+                    };
+                    assert!((pt - project(&model, &pose, &xy)).norm() < 1e-12);
+                    let what = if measured_output { "project" } else { "project_ideal" };
+                    check_jacobian(
+                        &format!("{what} wrt model {label}"),
+                        &model_vec(&model),
+                        &MODEL_SCALES,
+                        &|x| v2(project(&model_of(x), &pose, &xy)),
+                        &dyn_mat(&j.wrt_model),
+                        REL,
+                    );
+                    check_jacobian(
+                        &format!("{what} wrt pose {label}"),
+                        &DVector::from_row_slice(&pose.to_array()),
+                        &POSE_SCALES,
+                        &|x| v2(project(&model, &pose_of(x), &xy)),
+                        &dyn_mat(&j.wrt_pose),
+                        REL,
+                    );
+                    check_jacobian(
+                        &format!("{what} wrt template {label}"),
+                        &v2(xy),
+                        &[100.0; 2],
+                        &|x| v2(project(&model, &pose, &Vector2::new(x[0], x[1]))),
+                        &dyn_mat(&j.wrt_template),
+                        REL,
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn back_projection_jacobians() {
+    for (name, model) in example_models() {
+        for (k, pose) in example_poses().into_iter().enumerate() {
+            for xy in example_template_points() {
+                let label = format!("[{name} pose {k} {xy:?}]");
+                let measured = model.project(&pose, &xy).unwrap();
+                let (back, j) = model.back_project_with_jacobians(&pose, &measured).unwrap();
+                assert!((back - model.back_project(&pose, &measured).unwrap()).norm() < 1e-12);
+                check_jacobian(
+                    &format!("back_project wrt model {label}"),
+                    &model_vec(&model),
+                    &MODEL_SCALES,
+                    &|x| v2(model_of(x).back_project(&pose, &measured).unwrap()),
+                    &dyn_mat(&j.wrt_model),
+                    REL,
+                );
+                check_jacobian(
+                    &format!("back_project wrt pose {label}"),
+                    &DVector::from_row_slice(&pose.to_array()),
+                    &POSE_SCALES,
+                    &|x| v2(model.back_project(&pose_of(x), &measured).unwrap()),
+                    &dyn_mat(&j.wrt_pose),
+                    REL,
+                );
+                check_jacobian(
+                    &format!("back_project wrt measured {label}"),
+                    &v2(measured),
+                    &[1.0; 2],
+                    &|x| v2(model.back_project(&pose, &Vector2::new(x[0], x[1])).unwrap()),
+                    &dyn_mat(&j.wrt_measured),
+                    REL,
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn impact_point_gain_jacobian_matches_finite_differences() {
+    let geometry = PsdGeometry::default();
+    let gains = ChannelGains { x2: 1.07, y1: 0.94, y2: 1.02 };
+    for point in [Vector2::new(0.0, 0.0), Vector2::new(3.1, -2.2), Vector2::new(-4.4, 4.0)] {
+        let amps = electrode_currents(&geometry, &point, 2.5).apply_gains(&gains);
+        let (p, jac) = impact_point_gain_jacobian(&geometry, &amps, &gains).unwrap();
+        assert!((p - point).norm() < 1e-13);
+        check_jacobian(
+            &format!("impact point wrt gains at {point:?}"),
+            &DVector::from_row_slice(&gains.to_array()),
+            &[1.0; 3],
+            &|x| {
+                let g = ChannelGains { x2: x[0], y1: x[1], y2: x[2] };
+                v2(impact_point_with_gains(&geometry, &amps, &g).unwrap())
+            },
+            &dyn_mat(&jac),
+            REL,
+        );
+    }
+    // The amplitudes type is plain data: a zero total is refused, not NaN.
+    let dark = Amplitudes { vx1: 0.0, vx2: 0.0, vy1: 0.0, vy2: 0.0 };
+    assert!(impact_point_with_gains(&geometry, &dark, &gains).is_err());
+}
