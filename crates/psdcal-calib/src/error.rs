@@ -1,0 +1,58 @@
+//! The error type of the calibration crate.
+
+use psdcal_model::ModelError;
+use thiserror::Error;
+
+/// Everything that can make a calibration fail. Each message names the cause
+/// and, where one exists, what the user can do about it.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum CalibError {
+    /// Fewer usable images than the method needs.
+    #[error("only {usable} usable image(s); calibration needs at least {needed} template poses")]
+    TooFewImages {
+        /// Images with enough points.
+        usable: usize,
+        /// Minimum required.
+        needed: usize,
+    },
+    /// An image has too few points for a homography.
+    #[error("image '{image}' has {points} point(s); a homography needs at least 4")]
+    TooFewPoints {
+        /// The image id.
+        image: String,
+        /// Its number of points.
+        points: usize,
+    },
+    /// The data cannot determine the parameters (the reason says why).
+    #[error("degenerate calibration data: {reason}")]
+    Degenerate {
+        /// What makes it degenerate and what to change.
+        reason: String,
+    },
+    /// An LED index refers to no template LED.
+    #[error("observation refers to LED index {led}, but the template has {template_len} LEDs")]
+    UnknownLed {
+        /// The index.
+        led: usize,
+        /// The template size.
+        template_len: usize,
+    },
+    /// A numerical stage failed (the text says which and why).
+    #[error("{stage} failed: {reason}")]
+    Numerical {
+        /// Which stage (homography, closed form, refinement, ...).
+        stage: &'static str,
+        /// Why.
+        reason: String,
+    },
+    /// The refinement did not converge to a usable solution.
+    #[error("refinement did not converge: {reason}")]
+    NotConverged {
+        /// Why (termination reason, last cost).
+        reason: String,
+    },
+    /// The sensor model could not be evaluated.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+}

@@ -1,0 +1,14 @@
+//! # psdcal-calib
+//!
+//! Calibration of a PSD sensor from images of a planar LED template: the
+//! paper's adapted Zhang method (MODEL.md §4) — preliminary distortion
+//! correction, data normalisation, homographies by DLT, the constrained closed
+//! form, and Levenberg–Marquardt refinement on the template-plane error (P29),
+//! with the parameters' covariance.
+#![warn(missing_docs)]
+
+pub mod data;
+mod error;
+
+pub use data::{CalibrationData, ImageObservations, Observation};
+pub use error::CalibError;
