@@ -12,3 +12,9 @@ mod error;
 
 pub use data::{CalibrationData, ImageObservations, Observation};
 pub use error::CalibError;
+pub mod normal_equations;
+pub mod covariance;
+pub mod refine;
+
+pub use covariance::{covariance, Covariance};
+pub use refine::{refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination};

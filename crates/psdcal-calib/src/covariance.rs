@@ -1,0 +1,129 @@
+//! Uncertainty of a calibration (MODEL.md §4.6): the covariance
+//! `σ² (JᵀJ)⁻¹` of the estimated parameters at the solution, with
+//! `σ² = cost / (2·points − parameters)` (`parameters` counts the freed
+//! sensor parameters and 6 per pose).
+//!
+//! `(JᵀJ)⁻¹` is never formed whole: the sensor-parameter block is the inverse
+//! of the Schur complement `S⁻¹`, and each pose's 6 × 6 block is
+//! `V_i⁻¹ + V_i⁻¹ W_iᵀ S⁻¹ W_i V_i⁻¹` ([`crate::normal_equations`]).
+//!
+//! Identifiability: a parameter whose information is (nearly) explained by
+//! the others has a huge variance inflation `S⁻¹_kk · S_kk`; such parameters,
+//! and pairs whose correlation exceeds 0.98 in magnitude (p1/p2 with cx/cy,
+//! k1 with l1 when the centres nearly coincide), are reported as warnings.
+
+use nalgebra::{DMatrix, Matrix6};
+use psdcal_model::{Param, Pose, SensorModel};
+
+use crate::data::CalibrationData;
+use crate::refine::{normal_equations, CostKind, RobustLoss};
+use crate::CalibError;
+
+/// Correlation magnitude above which a pair of parameters is flagged.
+pub const CORRELATION_WARNING: f64 = 0.98;
+/// Variance inflation above which a parameter is flagged as poorly determined.
+pub const INFLATION_WARNING: f64 = 1e4;
+
+/// The covariance of a calibration's estimate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Covariance {
+    /// The estimated sensor parameters, in the order of `matrix`.
+    pub params: Vec<Param>,
+    /// Their covariance (σ² S⁻¹), in their units squared.
+    pub matrix: DMatrix<f64>,
+    /// Per image, the 6 × 6 covariance of `(rvec, t)`.
+    pub pose_blocks: Vec<Matrix6<f64>>,
+    /// The residual variance σ² per coordinate (cost units: mm²).
+    pub sigma2: f64,
+    /// Degrees of freedom `2·points − parameters`.
+    pub dof: usize,
+    /// Identifiability warnings (empty when the data pin everything down).
+    pub warnings: Vec<String>,
+}
+
+impl Covariance {
+    /// Standard deviation of an estimated parameter (`None` when it was fixed).
+    pub fn std(&self, p: Param) -> Option<f64> {
+        let k = self.params.iter().position(|q| *q == p)?;
+        Some(self.matrix[(k, k)].max(0.0).sqrt())
+    }
+
+    /// Correlation matrix of the estimated parameters.
+    pub fn correlation(&self) -> DMatrix<f64> {
+        let n = self.params.len();
+        DMatrix::from_fn(n, n, |i, j| {
+            let d = (self.matrix[(i, i)] * self.matrix[(j, j)]).sqrt();
+            if d > 0.0 {
+                self.matrix[(i, j)] / d
+            } else {
+                0.0
+            }
+        })
+    }
+}
+
+/// Computes the covariance at a solution `(model, poses)` whose cost is
+/// `cost`.
+pub fn covariance(
+    data: &CalibrationData,
+    cost_kind: CostKind,
+    free: &[Param],
+    robust: Option<RobustLoss>,
+    model: &SensorModel,
+    poses: &[Pose],
+    cost: f64,
+) -> Result<Covariance, CalibError> {
+    let ne = normal_equations(data, cost_kind, free, robust, model, poses)?;
+    let parameters = free.len() + 6 * poses.len();
+    let observations = 2 * data.point_count();
+    if observations <= parameters {
+        return Err(CalibError::Degenerate {
+            reason: format!(
+                "{observations} coordinates cannot determine {parameters} parameters; add images or LEDs"
+            ),
+        });
+    }
+    let dof = observations - parameters;
+    let sigma2 = cost / dof as f64;
+    let (s_inv, pose_inv) = ne.inverse_blocks().ok_or_else(|| CalibError::Degenerate {
+        reason: "the information matrix is singular: some freed parameter is not determined by the data \
+                 (fix it, or add images that vary the template pose)"
+            .into(),
+    })?;
+    let mut warnings = Vec::new();
+    if let Some(s) = ne.schur_complement() {
+        for (k, p) in free.iter().enumerate() {
+            let inflation = s_inv[(k, k)] * s[(k, k)];
+            if inflation > INFLATION_WARNING {
+                warnings.push(format!(
+                    "{p} is poorly determined by these images (variance inflated {inflation:.1e}× by correlation \
+                     with the other parameters); consider fixing it"
+                ));
+            }
+        }
+    }
+    let matrix = s_inv * sigma2;
+    let cov = Covariance {
+        params: free.to_vec(),
+        matrix,
+        pose_blocks: pose_inv.into_iter().map(|b| b * sigma2).collect(),
+        sigma2,
+        dof,
+        warnings,
+    };
+    let corr = cov.correlation();
+    let mut warnings = cov.warnings.clone();
+    for i in 0..free.len() {
+        for j in (i + 1)..free.len() {
+            if corr[(i, j)].abs() > CORRELATION_WARNING {
+                warnings.push(format!(
+                    "{} and {} are strongly correlated ({:+.3}): the data barely separate them",
+                    free[i],
+                    free[j],
+                    corr[(i, j)]
+                ));
+            }
+        }
+    }
+    Ok(Covariance { warnings, ..cov })
+}

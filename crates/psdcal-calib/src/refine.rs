@@ -1,0 +1,402 @@
+//! Levenberg–Marquardt refinement of the sensor parameters and every pose
+//! (MODEL.md §4.6, the paper's (P29)).
+//!
+//! Cost (template plane, the default): for every observed point `m_ij` of LED
+//! `j` in image `i`,
+//!
+//! ```text
+//! r_ij = back_project(θ, pose_i, m_ij) − (X_j, Y_j),   cost = Σ ‖r_ij‖²   (mm²)
+//! ```
+//!
+//! i.e. the measured point is corrected for distortion, its ray is cut with
+//! the template plane of its pose and compared with the LED. `cost` is the
+//! paper's *residual*. The image-plane alternative is
+//! `r_ij = project(θ, pose_i, X_j, Y_j) − m_ij` (mm on the sensor).
+//!
+//! With a robust loss `ρ` of scale `c` on `s = ‖r‖²` (Huber:
+//! `ρ = s` for `s ≤ c²`, else `2c√s − c²`; Cauchy: `ρ = c² ln(1 + s/c²)`), the
+//! cost is `Σ ρ(s_ij)` and each step reweights the normal equations with
+//! `ρ'(s_ij)` (iteratively reweighted least squares).
+//!
+//! Each iteration solves the damped normal equations through the Schur
+//! complement on the pose blocks ([`crate::normal_equations`]) with
+//! Marquardt's diagonal damping `(1 + λ)`; `λ` falls ×1/3 after a step that
+//! lowers the cost and rises ×4 after one that does not. Poses are updated
+//! additively in `(rvec, t)`.
+
+use nalgebra::{DMatrix, Vector2};
+use psdcal_model::{Param, Pose, SensorModel, N_PARAMS};
+use serde::Serialize;
+
+use crate::data::CalibrationData;
+use crate::normal_equations::NormalEquations;
+use crate::CalibError;
+
+/// Which error the refinement minimises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CostKind {
+    /// Template-plane error (P29), mm on the template: the paper's choice.
+    Template,
+    /// Image-plane reprojection error, mm on the sensor.
+    Image,
+}
+
+/// A robust loss on the squared norm of a point's residual.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum RobustLoss {
+    /// Quadratic up to `scale`, linear beyond.
+    Huber {
+        /// Residual norm at which the loss turns linear (cost units: mm).
+        scale: f64,
+    },
+    /// Logarithmic: outliers far beyond `scale` barely count.
+    Cauchy {
+        /// Residual norm scale (mm).
+        scale: f64,
+    },
+}
+
+impl RobustLoss {
+    /// `ρ(s)` for a squared residual norm `s`.
+    pub fn rho(&self, s: f64) -> f64 {
+        match *self {
+            RobustLoss::Huber { scale } => {
+                if s <= scale * scale {
+                    s
+                } else {
+                    2.0 * scale * s.sqrt() - scale * scale
+                }
+            }
+            RobustLoss::Cauchy { scale } => scale * scale * (s / (scale * scale)).ln_1p(),
+        }
+    }
+
+    /// `ρ'(s)`: the weight of the residual in the reweighted normal equations.
+    pub fn weight(&self, s: f64) -> f64 {
+        match *self {
+            RobustLoss::Huber { scale } => {
+                if s <= scale * scale {
+                    1.0
+                } else {
+                    scale / s.sqrt()
+                }
+            }
+            RobustLoss::Cauchy { scale } => 1.0 / (1.0 + s / (scale * scale)),
+        }
+    }
+}
+
+/// Options of [`refine`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RefineOptions {
+    /// The cost minimised.
+    pub cost: CostKind,
+    /// The freed sensor parameters (the others stay at their start values).
+    pub free: Vec<Param>,
+    /// Optional robust loss (off by default).
+    pub robust: Option<RobustLoss>,
+    /// Iteration budget (accepted and rejected steps both count).
+    pub max_iterations: usize,
+    /// Stop when an accepted step lowers the cost by less than this fraction.
+    pub cost_tolerance: f64,
+    /// Stop when the step changes the residuals by less than this fraction
+    /// of their norm.
+    pub step_tolerance: f64,
+    /// Starting damping.
+    pub initial_lambda: f64,
+}
+
+impl Default for RefineOptions {
+    fn default() -> Self {
+        Self {
+            cost: CostKind::Template,
+            free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2],
+            robust: None,
+            max_iterations: 200,
+            cost_tolerance: 1e-12,
+            step_tolerance: 1e-10,
+            initial_lambda: 1e-3,
+        }
+    }
+}
+
+/// Why the refinement stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Termination {
+    /// The cost is zero to rounding (noise-free data).
+    ExactFit,
+    /// An accepted step changed the cost by less than the tolerance.
+    CostConverged,
+    /// The step became negligible.
+    StepConverged,
+    /// The damping grew without finding a lower cost: a minimum to the
+    /// precision of the arithmetic.
+    DampingSaturated,
+    /// The iteration budget ran out.
+    MaxIterations,
+}
+
+impl Termination {
+    /// Whether the solution is a converged minimum.
+    pub fn converged(self) -> bool {
+        !matches!(self, Termination::MaxIterations)
+    }
+}
+
+/// What the refinement did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RefineReport {
+    /// Why it stopped.
+    pub termination: Termination,
+    /// Iterations (solved steps, accepted or not).
+    pub iterations: usize,
+    /// Accepted steps.
+    pub accepted: usize,
+    /// Cost after each accepted step, starting with the initial cost.
+    pub cost_history: Vec<f64>,
+    /// Final damping.
+    pub final_lambda: f64,
+}
+
+/// The refined parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refined {
+    /// Sensor parameters.
+    pub model: SensorModel,
+    /// One `sensor_from_template` pose per image.
+    pub poses: Vec<Pose>,
+    /// Final cost (robust cost when a loss is set).
+    pub cost: f64,
+    /// The solver's report.
+    pub report: RefineReport,
+}
+
+/// One point's residual and Jacobians, the model part restricted to the
+/// freed parameters.
+struct PointResidual {
+    r: Vector2<f64>,
+    a: DMatrix<f64>,
+    b: nalgebra::SMatrix<f64, 2, 6>,
+}
+
+/// Residual of one observation (no Jacobians).
+pub fn residual(
+    data: &CalibrationData,
+    cost: CostKind,
+    model: &SensorModel,
+    pose: &Pose,
+    led: usize,
+    measured: &Vector2<f64>,
+) -> Result<Vector2<f64>, psdcal_model::ModelError> {
+    let xy = data.template[led];
+    Ok(match cost {
+        CostKind::Template => model.back_project(pose, measured)? - xy,
+        CostKind::Image => model.project(pose, &xy)? - measured,
+    })
+}
+
+fn residual_with_jacobians(
+    data: &CalibrationData,
+    cost: CostKind,
+    free: &[Param],
+    model: &SensorModel,
+    pose: &Pose,
+    led: usize,
+    measured: &Vector2<f64>,
+) -> Result<PointResidual, psdcal_model::ModelError> {
+    let xy = data.template[led];
+    let (r, wrt_model, b) = match cost {
+        CostKind::Template => {
+            let (p, j) = model.back_project_with_jacobians(pose, measured)?;
+            (p - xy, j.wrt_model, j.wrt_pose)
+        }
+        CostKind::Image => {
+            let (p, j) = model.project_with_jacobians(pose, &xy)?;
+            (p - measured, j.wrt_model, j.wrt_pose)
+        }
+    };
+    let a = select_columns(&wrt_model, free);
+    Ok(PointResidual { r, a, b })
+}
+
+fn select_columns(m: &nalgebra::SMatrix<f64, 2, N_PARAMS>, free: &[Param]) -> DMatrix<f64> {
+    DMatrix::from_fn(2, free.len(), |i, k| m[(i, free[k].index())])
+}
+
+/// Total cost, or the first observation that cannot be evaluated.
+pub fn total_cost(
+    data: &CalibrationData,
+    cost: CostKind,
+    robust: Option<RobustLoss>,
+    model: &SensorModel,
+    poses: &[Pose],
+) -> Result<f64, (usize, usize, psdcal_model::ModelError)> {
+    let mut total = 0.0;
+    for (i, image) in data.images.iter().enumerate() {
+        for (k, obs) in image.points.iter().enumerate() {
+            let r = residual(data, cost, model, &poses[i], obs.led, &obs.measured).map_err(|e| (i, k, e))?;
+            let s = r.norm_squared();
+            total += robust.map_or(s, |l| l.rho(s));
+        }
+    }
+    Ok(total)
+}
+
+/// Accumulates the normal equations at the current parameters.
+pub(crate) fn normal_equations(
+    data: &CalibrationData,
+    cost: CostKind,
+    free: &[Param],
+    robust: Option<RobustLoss>,
+    model: &SensorModel,
+    poses: &[Pose],
+) -> Result<NormalEquations, CalibError> {
+    let mut ne = NormalEquations::zeros(free.len(), data.images.len());
+    for (i, image) in data.images.iter().enumerate() {
+        for obs in &image.points {
+            let pr = residual_with_jacobians(data, cost, free, model, &poses[i], obs.led, &obs.measured)
+                .map_err(|e| point_error(data, i, obs.led, e))?;
+            let weight = robust.map_or(1.0, |l| l.weight(pr.r.norm_squared()));
+            ne.add(i, weight, &pr.r, &pr.a, &pr.b);
+        }
+    }
+    Ok(ne)
+}
+
+fn point_error(data: &CalibrationData, image: usize, led: usize, e: psdcal_model::ModelError) -> CalibError {
+    CalibError::Numerical {
+        stage: "refinement",
+        reason: format!("image '{}', LED #{}: {e}", data.images[image].id, led + 1),
+    }
+}
+
+fn validate(data: &CalibrationData, poses: &[Pose], free: &[Param]) -> Result<(), CalibError> {
+    if poses.len() != data.images.len() {
+        return Err(CalibError::Numerical {
+            stage: "refinement",
+            reason: format!("{} poses for {} images", poses.len(), data.images.len()),
+        });
+    }
+    for image in &data.images {
+        for obs in &image.points {
+            if obs.led >= data.template.len() {
+                return Err(CalibError::UnknownLed { led: obs.led, template_len: data.template.len() });
+            }
+        }
+    }
+    let mut seen = [false; N_PARAMS];
+    for p in free {
+        if std::mem::replace(&mut seen[p.index()], true) {
+            return Err(CalibError::Numerical {
+                stage: "refinement",
+                reason: format!("parameter {p} freed twice"),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Refines `model` (its `free` parameters) and every pose from `start`.
+pub fn refine(
+    data: &CalibrationData,
+    model: &SensorModel,
+    poses: &[Pose],
+    options: &RefineOptions,
+) -> Result<Refined, CalibError> {
+    validate(data, poses, &options.free)?;
+    let mut model = *model;
+    let mut poses = poses.to_vec();
+    let mut cost = total_cost(data, options.cost, options.robust, &model, &poses)
+        .map_err(|(i, k, e)| point_error(data, i, data.images[i].points[k].led, e))?;
+    let mut history = vec![cost];
+    let mut lambda = options.initial_lambda;
+    let mut iterations = 0;
+    let mut accepted = 0;
+    let mut ne = normal_equations(data, options.cost, &options.free, options.robust, &model, &poses)?;
+    let termination = loop {
+        if cost <= 1e-28 * data.point_count() as f64 {
+            break Termination::ExactFit;
+        }
+        if iterations >= options.max_iterations {
+            break Termination::MaxIterations;
+        }
+        if lambda > 1e16 {
+            break Termination::DampingSaturated;
+        }
+        iterations += 1;
+        let Some(step) = ne.solve(lambda) else {
+            lambda *= 4.0;
+            continue;
+        };
+        let mut trial_model = model;
+        for (k, p) in options.free.iter().enumerate() {
+            trial_model.set(*p, model.get(*p) + step.da[k]);
+        }
+        let trial_poses: Vec<Pose> = poses
+            .iter()
+            .zip(&step.db)
+            .map(|(pose, d)| {
+                let a = pose.to_array();
+                Pose::from_array(&std::array::from_fn(|k| a[k] + d[k]))
+            })
+            .collect();
+        let trial_cost = if trial_model.validate().is_ok() {
+            total_cost(data, options.cost, options.robust, &trial_model, &trial_poses).unwrap_or(f64::INFINITY)
+        } else {
+            f64::INFINITY
+        };
+        if trial_cost < cost {
+            let small_step = step_is_negligible(&ne, &step, cost, data.point_count(), options.step_tolerance);
+            let small_change = (cost - trial_cost) <= options.cost_tolerance * cost;
+            model = trial_model;
+            poses = trial_poses;
+            cost = trial_cost;
+            history.push(cost);
+            accepted += 1;
+            lambda = (lambda / 3.0).max(1e-15);
+            if small_step {
+                break Termination::StepConverged;
+            }
+            if small_change {
+                break Termination::CostConverged;
+            }
+            ne = normal_equations(data, options.cost, &options.free, options.robust, &model, &poses)?;
+        } else {
+            lambda *= 4.0;
+        }
+    };
+    Ok(Refined {
+        model,
+        poses,
+        cost,
+        report: RefineReport { termination, iterations, accepted, cost_history: history, final_lambda: lambda },
+    })
+}
+
+/// Whether a step is negligible: the change it makes to the residuals,
+/// `‖J δ‖ ≈ sqrt(Σ δ_k² diag(JᵀJ)_k)` (mm), is below `tolerance` times the
+/// residual norm `sqrt(cost)` (with a floor at rounding level, 1e-13 mm per
+/// point, for exact data). One threshold thus serves `f` (mm) and `k3`
+/// (mm⁻⁶) alike.
+fn step_is_negligible(
+    ne: &NormalEquations,
+    step: &crate::normal_equations::Step,
+    cost: f64,
+    points: usize,
+    tolerance: f64,
+) -> bool {
+    let mut change2 = 0.0;
+    for k in 0..step.da.len() {
+        change2 += step.da[k] * step.da[k] * ne.u[(k, k)];
+    }
+    for (i, db) in step.db.iter().enumerate() {
+        for k in 0..6 {
+            change2 += db[k] * db[k] * ne.v[i][(k, k)];
+        }
+    }
+    let floor = 1e-26 * points as f64;
+    change2 <= tolerance * tolerance * cost.max(floor)
+}
