@@ -14,7 +14,9 @@ pub use data::{CalibrationData, ImageObservations, Observation};
 pub use error::CalibError;
 pub mod normal_equations;
 pub mod covariance;
+pub mod global;
 pub mod refine;
 
 pub use covariance::{covariance, Covariance};
+pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
 pub use refine::{refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination};

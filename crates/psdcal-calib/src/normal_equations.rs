@@ -23,7 +23,8 @@
 //! The same blocks give the covariance of the estimate (undamped):
 //! `Cov(a) = S⁻¹`, `Cov(b_i) = V_i⁻¹ + V_i⁻¹ W_iᵀ S⁻¹ W_i V_i⁻¹`, both times σ².
 
-use nalgebra::{DMatrix, DVector, Matrix6, SMatrix, Vector6};
+use nalgebra::{DMatrix, DVector, Matrix6, SMatrix, Vector2, Vector6};
+use psdcal_model::{Param, N_PARAMS};
 
 /// Accumulated normal equations of one evaluation.
 #[derive(Debug, Clone)]
@@ -38,6 +39,62 @@ pub struct NormalEquations {
     pub w: Vec<DMatrix<f64>>,
     /// Per image: `g_i = Σ Bᵀ r`.
     pub g_b: Vec<Vector6<f64>>,
+}
+
+/// Normal equations accumulated over all 11 sensor parameters with
+/// fixed-size blocks (no allocation per point); [`FullNormalEquations::select`]
+/// then keeps the freed ones.
+#[derive(Debug, Clone)]
+pub struct FullNormalEquations {
+    u: SMatrix<f64, N_PARAMS, N_PARAMS>,
+    g_a: SMatrix<f64, N_PARAMS, 1>,
+    v: Vec<Matrix6<f64>>,
+    w: Vec<SMatrix<f64, N_PARAMS, 6>>,
+    g_b: Vec<Vector6<f64>>,
+}
+
+impl FullNormalEquations {
+    /// Zeroed blocks for `n` images.
+    pub fn zeros(n: usize) -> Self {
+        Self {
+            u: SMatrix::zeros(),
+            g_a: SMatrix::zeros(),
+            v: vec![Matrix6::zeros(); n],
+            w: vec![SMatrix::zeros(); n],
+            g_b: vec![Vector6::zeros(); n],
+        }
+    }
+
+    /// Adds one weighted 2-vector residual `r` of image `i` with its Jacobians
+    /// `a = ∂r/∂model` (all 11 parameters) and `b = ∂r/∂pose_i`.
+    pub fn add(
+        &mut self,
+        i: usize,
+        weight: f64,
+        r: &Vector2<f64>,
+        a: &SMatrix<f64, 2, N_PARAMS>,
+        b: &SMatrix<f64, 2, 6>,
+    ) {
+        let at = a.transpose() * weight;
+        self.u += at * a;
+        self.g_a += at * r;
+        let bt = b.transpose() * weight;
+        self.v[i] += bt * b;
+        self.g_b[i] += bt * r;
+        self.w[i] += at * b;
+    }
+
+    /// The normal equations of the freed parameters only.
+    pub fn select(&self, free: &[Param]) -> NormalEquations {
+        let p = free.len();
+        NormalEquations {
+            u: DMatrix::from_fn(p, p, |i, j| self.u[(free[i].index(), free[j].index())]),
+            g_a: DVector::from_fn(p, |i, _| self.g_a[free[i].index()]),
+            v: self.v.clone(),
+            w: self.w.iter().map(|w| DMatrix::from_fn(p, 6, |i, j| w[(free[i].index(), j)])).collect(),
+            g_b: self.g_b.clone(),
+        }
+    }
 }
 
 /// A solved step: sensor-parameter part and one 6-vector per image.
@@ -59,24 +116,6 @@ impl NormalEquations {
             w: vec![DMatrix::zeros(p, 6); n],
             g_b: vec![Vector6::zeros(); n],
         }
-    }
-
-    /// Adds one (weighted) 2-vector residual of image `i` with its Jacobians.
-    pub fn add(
-        &mut self,
-        i: usize,
-        weight: f64,
-        r: &nalgebra::Vector2<f64>,
-        a: &DMatrix<f64>,
-        b: &SMatrix<f64, 2, 6>,
-    ) {
-        let at = a.transpose() * weight;
-        self.u += &at * a;
-        self.g_a += &at * r;
-        let bt = b.transpose() * weight;
-        self.v[i] += bt * b;
-        self.g_b[i] += bt * r;
-        self.w[i] += at * b;
     }
 
     /// Solves `(JᵀJ + λ D) δ = −Jᵀr` with Marquardt damping: the diagonal of

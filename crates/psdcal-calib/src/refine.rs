@@ -20,17 +20,26 @@
 //!
 //! Each iteration solves the damped normal equations through the Schur
 //! complement on the pose blocks ([`crate::normal_equations`]) with
-//! Marquardt's diagonal damping `(1 + λ)`; `λ` falls ×1/3 after a step that
-//! lowers the cost and rises ×4 after one that does not. Poses are updated
-//! additively in `(rvec, t)`.
+//! Marquardt's diagonal damping `(1 + λ)`, updated as Nielsen proposes: after
+//! a step that lowers the cost `λ` falls ×1/3 and `ν = 2`; after one that does
+//! not, `λ ← λν`, `ν ← 2ν` (so a run of rejections ends within about ten
+//! steps). Poses are updated additively in `(rvec, t)`.
+//!
+//! Stopping: an *exact fit* when the RMS residual is below 1e-10 (mm on the
+//! template plane; a few hundred times the rounding floor of the
+//! back-projection), a negligible step or cost change, saturated damping, or
+//! the iteration budget.
 
-use nalgebra::{DMatrix, Vector2};
-use psdcal_model::{Param, Pose, SensorModel, N_PARAMS};
+use nalgebra::{SMatrix, Vector2};
+use psdcal_model::{Param, Pose, RotationJacobian, SensorModel, N_PARAMS};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::normal_equations::NormalEquations;
+use crate::normal_equations::{FullNormalEquations, NormalEquations};
 use crate::CalibError;
+
+/// Mean squared residual per point below which the fit is exact (RMS 1e-10).
+const EXACT_FIT_MS: f64 = 1e-20;
 
 /// Which error the refinement minimises.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -174,14 +183,6 @@ pub struct Refined {
     pub report: RefineReport,
 }
 
-/// One point's residual and Jacobians, the model part restricted to the
-/// freed parameters.
-struct PointResidual {
-    r: Vector2<f64>,
-    a: DMatrix<f64>,
-    b: nalgebra::SMatrix<f64, 2, 6>,
-}
-
 /// Residual of one observation (no Jacobians).
 pub fn residual(
     data: &CalibrationData,
@@ -198,32 +199,28 @@ pub fn residual(
     })
 }
 
+/// Residual of one observation with its Jacobians with respect to every
+/// model parameter (2×11) and to the pose (2×6).
 fn residual_with_jacobians(
     data: &CalibrationData,
     cost: CostKind,
-    free: &[Param],
     model: &SensorModel,
     pose: &Pose,
+    rotation: &RotationJacobian,
     led: usize,
     measured: &Vector2<f64>,
-) -> Result<PointResidual, psdcal_model::ModelError> {
+) -> Result<(Vector2<f64>, SMatrix<f64, 2, N_PARAMS>, SMatrix<f64, 2, 6>), psdcal_model::ModelError> {
     let xy = data.template[led];
-    let (r, wrt_model, b) = match cost {
+    Ok(match cost {
         CostKind::Template => {
-            let (p, j) = model.back_project_with_jacobians(pose, measured)?;
+            let (p, j) = model.back_project_with_jacobians_using(pose, rotation, measured)?;
             (p - xy, j.wrt_model, j.wrt_pose)
         }
         CostKind::Image => {
-            let (p, j) = model.project_with_jacobians(pose, &xy)?;
+            let (p, j) = model.project_with_jacobians_using(pose, rotation, &xy)?;
             (p - measured, j.wrt_model, j.wrt_pose)
         }
-    };
-    let a = select_columns(&wrt_model, free);
-    Ok(PointResidual { r, a, b })
-}
-
-fn select_columns(m: &nalgebra::SMatrix<f64, 2, N_PARAMS>, free: &[Param]) -> DMatrix<f64> {
-    DMatrix::from_fn(2, free.len(), |i, k| m[(i, free[k].index())])
+    })
 }
 
 /// Total cost, or the first observation that cannot be evaluated.
@@ -254,16 +251,17 @@ pub(crate) fn normal_equations(
     model: &SensorModel,
     poses: &[Pose],
 ) -> Result<NormalEquations, CalibError> {
-    let mut ne = NormalEquations::zeros(free.len(), data.images.len());
+    let mut ne = FullNormalEquations::zeros(data.images.len());
     for (i, image) in data.images.iter().enumerate() {
+        let rotation = poses[i].rotation_jacobian();
         for obs in &image.points {
-            let pr = residual_with_jacobians(data, cost, free, model, &poses[i], obs.led, &obs.measured)
+            let (r, a, b) = residual_with_jacobians(data, cost, model, &poses[i], &rotation, obs.led, &obs.measured)
                 .map_err(|e| point_error(data, i, obs.led, e))?;
-            let weight = robust.map_or(1.0, |l| l.weight(pr.r.norm_squared()));
-            ne.add(i, weight, &pr.r, &pr.a, &pr.b);
+            let weight = robust.map_or(1.0, |l| l.weight(r.norm_squared()));
+            ne.add(i, weight, &r, &a, &b);
         }
     }
-    Ok(ne)
+    Ok(ne.select(free))
 }
 
 fn point_error(data: &CalibrationData, image: usize, led: usize, e: psdcal_model::ModelError) -> CalibError {
@@ -313,11 +311,12 @@ pub fn refine(
         .map_err(|(i, k, e)| point_error(data, i, data.images[i].points[k].led, e))?;
     let mut history = vec![cost];
     let mut lambda = options.initial_lambda;
+    let mut nu = 2.0;
     let mut iterations = 0;
     let mut accepted = 0;
     let mut ne = normal_equations(data, options.cost, &options.free, options.robust, &model, &poses)?;
     let termination = loop {
-        if cost <= 1e-28 * data.point_count() as f64 {
+        if cost <= EXACT_FIT_MS * data.point_count() as f64 {
             break Termination::ExactFit;
         }
         if iterations >= options.max_iterations {
@@ -328,7 +327,8 @@ pub fn refine(
         }
         iterations += 1;
         let Some(step) = ne.solve(lambda) else {
-            lambda *= 4.0;
+            lambda *= nu;
+            nu *= 2.0;
             continue;
         };
         let mut trial_model = model;
@@ -357,6 +357,7 @@ pub fn refine(
             history.push(cost);
             accepted += 1;
             lambda = (lambda / 3.0).max(1e-15);
+            nu = 2.0;
             if small_step {
                 break Termination::StepConverged;
             }
@@ -365,7 +366,8 @@ pub fn refine(
             }
             ne = normal_equations(data, options.cost, &options.free, options.robust, &model, &poses)?;
         } else {
-            lambda *= 4.0;
+            lambda *= nu;
+            nu *= 2.0;
         }
     };
     Ok(Refined {

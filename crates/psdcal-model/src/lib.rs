@@ -26,6 +26,6 @@ pub mod sensor;
 pub use distortion::CorrectionJacobian;
 pub use error::ModelError;
 pub use params::{Distortion, Intrinsics, Param, SensorModel, UnknownParam, N_PARAMS};
-pub use pose::{Pose, N_POSE};
+pub use pose::{Pose, RotationJacobian, N_POSE};
 pub use projection::{BackProjectionJacobians, ProjectionJacobians};
 pub use sensor::{Amplitudes, ChannelGains, PsdGeometry};

@@ -19,6 +19,16 @@ use nalgebra::{Matrix3, Rotation3, SMatrix, UnitQuaternion, Vector3};
 /// Number of pose parameters: Rodrigues vector (3) and translation (3).
 pub const N_POSE: usize = 6;
 
+/// A rotation matrix with its derivatives with respect to the Rodrigues
+/// vector: computed once per pose and shared by every point seen in it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RotationJacobian {
+    /// `R(rvec)`.
+    pub r: Matrix3<f64>,
+    /// `∂R/∂rvec_i`, i = 0, 1, 2.
+    pub dr: [Matrix3<f64>; 3],
+}
+
 /// A rigid transformation `P_dst = R(rvec) P_src + t`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pose {
@@ -136,6 +146,12 @@ impl Pose {
         (r, deriv)
     }
 
+    /// The rotation and its derivatives, for reuse over many points.
+    pub fn rotation_jacobian(&self) -> RotationJacobian {
+        let (r, dr) = self.rotation_with_derivatives();
+        RotationJacobian { r, dr }
+    }
+
     /// Applies the pose to a point: `R p + t`.
     pub fn transform(&self, p: &Vector3<f64>) -> Vector3<f64> {
         self.rotation() * p + self.t
@@ -147,7 +163,17 @@ impl Pose {
         &self,
         p: &Vector3<f64>,
     ) -> (Vector3<f64>, SMatrix<f64, 3, N_POSE>, Matrix3<f64>) {
-        let (r, dr) = self.rotation_with_derivatives();
+        self.transform_with_jacobians_using(&self.rotation_jacobian(), p)
+    }
+
+    /// [`Self::transform_with_jacobians`] with the rotation Jacobian of this
+    /// pose precomputed by [`Self::rotation_jacobian`].
+    pub fn transform_with_jacobians_using(
+        &self,
+        rotation: &RotationJacobian,
+        p: &Vector3<f64>,
+    ) -> (Vector3<f64>, SMatrix<f64, 3, N_POSE>, Matrix3<f64>) {
+        let (r, dr) = (rotation.r, &rotation.dr);
         let mut j = SMatrix::<f64, 3, N_POSE>::zeros();
         for (i, dri) in dr.iter().enumerate() {
             j.set_column(i, &(dri * p));

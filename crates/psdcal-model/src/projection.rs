@@ -21,7 +21,7 @@
 use nalgebra::{Matrix2, Matrix3, SMatrix, Vector2, Vector3};
 
 use crate::params::{SensorModel, N_PARAMS};
-use crate::pose::{Pose, N_POSE};
+use crate::pose::{Pose, RotationJacobian, N_POSE};
 use crate::ModelError;
 
 /// Jacobians of a projected (measured or ideal) point.
@@ -66,8 +66,23 @@ impl SensorModel {
         sensor_from_template: &Pose,
         template_xy: &Vector2<f64>,
     ) -> Result<(Vector2<f64>, ProjectionJacobians), ModelError> {
+        self.project_ideal_with_jacobians_using(
+            sensor_from_template,
+            &sensor_from_template.rotation_jacobian(),
+            template_xy,
+        )
+    }
+
+    /// [`Self::project_ideal_with_jacobians`] with the pose's rotation
+    /// Jacobian precomputed ([`Pose::rotation_jacobian`]).
+    pub fn project_ideal_with_jacobians_using(
+        &self,
+        sensor_from_template: &Pose,
+        rotation: &RotationJacobian,
+        template_xy: &Vector2<f64>,
+    ) -> Result<(Vector2<f64>, ProjectionJacobians), ModelError> {
         let p_t = Vector3::new(template_xy.x, template_xy.y, 0.0);
-        let (p_c, dpc_dpose, rot) = sensor_from_template.transform_with_jacobians(&p_t);
+        let (p_c, dpc_dpose, rot) = sensor_from_template.transform_with_jacobians_using(rotation, &p_t);
         let (ideal, dp_dpc, wrt_model) = self.pinhole_project_with_jacobians(&p_c)?;
         Ok((
             ideal,
@@ -95,7 +110,23 @@ impl SensorModel {
         sensor_from_template: &Pose,
         template_xy: &Vector2<f64>,
     ) -> Result<(Vector2<f64>, ProjectionJacobians), ModelError> {
-        let (ideal, jp) = self.project_ideal_with_jacobians(sensor_from_template, template_xy)?;
+        self.project_with_jacobians_using(
+            sensor_from_template,
+            &sensor_from_template.rotation_jacobian(),
+            template_xy,
+        )
+    }
+
+    /// [`Self::project_with_jacobians`] with the pose's rotation Jacobian
+    /// precomputed ([`Pose::rotation_jacobian`]).
+    pub fn project_with_jacobians_using(
+        &self,
+        sensor_from_template: &Pose,
+        rotation: &RotationJacobian,
+        template_xy: &Vector2<f64>,
+    ) -> Result<(Vector2<f64>, ProjectionJacobians), ModelError> {
+        let (ideal, jp) =
+            self.project_ideal_with_jacobians_using(sensor_from_template, rotation, template_xy)?;
         let measured = self.distort(&ideal)?;
         let ju = self.undistort_with_jacobians(&measured);
         let inv = ju
@@ -135,9 +166,24 @@ impl SensorModel {
         sensor_from_template: &Pose,
         measured: &Vector2<f64>,
     ) -> Result<(Vector2<f64>, BackProjectionJacobians), ModelError> {
+        self.back_project_with_jacobians_using(
+            sensor_from_template,
+            &sensor_from_template.rotation_jacobian(),
+            measured,
+        )
+    }
+
+    /// [`Self::back_project_with_jacobians`] with the pose's rotation
+    /// Jacobian precomputed ([`Pose::rotation_jacobian`]).
+    pub fn back_project_with_jacobians_using(
+        &self,
+        sensor_from_template: &Pose,
+        rotation: &RotationJacobian,
+        measured: &Vector2<f64>,
+    ) -> Result<(Vector2<f64>, BackProjectionJacobians), ModelError> {
         let ju = self.undistort_with_jacobians(measured);
         let (ab, dn_dideal, dn_dmodel_direct) = self.normalize_with_jacobians(&ju.ideal);
-        let (rot, drot) = sensor_from_template.rotation_with_derivatives();
+        let (rot, drot) = (rotation.r, rotation.dr);
         let t = &sensor_from_template.t;
         let (xy, s, q) = intersect_template_plane(&rot, t, &ab)?;
         let n = Vector3::new(ab.x, ab.y, 1.0);
