@@ -8,15 +8,23 @@
 #![warn(missing_docs)]
 
 pub mod data;
+pub mod homography;
+pub mod initialize;
+pub mod preliminary;
+pub mod straightness;
+pub mod zhang;
 mod error;
 
 pub use data::{CalibrationData, ImageObservations, Observation};
 pub use error::CalibError;
+pub use homography::{fit_homography, Homography, HomographyFit, HomographyOptions};
 pub mod normal_equations;
 pub mod covariance;
 pub mod global;
 pub mod refine;
+pub mod report;
 
 pub use covariance::{covariance, Covariance};
 pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
+pub use report::{fit_statistics, FitStatistics, ImageStats, PointError};
 pub use refine::{refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination};

@@ -106,3 +106,59 @@ fn monte_carlo_spread_matches_reported_sigma() {
         );
     }
 }
+
+#[test]
+fn robust_loss_resists_outliers_and_reports_them() {
+    use psdcal_calib::{fit_statistics, RobustLoss};
+    let truth = SensorModel::paper_lens2();
+    let sigma_mm = 3e-4;
+    let mut s = scenario(truth, 9, sigma_mm, 21);
+    // Six gross outliers: 0.3 mm (1000 σ) displacements.
+    let bad = [(0, 3), (1, 7), (2, 1), (4, 12), (6, 5), (8, 9)];
+    for &(i, k) in &bad {
+        s.data.images[i].points[k].measured.x += 0.3;
+    }
+    let (m0, p0) = perturbed(&truth, &s.poses);
+    let plain = refine(&s.data, &m0, &p0, &RefineOptions::default()).unwrap();
+    // Huber scale: 3 σ on the template plane (σ_template ≈ σ · depth / f ≈ 0.04 mm).
+    let robust = Some(RobustLoss::Huber { scale: 0.12 });
+    let options = RefineOptions { robust, ..RefineOptions::default() };
+    let r = refine(&s.data, &m0, &p0, &options).unwrap();
+    let clean = scenario(truth, 9, sigma_mm, 21);
+    let reference = refine(&clean.data, &m0, &p0, &RefineOptions::default()).unwrap();
+    let cov = covariance(&clean.data, options.cost, &options.free, None, &reference.model, &reference.poses, reference.cost)
+        .unwrap();
+    let sigma_f = cov.std(Param::F).unwrap();
+    // Robust: within 3 σ of the outlier-free estimate; plain: pulled far away.
+    let robust_shift = (r.model.intrinsics.f - reference.model.intrinsics.f).abs();
+    let plain_shift = (plain.model.intrinsics.f - reference.model.intrinsics.f).abs();
+    println!("σ_f {sigma_f:.3e}: robust shift {robust_shift:.3e}, plain shift {plain_shift:.3e}");
+    assert!(robust_shift < 3.0 * sigma_f, "robust estimate moved {robust_shift:e} (σ {sigma_f:e})");
+    assert!(plain_shift > 10.0 * robust_shift, "plain least squares should suffer from the outliers");
+    let stats = fit_statistics(&s.data, &r.model, &r.poses, options.cost, robust);
+    let mut flagged: Vec<(String, usize)> = stats.outliers.iter().map(|p| (p.image.clone(), p.led)).collect();
+    flagged.sort();
+    let mut expected: Vec<(String, usize)> = bad.iter().map(|&(i, k)| (format!("{}", i + 1), k)).collect();
+    expected.sort();
+    assert_eq!(flagged, expected, "exactly the displaced points are flagged");
+}
+
+#[test]
+fn fit_statistics_agree_with_the_cost() {
+    use psdcal_calib::fit_statistics;
+    let truth = SensorModel::paper_lens1();
+    let s = scenario(truth, 9, 5e-4, 4);
+    let (m0, p0) = perturbed(&truth, &s.poses);
+    let r = refine(&s.data, &m0, &p0, &RefineOptions::default()).unwrap();
+    let stats = fit_statistics(&s.data, &r.model, &r.poses, CostKind::Template, None);
+    assert!((stats.residual_mm2 - r.cost).abs() <= 1e-12 * r.cost);
+    assert_eq!(stats.points, 126);
+    assert_eq!(stats.per_image.len(), 9);
+    let from_images: f64 = stats.per_image.iter().map(|i| i.rms_template_mm.powi(2) * i.points as f64).sum();
+    assert!((from_images - stats.residual_mm2).abs() <= 1e-12 * r.cost);
+    // Image-plane RMS near the injected noise: sqrt(2)·σ per point, less the
+    // fraction absorbed by the 59 fitted parameters out of 252 coordinates.
+    let expected = 5e-4 * (2.0f64 * (252.0 - 59.0) / 252.0).sqrt();
+    assert!((stats.rms_image_mm / expected - 1.0).abs() < 0.2, "{} vs {expected}", stats.rms_image_mm);
+    assert!(stats.worst_points.windows(2).all(|w| w[0].template_mm >= w[1].template_mm));
+}

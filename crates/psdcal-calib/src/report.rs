@@ -1,0 +1,140 @@
+//! The fit statistics of a calibration (MODEL.md §4.6): the paper's
+//! *residual* (sum over every point of the squared template-plane error, mm²),
+//! the RMS template-plane and image-plane errors, each image's RMS, the worst
+//! points, and — under a robust loss — the points it down-weighted.
+//!
+//! For a point `m_ij` of LED `j` in image `i`:
+//! template-plane error `e_t = ‖back_project(θ, pose_i, m_ij) − (X_j, Y_j)‖`
+//! (mm on the template); image-plane error
+//! `e_m = ‖project(θ, pose_i, X_j, Y_j) − m_ij‖` (mm on the sensor).
+//! RMS values are `sqrt(mean(e²))` over points.
+
+use psdcal_model::{Pose, SensorModel};
+use serde::Serialize;
+
+use crate::data::CalibrationData;
+use crate::refine::{residual, CostKind, RobustLoss};
+
+/// How many of the worst points a report lists.
+pub const WORST_POINTS: usize = 10;
+
+/// The errors of one point.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PointError {
+    /// Image id.
+    pub image: String,
+    /// LED index in the template.
+    pub led: usize,
+    /// Template-plane error, mm.
+    pub template_mm: f64,
+    /// Image-plane error, mm (`None` where the point cannot be reprojected).
+    pub image_mm: Option<f64>,
+}
+
+/// The errors of one image.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ImageStats {
+    /// Image id.
+    pub id: String,
+    /// Points used.
+    pub points: usize,
+    /// RMS template-plane error, mm.
+    pub rms_template_mm: f64,
+    /// RMS image-plane error, mm.
+    pub rms_image_mm: f64,
+}
+
+/// Fit statistics over the whole data set.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FitStatistics {
+    /// Sum of squared template-plane errors, mm² (the paper's residual).
+    pub residual_mm2: f64,
+    /// RMS template-plane error, mm.
+    pub rms_template_mm: f64,
+    /// RMS image-plane error, mm.
+    pub rms_image_mm: f64,
+    /// Points used.
+    pub points: usize,
+    /// Images used.
+    pub images: usize,
+    /// Per image.
+    pub per_image: Vec<ImageStats>,
+    /// The largest template-plane errors, worst first.
+    pub worst_points: Vec<PointError>,
+    /// Points whose robust weight fell below 1/2 (outliers), worst first;
+    /// empty without a robust loss.
+    pub outliers: Vec<PointError>,
+    /// Points that could not be reprojected onto the sensor (outside the
+    /// model's valid region); they count in neither image-plane figure.
+    pub unprojectable: usize,
+}
+
+/// Computes the fit statistics of `(model, poses)` on `data`. `cost` and
+/// `robust` say what was minimised (to flag outliers in the right units).
+pub fn fit_statistics(
+    data: &CalibrationData,
+    model: &SensorModel,
+    poses: &[Pose],
+    cost: CostKind,
+    robust: Option<RobustLoss>,
+) -> FitStatistics {
+    let mut all: Vec<PointError> = Vec::with_capacity(data.point_count());
+    let mut outliers = Vec::new();
+    let mut per_image = Vec::with_capacity(data.images.len());
+    let (mut sum_t, mut sum_m, mut n_m, mut unprojectable) = (0.0, 0.0, 0usize, 0usize);
+    for (i, image) in data.images.iter().enumerate() {
+        let (mut img_t, mut img_m, mut img_n_m) = (0.0, 0.0, 0usize);
+        for obs in &image.points {
+            let e_t = residual(data, CostKind::Template, model, &poses[i], obs.led, &obs.measured)
+                .map(|r| r.norm())
+                .unwrap_or(f64::INFINITY);
+            let e_m = residual(data, CostKind::Image, model, &poses[i], obs.led, &obs.measured)
+                .ok()
+                .map(|r| r.norm());
+            img_t += e_t * e_t;
+            match e_m {
+                Some(e) => {
+                    img_m += e * e;
+                    img_n_m += 1;
+                }
+                None => unprojectable += 1,
+            }
+            let point = PointError { image: image.id.clone(), led: obs.led, template_mm: e_t, image_mm: e_m };
+            if let Some(loss) = robust {
+                let e = match cost {
+                    CostKind::Template => Some(e_t),
+                    CostKind::Image => e_m,
+                };
+                if e.is_none_or(|e| loss.weight(e * e) < 0.5) {
+                    outliers.push(point.clone());
+                }
+            }
+            all.push(point);
+        }
+        let n = image.points.len().max(1) as f64;
+        per_image.push(ImageStats {
+            id: image.id.clone(),
+            points: image.points.len(),
+            rms_template_mm: (img_t / n).sqrt(),
+            rms_image_mm: if img_n_m > 0 { (img_m / img_n_m as f64).sqrt() } else { f64::INFINITY },
+        });
+        sum_t += img_t;
+        sum_m += img_m;
+        n_m += img_n_m;
+    }
+    let points = data.point_count();
+    all.sort_by(|a, b| b.template_mm.total_cmp(&a.template_mm));
+    all.truncate(WORST_POINTS);
+    outliers.sort_by(|a, b| b.template_mm.total_cmp(&a.template_mm));
+    FitStatistics {
+        residual_mm2: sum_t,
+        rms_template_mm: (sum_t / points.max(1) as f64).sqrt(),
+        rms_image_mm: if n_m > 0 { (sum_m / n_m as f64).sqrt() } else { f64::INFINITY },
+        points,
+        images: data.images.len(),
+        per_image,
+        worst_points: all,
+        outliers,
+        unprojectable,
+    }
+}
