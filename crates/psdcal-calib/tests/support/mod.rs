@@ -28,6 +28,21 @@ pub const TEMPLATE_MM: [(f64, f64); 14] = [
     (90.0, 140.0),
 ];
 
+/// Six more LEDs for a 20-LED template (still no three collinear).
+pub const EXTRA_MM: [(f64, f64); 6] = [
+    (-10.0, -150.0),
+    (100.0, 95.0),
+    (-150.0, 110.0),
+    (15.0, 145.0),
+    (150.0, -10.0),
+    (-95.0, -95.0),
+];
+
+/// The first `leds` LEDs of the 20-LED template (14 or 20).
+pub fn template(leds: usize) -> Vec<Vector2<f64>> {
+    TEMPLATE_MM.iter().chain(EXTRA_MM.iter()).take(leds).map(|&(x, y)| Vector2::new(x, y)).collect()
+}
+
 /// A scenario: the truth and the data it produced.
 pub struct Scenario {
     pub truth: SensorModel,
@@ -40,7 +55,11 @@ pub struct Scenario {
 /// template plane, any roll; a pose is redrawn until every LED falls inside
 /// ±4.4 mm.
 pub fn poses(truth: &SensorModel, n: usize, rng: &mut ChaCha8Rng) -> Vec<Pose> {
-    let template: Vec<Vector2<f64>> = TEMPLATE_MM.iter().map(|&(x, y)| Vector2::new(x, y)).collect();
+    poses_for(truth, &template(20), n, rng)
+}
+
+/// [`poses`] for a given template.
+pub fn poses_for(truth: &SensorModel, template: &[Vector2<f64>], n: usize, rng: &mut ChaCha8Rng) -> Vec<Pose> {
     let mut out = Vec::with_capacity(n);
     while out.len() < n {
         let k = out.len() % 9;
@@ -75,15 +94,31 @@ pub fn poses(truth: &SensorModel, n: usize, rng: &mut ChaCha8Rng) -> Vec<Pose> {
 /// A scenario with `n` images and point noise of std `sigma_mm` per
 /// coordinate, all from `seed`.
 pub fn scenario(truth: SensorModel, n: usize, sigma_mm: f64, seed: u64) -> Scenario {
+    scenario_with(truth, 14, n, sigma_mm, seed)
+}
+
+/// A scenario with a template of `leds` LEDs (14 or 20).
+pub fn scenario_with(truth: SensorModel, leds: usize, n: usize, sigma_mm: f64, seed: u64) -> Scenario {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let poses = poses(&truth, n, &mut rng);
-    let data = observe(&truth, &poses, sigma_mm, &mut rng);
+    let data = observe_with(&truth, &template(leds), &poses, sigma_mm, &mut rng);
     Scenario { truth, poses, data }
 }
 
 /// Measures every LED in every pose, adding Gaussian noise.
 pub fn observe(truth: &SensorModel, poses: &[Pose], sigma_mm: f64, rng: &mut ChaCha8Rng) -> CalibrationData {
-    let template: Vec<Vector2<f64>> = TEMPLATE_MM.iter().map(|&(x, y)| Vector2::new(x, y)).collect();
+    observe_with(truth, &template(14), poses, sigma_mm, rng)
+}
+
+/// [`observe`] for a given template.
+pub fn observe_with(
+    truth: &SensorModel,
+    template: &[Vector2<f64>],
+    poses: &[Pose],
+    sigma_mm: f64,
+    rng: &mut ChaCha8Rng,
+) -> CalibrationData {
+    let template = template.to_vec();
     let noise = Normal::new(0.0, sigma_mm.max(0.0)).expect("valid sigma");
     let images = poses
         .iter()

@@ -1,0 +1,53 @@
+//! Refinement speed: the paper's size (9 images × 14 LEDs), with l1 freed
+//! (global search), and a large set (10 to 1000 images × 20 LEDs) to show the
+//! cost per image stays flat (Schur complement on the pose blocks).
+
+#[path = "../tests/support/mod.rs"]
+mod support;
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use psdcal_calib::{refine, refine_global, GlobalOptions, RefineOptions};
+use psdcal_model::{Param, SensorModel};
+use std::hint::black_box;
+
+fn paper_size(c: &mut Criterion) {
+    let truth = SensorModel::paper_lens2();
+    let s = support::scenario(truth, 9, 3e-4, 1);
+    let (m0, p0) = support::perturbed(&truth, &s.poses);
+    let options = RefineOptions::default();
+    c.bench_function("refine 9x14 lens2 f,cx,cy,k1,k2", |b| {
+        b.iter(|| refine(black_box(&s.data), &m0, &p0, &options).unwrap())
+    });
+    let mut truth_psd = truth;
+    truth_psd.distortion.l1 = SensorModel::PAPER_L1;
+    let s = support::scenario(truth_psd, 9, 3e-4, 1);
+    let (mut m0, p0) = support::perturbed(&truth_psd, &s.poses);
+    m0.distortion.l1 = 0.0;
+    let options = RefineOptions {
+        free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2, Param::L1],
+        ..RefineOptions::default()
+    };
+    let global = GlobalOptions::default();
+    c.bench_function("refine_global 9x14 lens2 +l1", |b| {
+        b.iter(|| refine_global(black_box(&s.data), &m0, &p0, &options, &global).unwrap())
+    });
+}
+
+fn scaling(c: &mut Criterion) {
+    let truth = SensorModel::paper_lens2();
+    let mut group = c.benchmark_group("refine x20 LEDs");
+    group.sample_size(10);
+    for n in [10usize, 100, 1000] {
+        let s = support::scenario_with(truth, 20, n, 3e-4, 2);
+        let (m0, p0) = support::perturbed(&truth, &s.poses);
+        let options = RefineOptions::default();
+        group.throughput(Throughput::Elements(n as u64));
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| refine(black_box(&s.data), &m0, &p0, &options).unwrap())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, paper_size, scaling);
+criterion_main!(benches);
