@@ -1,1 +1,58 @@
-pub fn x(){}
+//! # psdcal-io
+//!
+//! psdcal's file formats (the binding specification is FORMATS.md):
+//!
+//! - [`Template`] — template.csv, the LEDs of the calibration template;
+//! - [`Observations`] — observations.csv, measured impact points per image;
+//! - [`Signals`] — signals.csv, electrode amplitudes, converted to
+//!   observations with the pin-cushion formulas of MODEL.md §1;
+//! - [`Points`] — points.csv, points to correct, written back with their
+//!   original columns ([`correct_points`]);
+//! - [`Calibration`] — calibration.json, versioned, read with
+//!   [`read_calibration`] and written with [`write_calibration`].
+//!
+//! [`validate_data_set`] checks a template and its observations together and
+//! groups the usable points by image; [`DataSetSummary`] and [`Coverage`]
+//! describe the result. Every output file is written atomically
+//! ([`write_atomic`]).
+//!
+//! All readers take a path (named in messages) and also have `from_reader`
+//! and `from_str` variants with a display name. Every error is an
+//! [`IoError`] that names the file, the 1-based physical line and, for a bad
+//! value, the column, and says what was expected. No input makes these
+//! readers panic or produce a NaN. Millimetres everywhere.
+#![warn(missing_docs)]
+
+mod atomic;
+mod calibration;
+mod correct;
+mod coverage;
+mod csv_fields;
+mod csv_table;
+mod error;
+mod observations;
+mod points;
+mod signals;
+mod summary;
+mod template;
+mod validate;
+mod warning;
+
+pub use atomic::{write_atomic, write_atomic_bytes};
+pub use calibration::{
+    read_calibration, write_calibration, Calibration, CostKind, Covariance, FitSummary,
+    GainsRecord, ImageFit, IntrinsicsRecord, SensorSize, Software, StdDevs, CALIBRATION_FORMAT,
+    CALIBRATION_VERSION, GAIN_NAMES,
+};
+pub use correct::{correct_points, Correction, IDEAL_COLUMNS, MEASURED_COLUMNS};
+pub use coverage::{Bounds, Coverage};
+pub use error::{ColumnRef, IoError, Location};
+pub use observations::{Observation, Observations};
+pub use points::{AddedColumn, PointInput, PointRow, Points};
+pub use signals::{SignalRow, Signals};
+pub use summary::{DataSetSummary, ImageSummary, LineSummary, TemplateSummary};
+pub use template::{Led, LineGroup, Template};
+pub use validate::{
+    validate_data_set, Image, ValidatedDataSet, ValidationOptions, MIN_IMAGES, MIN_POINTS_PER_IMAGE,
+};
+pub use warning::Warning;

@@ -35,7 +35,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Nine poses: the template's centre aimed at a 3 × 3 grid of sensor
     // positions, 0.7–1.5 m away, tilted up to about 30°.
     let aims = [-3.1, 0.0, 3.1];
-    let depths = [700.0, 1100.0, 1500.0, 900.0, 1300.0, 800.0, 1000.0, 1400.0, 1200.0];
+    let depths = [
+        700.0, 1100.0, 1500.0, 900.0, 1300.0, 800.0, 1000.0, 1400.0, 1200.0,
+    ];
     let tilts = [
         (0.30, -0.20, 0.10),
         (-0.25, 0.35, -0.40),
@@ -50,11 +52,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut poses = Vec::new();
     for (k, (&z, &(rx, ry, rz))) in depths.iter().zip(tilts.iter()).enumerate() {
         let (u, v) = (aims[k % 3], aims[k / 3]);
-        let t = Vector3::new((u - model.intrinsics.cx) * z / model.intrinsics.f, (v - model.intrinsics.cy) * z / model.intrinsics.f, z);
+        let t = Vector3::new(
+            (u - model.intrinsics.cx) * z / model.intrinsics.f,
+            (v - model.intrinsics.cy) * z / model.intrinsics.f,
+            z,
+        );
         poses.push(Pose::new(Vector3::new(rx, ry, rz), t));
     }
 
-    let mut template = String::from("# Example calibration template: 14 LEDs, unaligned (mm).\nled,X_mm,Y_mm\n");
+    let mut template =
+        String::from("# Example calibration template: 14 LEDs, unaligned (mm).\nled,X_mm,Y_mm\n");
     for (i, (x, y)) in TEMPLATE_MM.iter().enumerate() {
         writeln!(template, "{},{x},{y}", i + 1)?;
     }
@@ -74,9 +81,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let m = model.project(pose, &Vector2::new(*x, *y))?;
             let margin = 4.5 - m.x.abs().max(m.y.abs());
             if !is_on_active_area(&geometry, &m) || margin < 0.05 {
-                return Err(format!("image {} LED {} falls at {m:?}, too near the edge", k + 1, i + 1).into());
+                return Err(format!(
+                    "image {} LED {} falls at {m:?}, too near the edge",
+                    k + 1,
+                    i + 1
+                )
+                .into());
             }
-            writeln!(observations, "{},{},{:.15e},{:.15e}", k + 1, i + 1, m.x, m.y)?;
+            writeln!(
+                observations,
+                "{},{},{:.15e},{:.15e}",
+                k + 1,
+                i + 1,
+                m.x,
+                m.y
+            )?;
             let a = electrode_currents(&geometry, &m, 20e-6);
             writeln!(
                 signals,
@@ -93,7 +112,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut truth = String::from("# image,rx,ry,rz,tx_mm,ty_mm,tz_mm: the true sensor_from_template poses.\nimage,rx,ry,rz,tx_mm,ty_mm,tz_mm\n");
     for (k, p) in poses.iter().enumerate() {
         let a = p.to_array();
-        writeln!(truth, "{},{},{},{},{},{},{}", k + 1, a[0], a[1], a[2], a[3], a[4], a[5])?;
+        writeln!(
+            truth,
+            "{},{},{},{},{},{},{}",
+            k + 1,
+            a[0],
+            a[1],
+            a[2],
+            a[3],
+            a[4],
+            a[5]
+        )?;
     }
     std::fs::write("data/example/template.csv", template)?;
     std::fs::write("data/example/observations.csv", observations)?;

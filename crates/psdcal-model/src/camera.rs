@@ -18,13 +18,17 @@ use nalgebra::{Matrix2, Matrix2x3, SMatrix, Unit, Vector2, Vector3};
 use crate::params::{Param, SensorModel, N_PARAMS};
 use crate::ModelError;
 
+/// An ideal point with its Jacobians with respect to the sensor-frame point
+/// (2×3) and to the model parameters (2×11).
+pub type PinholeWithJacobians = (Vector2<f64>, Matrix2x3<f64>, SMatrix<f64, 2, N_PARAMS>);
+
 /// Smallest depth accepted as "in front of the sensor", mm.
 pub const MIN_DEPTH_MM: f64 = 1e-9;
 
 impl SensorModel {
     /// Ideal image point of a sensor-frame point.
     pub fn pinhole_project(&self, p_c: &Vector3<f64>) -> Result<Vector2<f64>, ModelError> {
-        if !(p_c.z > MIN_DEPTH_MM) {
+        if p_c.z.is_nan() || p_c.z <= MIN_DEPTH_MM {
             return Err(ModelError::BehindSensor { zc: p_c.z });
         }
         let k = &self.intrinsics;
@@ -37,7 +41,7 @@ impl SensorModel {
     pub fn pinhole_project_with_jacobians(
         &self,
         p_c: &Vector3<f64>,
-    ) -> Result<(Vector2<f64>, Matrix2x3<f64>, SMatrix<f64, 2, N_PARAMS>), ModelError> {
+    ) -> Result<PinholeWithJacobians, ModelError> {
         let ideal = self.pinhole_project(p_c)?;
         let k = &self.intrinsics;
         let inv_z = 1.0 / p_c.z;

@@ -127,7 +127,9 @@ impl SensorModel {
     /// inverse of [`Self::undistort`]), by Newton's method to 1e-12 mm.
     pub fn distort(&self, ideal: &Vector2<f64>) -> Result<Vector2<f64>, ModelError> {
         if !(ideal.x.is_finite() && ideal.y.is_finite()) {
-            return Err(ModelError::NonFinite { what: "ideal point" });
+            return Err(ModelError::NonFinite {
+                what: "ideal point",
+            });
         }
         // Without distortion the map is the identity.
         let d = &self.distortion;
@@ -146,12 +148,15 @@ impl SensorModel {
             }
             let jac = self.undistort_point_jacobian(&m);
             let det = jac.determinant();
-            if !(det > 1e-12) {
-                return Err(ModelError::SingularDistortion { x: m.x, y: m.y, det });
+            if det.is_nan() || det <= 1e-12 {
+                return Err(ModelError::SingularDistortion {
+                    x: m.x,
+                    y: m.y,
+                    det,
+                });
             }
-            let step = Matrix2::new(jac[(1, 1)], -jac[(0, 1)], -jac[(1, 0)], jac[(0, 0)])
-                * residual
-                / det;
+            let step =
+                Matrix2::new(jac[(1, 1)], -jac[(0, 1)], -jac[(1, 0)], jac[(0, 0)]) * residual / det;
             // Step halving keeps the iteration on the branch it started on.
             let mut alpha = 1.0;
             loop {
@@ -192,7 +197,11 @@ impl SensorModel {
         if det > 1e-12 {
             Ok(m)
         } else {
-            Err(ModelError::SingularDistortion { x: m.x, y: m.y, det })
+            Err(ModelError::SingularDistortion {
+                x: m.x,
+                y: m.y,
+                det,
+            })
         }
     }
 }

@@ -178,7 +178,8 @@ impl Pose {
         for (i, dri) in dr.iter().enumerate() {
             j.set_column(i, &(dri * p));
         }
-        j.fixed_view_mut::<3, 3>(0, 3).copy_from(&Matrix3::identity());
+        j.fixed_view_mut::<3, 3>(0, 3)
+            .copy_from(&Matrix3::identity());
         (r * p + self.t, j, r)
     }
 
@@ -212,22 +213,36 @@ mod tests {
             let c = rodrigues_closed_form(theta);
             for k in 0..4 {
                 let rel = (s[k] - c[k]).abs() / c[k].abs();
-                assert!(rel < 1e-12, "θ = {theta}, coefficient {k}: {} vs {} (rel {rel:.2e})", s[k], c[k]);
+                assert!(
+                    rel < 1e-12,
+                    "θ = {theta}, coefficient {k}: {} vs {} (rel {rel:.2e})",
+                    s[k],
+                    c[k]
+                );
             }
         }
     }
 
     #[test]
     fn rotation_is_exact_for_quarter_turn_about_z() {
-        let pose = Pose::new(Vector3::new(0.0, 0.0, std::f64::consts::FRAC_PI_2), Vector3::zeros());
+        let pose = Pose::new(
+            Vector3::new(0.0, 0.0, std::f64::consts::FRAC_PI_2),
+            Vector3::zeros(),
+        );
         let p = pose.transform(&Vector3::new(1.0, 0.0, 0.0));
         assert!((p - Vector3::new(0.0, 1.0, 0.0)).norm() < 1e-15);
     }
 
     #[test]
     fn inverse_and_compose_round_trip() {
-        let a = Pose::new(Vector3::new(0.3, -0.2, 2.9), Vector3::new(10.0, -5.0, 900.0));
-        let b = Pose::new(Vector3::new(-1.0, 0.4, 0.1), Vector3::new(-30.0, 60.0, 20.0));
+        let a = Pose::new(
+            Vector3::new(0.3, -0.2, 2.9),
+            Vector3::new(10.0, -5.0, 900.0),
+        );
+        let b = Pose::new(
+            Vector3::new(-1.0, 0.4, 0.1),
+            Vector3::new(-30.0, 60.0, 20.0),
+        );
         let p = Vector3::new(12.0, -7.0, 3.0);
         assert!((a.inverse().transform(&a.transform(&p)) - p).norm() < 1e-12);
         assert!((a.compose(&b).transform(&p) - a.transform(&b.transform(&p))).norm() < 1e-12);

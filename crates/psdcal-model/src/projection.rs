@@ -82,7 +82,8 @@ impl SensorModel {
         template_xy: &Vector2<f64>,
     ) -> Result<(Vector2<f64>, ProjectionJacobians), ModelError> {
         let p_t = Vector3::new(template_xy.x, template_xy.y, 0.0);
-        let (p_c, dpc_dpose, rot) = sensor_from_template.transform_with_jacobians_using(rotation, &p_t);
+        let (p_c, dpc_dpose, rot) =
+            sensor_from_template.transform_with_jacobians_using(rotation, &p_t);
         let (ideal, dp_dpc, wrt_model) = self.pinhole_project_with_jacobians(&p_c)?;
         Ok((
             ideal,
@@ -228,7 +229,8 @@ fn intersect_template_plane(
     let r3 = rot.column(2);
     let q = r3.dot(&n);
     let s = r3.dot(t) / q;
-    if !(q.abs() > MIN_OBLIQUITY * n.norm()) || !(s > 0.0) || !s.is_finite() {
+    let grazing = q.is_nan() || q.abs() <= MIN_OBLIQUITY * n.norm();
+    if grazing || s.is_nan() || s <= 0.0 || !s.is_finite() {
         return Err(ModelError::RayMissesPlane { s });
     }
     let p_t = rot.transpose() * (n * s - t);

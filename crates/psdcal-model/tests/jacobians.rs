@@ -5,10 +5,13 @@
 mod common;
 
 use common::{
-    check_jacobian, example_models, example_poses, example_template_points, MODEL_SCALES, POSE_SCALES,
+    check_jacobian, example_models, example_poses, example_template_points, MODEL_SCALES,
+    POSE_SCALES,
 };
 use nalgebra::{DMatrix, DVector, Vector2, Vector3};
-use psdcal_model::sensor::{impact_point_with_gains, electrode_currents, impact_point_gain_jacobian};
+use psdcal_model::sensor::{
+    electrode_currents, impact_point_gain_jacobian, impact_point_with_gains,
+};
 use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel, N_PARAMS};
 
 const REL: f64 = 1e-6;
@@ -107,7 +110,11 @@ fn pinhole_and_normalize_jacobians() {
                 &format!("pinhole wrt P_c [{name}]"),
                 &DVector::from_row_slice(p.as_slice()),
                 &[1000.0; 3],
-                &|x| v2(model.pinhole_project(&Vector3::new(x[0], x[1], x[2])).unwrap()),
+                &|x| {
+                    v2(model
+                        .pinhole_project(&Vector3::new(x[0], x[1], x[2]))
+                        .unwrap())
+                },
                 &dyn_mat(&wrt_p),
                 REL,
             );
@@ -190,7 +197,9 @@ fn transform_jacobians() {
             "transform wrt point",
             &DVector::from_row_slice(p.as_slice()),
             &[1000.0; 3],
-            &|x| DVector::from_row_slice(pose.transform(&Vector3::new(x[0], x[1], x[2])).as_slice()),
+            &|x| {
+                DVector::from_row_slice(pose.transform(&Vector3::new(x[0], x[1], x[2])).as_slice())
+            },
             &dyn_mat(&wrt_p),
             REL,
         );
@@ -217,7 +226,11 @@ fn projection_jacobians() {
                         model.project_ideal_with_jacobians(&pose, &xy).unwrap()
                     };
                     assert!((pt - project(&model, &pose, &xy)).norm() < 1e-12);
-                    let what = if measured_output { "project" } else { "project_ideal" };
+                    let what = if measured_output {
+                        "project"
+                    } else {
+                        "project_ideal"
+                    };
                     check_jacobian(
                         &format!("{what} wrt model {label}"),
                         &model_vec(&model),
@@ -277,7 +290,11 @@ fn back_projection_jacobians() {
                     &format!("back_project wrt measured {label}"),
                     &v2(measured),
                     &[1.0; 2],
-                    &|x| v2(model.back_project(&pose, &Vector2::new(x[0], x[1])).unwrap()),
+                    &|x| {
+                        v2(model
+                            .back_project(&pose, &Vector2::new(x[0], x[1]))
+                            .unwrap())
+                    },
                     &dyn_mat(&j.wrt_measured),
                     REL,
                 );
@@ -289,8 +306,16 @@ fn back_projection_jacobians() {
 #[test]
 fn impact_point_gain_jacobian_matches_finite_differences() {
     let geometry = PsdGeometry::default();
-    let gains = ChannelGains { x2: 1.07, y1: 0.94, y2: 1.02 };
-    for point in [Vector2::new(0.0, 0.0), Vector2::new(3.1, -2.2), Vector2::new(-4.4, 4.0)] {
+    let gains = ChannelGains {
+        x2: 1.07,
+        y1: 0.94,
+        y2: 1.02,
+    };
+    for point in [
+        Vector2::new(0.0, 0.0),
+        Vector2::new(3.1, -2.2),
+        Vector2::new(-4.4, 4.0),
+    ] {
         let amps = electrode_currents(&geometry, &point, 2.5).apply_gains(&gains);
         let (p, jac) = impact_point_gain_jacobian(&geometry, &amps, &gains).unwrap();
         assert!((p - point).norm() < 1e-13);
@@ -299,7 +324,11 @@ fn impact_point_gain_jacobian_matches_finite_differences() {
             &DVector::from_row_slice(&gains.to_array()),
             &[1.0; 3],
             &|x| {
-                let g = ChannelGains { x2: x[0], y1: x[1], y2: x[2] };
+                let g = ChannelGains {
+                    x2: x[0],
+                    y1: x[1],
+                    y2: x[2],
+                };
                 v2(impact_point_with_gains(&geometry, &amps, &g).unwrap())
             },
             &dyn_mat(&jac),
@@ -307,6 +336,11 @@ fn impact_point_gain_jacobian_matches_finite_differences() {
         );
     }
     // The amplitudes type is plain data: a zero total is refused, not NaN.
-    let dark = Amplitudes { vx1: 0.0, vx2: 0.0, vy1: 0.0, vy2: 0.0 };
+    let dark = Amplitudes {
+        vx1: 0.0,
+        vx2: 0.0,
+        vy1: 0.0,
+        vy2: 0.0,
+    };
     assert!(impact_point_with_gains(&geometry, &dark, &gains).is_err());
 }

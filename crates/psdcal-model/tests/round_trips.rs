@@ -11,14 +11,19 @@ use psdcal_model::{ChannelGains, ModelError, Pose, PsdGeometry, SensorModel};
 
 /// 41 × 41 points over the 9 × 9 mm active area, edges included.
 fn sensor_grid() -> impl Iterator<Item = Vector2<f64>> {
-    (0..41).flat_map(|i| (0..41).map(move |j| Vector2::new(-4.5 + 0.225 * i as f64, -4.5 + 0.225 * j as f64)))
+    (0..41).flat_map(|i| {
+        (0..41).map(move |j| Vector2::new(-4.5 + 0.225 * i as f64, -4.5 + 0.225 * j as f64))
+    })
 }
 
 /// The round-trip cases: both lenses, with and without the paper's
 /// PSD distortion, and with tangential terms.
 fn round_trip_models() -> Vec<(String, SensorModel)> {
     let mut out = Vec::new();
-    for (lens, base) in [("lens1", SensorModel::paper_lens1()), ("lens2", SensorModel::paper_lens2())] {
+    for (lens, base) in [
+        ("lens1", SensorModel::paper_lens1()),
+        ("lens2", SensorModel::paper_lens2()),
+    ] {
         for l1 in [0.0, SensorModel::PAPER_L1] {
             for tangential in [false, true] {
                 let mut m = base;
@@ -39,16 +44,24 @@ fn distortion_round_trip_on_the_sensor_grid() {
     for (name, model) in round_trip_models() {
         let mut worst: f64 = 0.0;
         for ideal in sensor_grid() {
-            let measured = model.distort(&ideal).unwrap_or_else(|e| panic!("{name}: {ideal:?}: {e}"));
+            let measured = model
+                .distort(&ideal)
+                .unwrap_or_else(|e| panic!("{name}: {ideal:?}: {e}"));
             worst = worst.max((model.undistort(&measured) - ideal).norm());
         }
-        assert!(worst <= 1e-10, "{name}: ideal → measured → ideal error {worst:.3e} mm");
+        assert!(
+            worst <= 1e-10,
+            "{name}: ideal → measured → ideal error {worst:.3e} mm"
+        );
         let mut worst: f64 = 0.0;
         for measured in sensor_grid() {
             let back = model.distort(&model.undistort(&measured)).unwrap();
             worst = worst.max((back - measured).norm());
         }
-        assert!(worst <= 1e-10, "{name}: measured → ideal → measured error {worst:.3e} mm");
+        assert!(
+            worst <= 1e-10,
+            "{name}: measured → ideal → measured error {worst:.3e} mm"
+        );
     }
 }
 
@@ -79,15 +92,21 @@ fn undistort_closed_form_cases() {
 fn pinhole_closed_form_cases() {
     let model = SensorModel::paper_lens2();
     // On the optical axis: the optical centre.
-    let on_axis = model.pinhole_project(&Vector3::new(0.0, 0.0, 1234.0)).unwrap();
+    let on_axis = model
+        .pinhole_project(&Vector3::new(0.0, 0.0, 1234.0))
+        .unwrap();
     assert_eq!(on_axis, Vector2::new(0.5, -0.7));
     // 45° off axis in x: f to the right of the centre.
-    let p = model.pinhole_project(&Vector3::new(1000.0, 0.0, 1000.0)).unwrap();
+    let p = model
+        .pinhole_project(&Vector3::new(1000.0, 0.0, 1000.0))
+        .unwrap();
     assert!((p - Vector2::new(8.5, -0.7)).norm() < 1e-14);
     // Skew shifts x by γ · Yc/Zc.
     let mut skewed = model;
     skewed.intrinsics.skew = 0.25;
-    let q = skewed.pinhole_project(&Vector3::new(0.0, 500.0, 1000.0)).unwrap();
+    let q = skewed
+        .pinhole_project(&Vector3::new(0.0, 500.0, 1000.0))
+        .unwrap();
     assert!((q - Vector2::new(0.5 + 0.125, -0.7 + 4.0)).norm() < 1e-14);
 }
 
@@ -98,7 +117,10 @@ fn projection_back_projection_round_trip() {
             for xy in example_template_points() {
                 let measured = model.project(&pose, &xy).unwrap();
                 let back = model.back_project(&pose, &measured).unwrap();
-                assert!((back - xy).norm() < 1e-9, "{name}: {xy:?} → {measured:?} → {back:?}");
+                assert!(
+                    (back - xy).norm() < 1e-9,
+                    "{name}: {xy:?} → {measured:?} → {back:?}"
+                );
             }
         }
     }
@@ -111,7 +133,8 @@ fn outside_the_valid_region_is_a_typed_error() {
     let mut folded = SensorModel::pinhole(8.0, 0.0, 0.0);
     folded.distortion.k1 = -0.01;
     match folded.distort(&Vector2::new(10.0, 0.0)) {
-        Err(ModelError::SingularDistortion { .. }) | Err(ModelError::DistortionNotConverged { .. }) => {}
+        Err(ModelError::SingularDistortion { .. })
+        | Err(ModelError::DistortionNotConverged { .. }) => {}
         other => panic!("expected a distortion error, got {other:?}"),
     }
     assert!(matches!(
@@ -125,7 +148,10 @@ fn outside_the_valid_region_is_a_typed_error() {
         Err(ModelError::BehindSensor { .. })
     ));
     // Template plane seen edge-on (rotated 90° about x): rays run parallel to it.
-    let edge_on = Pose::new(Vector3::new(std::f64::consts::FRAC_PI_2, 0.0, 0.0), Vector3::new(0.0, 0.0, 1000.0));
+    let edge_on = Pose::new(
+        Vector3::new(std::f64::consts::FRAC_PI_2, 0.0, 0.0),
+        Vector3::new(0.0, 0.0, 1000.0),
+    );
     assert!(matches!(
         model.back_project(&edge_on, &Vector2::new(0.5, -0.7)),
         Err(ModelError::RayMissesPlane { .. })
@@ -135,7 +161,11 @@ fn outside_the_valid_region_is_a_typed_error() {
 #[test]
 fn unequal_gains_bias_the_centre_and_dividing_them_out_removes_it() {
     let geometry = PsdGeometry::default();
-    let gains = ChannelGains { x2: 1.05, y1: 0.97, y2: 1.08 };
+    let gains = ChannelGains {
+        x2: 1.05,
+        y1: 0.97,
+        y2: 1.08,
+    };
     let balanced = electrode_currents(&geometry, &Vector2::zeros(), 1.0);
     let measured = balanced.apply_gains(&gains);
     // At the centre every current is I0/4, so S = (1 + g_x2 + g_y1 + g_y2)/4 and
@@ -155,10 +185,18 @@ fn unequal_gains_bias_the_centre_and_dividing_them_out_removes_it() {
 #[test]
 fn electrode_corners_map_to_themselves() {
     let geometry = PsdGeometry { lx: 9.0, ly: 6.0 };
-    for corner in [Vector2::new(4.5, 3.0), Vector2::new(4.5, -3.0), Vector2::new(-4.5, -3.0), Vector2::new(-4.5, 3.0)] {
+    for corner in [
+        Vector2::new(4.5, 3.0),
+        Vector2::new(4.5, -3.0),
+        Vector2::new(-4.5, -3.0),
+        Vector2::new(-4.5, 3.0),
+    ] {
         let amps = electrode_currents(&geometry, &corner, 1.0);
         // All the current goes to the corner's own electrode.
-        let nonzero = [amps.vx1, amps.vx2, amps.vy1, amps.vy2].iter().filter(|v| v.abs() > 0.0).count();
+        let nonzero = [amps.vx1, amps.vx2, amps.vy1, amps.vy2]
+            .iter()
+            .filter(|v| v.abs() > 0.0)
+            .count();
         assert_eq!(nonzero, 1);
         assert!((impact_point(&geometry, &amps).unwrap() - corner).norm() < 1e-15);
     }

@@ -35,10 +35,22 @@ pub fn example_models() -> Vec<(&'static str, SensorModel)> {
 pub fn example_poses() -> Vec<Pose> {
     vec![
         Pose::new(Vector3::zeros(), Vector3::new(10.0, -20.0, 900.0)),
-        Pose::new(Vector3::new(0.3, -0.2, 0.1), Vector3::new(-150.0, 80.0, 700.0)),
-        Pose::new(Vector3::new(-0.45, 0.25, -0.6), Vector3::new(120.0, 140.0, 1500.0)),
-        Pose::new(Vector3::new(1e-9, -2e-9, 5e-10), Vector3::new(0.0, 0.0, 1100.0)),
-        Pose::new(Vector3::new(0.1, 0.5, 2.8), Vector3::new(60.0, -90.0, 1200.0)),
+        Pose::new(
+            Vector3::new(0.3, -0.2, 0.1),
+            Vector3::new(-150.0, 80.0, 700.0),
+        ),
+        Pose::new(
+            Vector3::new(-0.45, 0.25, -0.6),
+            Vector3::new(120.0, 140.0, 1500.0),
+        ),
+        Pose::new(
+            Vector3::new(1e-9, -2e-9, 5e-10),
+            Vector3::new(0.0, 0.0, 1100.0),
+        ),
+        Pose::new(
+            Vector3::new(0.1, 0.5, 2.8),
+            Vector3::new(60.0, -90.0, 1200.0),
+        ),
     ]
 }
 
@@ -55,7 +67,9 @@ pub fn example_template_points() -> Vec<Vector2<f64>> {
 
 /// Typical magnitudes of the model parameters in [`psdcal_model::Param::ALL`]
 /// order: finite-difference steps and tolerances are taken in these units.
-pub const MODEL_SCALES: [f64; 11] = [10.0, 1.0, 1.0, 0.1, 1e-2, 1e-4, 1e-6, 1e-3, 1e-3, 1e-3, 1e-5];
+pub const MODEL_SCALES: [f64; 11] = [
+    10.0, 1.0, 1.0, 0.1, 1e-2, 1e-4, 1e-6, 1e-3, 1e-3, 1e-3, 1e-5,
+];
 /// Typical magnitudes of the pose parameters (rad, rad, rad, mm, mm, mm).
 pub const POSE_SCALES: [f64; 6] = [1.0, 1.0, 1.0, 1000.0, 1000.0, 1000.0];
 
@@ -82,8 +96,12 @@ pub fn check_jacobian(
     assert_eq!(analytic.nrows(), y0.len(), "{name}: Jacobian rows");
     assert_eq!(analytic.ncols(), x.len(), "{name}: Jacobian columns");
     assert_eq!(scales.len(), x.len(), "{name}: scales");
-    let scaled = DMatrix::from_fn(analytic.nrows(), analytic.ncols(), |i, j| analytic[(i, j)] * scales[j]);
-    let largest = (0..x.len()).map(|j| scaled.column(j).norm()).fold(0.0, f64::max);
+    let scaled = DMatrix::from_fn(analytic.nrows(), analytic.ncols(), |i, j| {
+        analytic[(i, j)] * scales[j]
+    });
+    let largest = (0..x.len())
+        .map(|j| scaled.column(j).norm())
+        .fold(0.0, f64::max);
     for j in 0..x.len() {
         let col = scaled.column(j);
         let h = 1e-5 * scales[j];

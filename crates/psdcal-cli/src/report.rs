@@ -1,0 +1,57 @@
+//! How failures and warnings reach the user: one `error: <what happened>;
+//! <what to do>` line, and `warning: ...` lines, on standard error.
+
+use psdcal_io::{IoError, Warning};
+
+/// At most this many warnings are printed one by one.
+const MAX_WARNINGS: usize = 50;
+
+/// Prints the failure as one line on standard error.
+pub fn print_error(error: &anyhow::Error) {
+    // psdcal-io's messages already include their causes; other errors get
+    // their chain of causes joined with ": ".
+    let what = if error.is::<IoError>() {
+        error.to_string()
+    } else {
+        format!("{error:#}")
+    };
+    let what = what.replace('\n', " ");
+    eprintln!("error: {what}; {}", hint(error));
+}
+
+/// Prints warnings on standard error, at most [`MAX_WARNINGS`] of them.
+pub fn print_warnings(warnings: &[Warning]) {
+    for warning in warnings.iter().take(MAX_WARNINGS) {
+        eprintln!("warning: {warning}");
+    }
+    if warnings.len() > MAX_WARNINGS {
+        eprintln!(
+            "warning: {} more warnings not shown (--json lists them all)",
+            warnings.len() - MAX_WARNINGS
+        );
+    }
+}
+
+/// What the user can do about an error.
+fn hint(error: &anyhow::Error) -> &'static str {
+    let Some(io) = error.downcast_ref::<IoError>() else {
+        return "see 'psdcal --help'";
+    };
+    match io {
+        IoError::Read { .. } => "check the path and that the file is readable",
+        IoError::Write { .. } => "check that the destination folder exists and is writable",
+        IoError::Encoding { .. } => "save the file as UTF-8 text (CSV or JSON)",
+        IoError::Structure { .. } => "fix the file's header or rows (formats: FORMATS.md)",
+        IoError::Value { .. } => "correct the value on that line",
+        IoError::UnknownLed { .. } => "add the LED to the template or correct its identifier",
+        IoError::Duplicate { .. } => "keep only one of the two rows",
+        IoError::Invalid { .. } => "correct the data (formats: FORMATS.md)",
+        IoError::Amplitudes { .. } => {
+            "check that row's amplitudes (no light reached the sensor, or a channel is broken)"
+        }
+        IoError::Json { .. } => "correct the calibration file, or write it again with psdcal",
+        IoError::NewerVersion { .. } => "upgrade psdcal to read this file",
+        IoError::Strict { .. } => "fix the data, or run without --strict to drop it with a warning",
+        _ => "see 'psdcal --help'",
+    }
+}

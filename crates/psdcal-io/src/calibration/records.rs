@@ -1,0 +1,346 @@
+//! The parts of calibration.json (see the parent module for the format):
+//! sensor size, intrinsics, gains, standard deviations, covariance, fit
+//! summary and per-image poses. Values that must be valid in any file are
+//! checked while parsing, so that errors carry the JSON line and column.
+
+use std::fmt;
+
+use nalgebra::Vector3;
+use psdcal_model::{ChannelGains, Pose};
+use serde::de::{self, Deserializer, MapAccess, Visitor};
+use serde::ser::Serializer;
+use serde::{Deserialize, Serialize};
+
+use super::rules::{de_identifier, de_positive, shown};
+
+/// The program that wrote a calibration.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Software {
+    /// Program name.
+    pub name: String,
+    /// Program version.
+    pub version: String,
+}
+
+impl Software {
+    /// This psdcal.
+    pub fn current() -> Self {
+        Self {
+            name: "psdcal".to_string(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+        }
+    }
+}
+
+/// Active area of the PSD, mm.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SensorSize {
+    /// Side along x, mm.
+    #[serde(deserialize_with = "de_positive")]
+    pub lx_mm: f64,
+    /// Side along y, mm.
+    #[serde(deserialize_with = "de_positive")]
+    pub ly_mm: f64,
+}
+
+/// Pinhole intrinsics with their units in the names (MODEL.md §3).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct IntrinsicsRecord {
+    /// Focal length, mm, positive.
+    #[serde(deserialize_with = "de_positive")]
+    pub f_mm: f64,
+    /// Optical centre x, mm.
+    pub cx_mm: f64,
+    /// Optical centre y, mm.
+    pub cy_mm: f64,
+    /// Skew `γ`, mm.
+    pub skew: f64,
+}
+
+/// Channel gains of an electrical calibration (MODEL.md §1). Only the ratios
+/// to `x1` matter.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "GainsFields")]
+pub struct GainsRecord {
+    /// Gain of channel x1 (the reference, normally 1).
+    pub x1: f64,
+    /// Gain of channel x2.
+    pub x2: f64,
+    /// Gain of channel y1.
+    pub y1: f64,
+    /// Gain of channel y2.
+    pub y2: f64,
+    /// Whether the fit estimated the gains (then `std` has `g_x2`, `g_y1`, `g_y2`).
+    pub estimated: bool,
+}
+
+#[derive(Deserialize)]
+struct GainsFields {
+    x1: f64,
+    x2: f64,
+    y1: f64,
+    y2: f64,
+    estimated: bool,
+}
+
+impl TryFrom<GainsFields> for GainsRecord {
+    type Error = String;
+    fn try_from(f: GainsFields) -> Result<Self, String> {
+        let record = GainsRecord {
+            x1: f.x1,
+            x2: f.x2,
+            y1: f.y1,
+            y2: f.y2,
+            estimated: f.estimated,
+        };
+        record.check()?;
+        Ok(record)
+    }
+}
+
+impl GainsRecord {
+    /// A record of relative gains (`x1 = 1`).
+    pub fn new(gains: &ChannelGains, estimated: bool) -> Self {
+        Self {
+            x1: 1.0,
+            x2: gains.x2,
+            y1: gains.y1,
+            y2: gains.y2,
+            estimated,
+        }
+    }
+
+    /// The gains relative to channel x1.
+    pub fn to_gains(&self) -> ChannelGains {
+        ChannelGains::from_absolute(self.x1, self.x2, self.y1, self.y2)
+    }
+
+    pub(super) fn check(&self) -> Result<(), String> {
+        for (name, value) in [
+            ("x1", self.x1),
+            ("x2", self.x2),
+            ("y1", self.y1),
+            ("y2", self.y2),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(format!(
+                    "gains.{name} must be a positive number, found {}",
+                    shown(value)
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Standard deviations by parameter name, in file order (a JSON object).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct StdDevs(pub Vec<(String, f64)>);
+
+impl StdDevs {
+    /// The standard deviation of `name`.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.0.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
+    }
+
+    /// The names, in order.
+    pub fn names(&self) -> Vec<&str> {
+        self.0.iter().map(|(n, _)| n.as_str()).collect()
+    }
+}
+
+impl Serialize for StdDevs {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_map(self.0.iter().map(|(k, v)| (k, v)))
+    }
+}
+
+impl<'de> Deserialize<'de> for StdDevs {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct StdVisitor;
+        impl<'de> Visitor<'de> for StdVisitor {
+            type Value = StdDevs;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("an object of standard deviations by parameter name")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<StdDevs, A::Error> {
+                let mut entries: Vec<(String, f64)> = Vec::new();
+                while let Some((name, value)) = map.next_entry::<String, f64>()? {
+                    if entries.iter().any(|(n, _)| *n == name) {
+                        return Err(de::Error::custom(format!(
+                            "std names parameter '{name}' twice; expected each once"
+                        )));
+                    }
+                    if value < 0.0 {
+                        return Err(de::Error::custom(format!(
+                            "std.{name} must be zero or positive, found {value}"
+                        )));
+                    }
+                    entries.push((name, value));
+                }
+                Ok(StdDevs(entries))
+            }
+        }
+        deserializer.deserialize_map(StdVisitor)
+    }
+}
+
+/// Covariance of the estimated parameters.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(try_from = "CovarianceFields")]
+pub struct Covariance {
+    /// Row and column names (as in `std`).
+    pub parameters: Vec<String>,
+    /// Square symmetric matrix, one row per parameter.
+    pub matrix: Vec<Vec<f64>>,
+}
+
+#[derive(Deserialize)]
+struct CovarianceFields {
+    parameters: Vec<String>,
+    matrix: Vec<Vec<f64>>,
+}
+
+impl TryFrom<CovarianceFields> for Covariance {
+    type Error = String;
+    fn try_from(f: CovarianceFields) -> Result<Self, String> {
+        let c = Covariance {
+            parameters: f.parameters,
+            matrix: f.matrix,
+        };
+        c.check()?;
+        Ok(c)
+    }
+}
+
+impl Covariance {
+    /// The entry for parameters `a` and `b`.
+    pub fn get(&self, a: &str, b: &str) -> Option<f64> {
+        let i = self.parameters.iter().position(|p| p == a)?;
+        let j = self.parameters.iter().position(|p| p == b)?;
+        self.matrix.get(i)?.get(j).copied()
+    }
+
+    pub(super) fn check(&self) -> Result<(), String> {
+        let n = self.parameters.len();
+        if self.matrix.len() != n {
+            return Err(format!(
+                "covariance.matrix has {} rows for {n} parameters; expected a square {n} x {n} \
+                 matrix",
+                self.matrix.len()
+            ));
+        }
+        for (i, row) in self.matrix.iter().enumerate() {
+            if row.len() != n {
+                return Err(format!(
+                    "covariance.matrix row {} has {} entries; expected {n}",
+                    i + 1,
+                    row.len()
+                ));
+            }
+            if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+                return Err(format!(
+                    "covariance.matrix[{i}][{j}] must be a finite number"
+                ));
+            }
+        }
+        for i in 0..n {
+            for j in 0..i {
+                let (a, b) = (self.matrix[i][j], self.matrix[j][i]);
+                if (a - b).abs() > 1e-9 * a.abs().max(b.abs()) {
+                    return Err(format!(
+                        "covariance.matrix is not symmetric: [{i}][{j}] = {a} but [{j}][{i}] = \
+                         {b}"
+                    ));
+                }
+            }
+            if self.matrix[i][i] < 0.0 {
+                return Err(format!(
+                    "covariance.matrix[{i}][{i}] is a variance and must not be negative, found {}",
+                    self.matrix[i][i]
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Which error the fit minimised (MODEL.md §4.6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CostKind {
+    /// Template-plane error (the paper's residual).
+    Template,
+    /// Image-plane reprojection error.
+    Image,
+}
+
+/// Summary of the fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitSummary {
+    /// The minimised cost.
+    pub cost: CostKind,
+    /// Sum of squared template-plane errors, mm².
+    pub residual_mm2: f64,
+    /// RMS template-plane error, mm.
+    pub rms_template_mm: f64,
+    /// RMS image-plane error, mm.
+    pub rms_image_mm: f64,
+    /// Iterations of the optimiser.
+    pub iterations: usize,
+    /// Points used.
+    pub points: usize,
+    /// Images used.
+    pub images: usize,
+    /// Why the optimiser stopped.
+    pub termination: String,
+}
+
+impl Default for FitSummary {
+    fn default() -> Self {
+        Self {
+            cost: CostKind::Template,
+            residual_mm2: 0.0,
+            rms_template_mm: 0.0,
+            rms_image_mm: 0.0,
+            iterations: 0,
+            points: 0,
+            images: 0,
+            termination: "not fitted".to_string(),
+        }
+    }
+}
+
+/// One image's pose and error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ImageFit {
+    /// Image identifier (text; a JSON integer is read as its text).
+    #[serde(deserialize_with = "de_identifier")]
+    pub id: String,
+    /// Rodrigues vector of the sensor-from-template rotation, rad.
+    pub rvec: [f64; 3],
+    /// Sensor-from-template translation, mm.
+    pub t_mm: [f64; 3],
+    /// RMS error of the image's points, mm.
+    pub rms_mm: f64,
+    /// Points used.
+    pub points: usize,
+}
+
+impl ImageFit {
+    /// The record of a pose.
+    pub fn new(id: &str, pose: &Pose, rms_mm: f64, points: usize) -> Self {
+        Self {
+            id: id.to_string(),
+            rvec: [pose.rvec.x, pose.rvec.y, pose.rvec.z],
+            t_mm: [pose.t.x, pose.t.y, pose.t.z],
+            rms_mm,
+            points,
+        }
+    }
+
+    /// The sensor-from-template pose.
+    pub fn pose(&self) -> Pose {
+        Pose::new(Vector3::from(self.rvec), Vector3::from(self.t_mm))
+    }
+}

@@ -1,0 +1,273 @@
+//! The error type of psdcal's file formats.
+//!
+//! Every data error names the file, the physical line (1-based, counting
+//! comments and blank lines) and, where a value is at fault, the column by
+//! header name and 1-based number, then says what was expected:
+//!
+//! ```text
+//! observations.csv:17: column 'x_mm' (3): expected a number, found 'abc'
+//! calibration.json:7:16: intrinsics.f_mm must be positive, found -1
+//! ```
+//!
+//! Messages are single lines, so a command-line tool can print one
+//! `error: ...` line per failure.
+
+use std::fmt;
+
+use psdcal_model::ModelError;
+use thiserror::Error;
+
+use crate::warning::Warning;
+
+/// A place in a file: its name as given by the user and, when the problem
+/// sits on a line, the 1-based physical line number.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Location {
+    /// File name or path, as shown to the user.
+    pub file: String,
+    /// 1-based physical line, if the problem is on one line.
+    pub line: Option<usize>,
+}
+
+impl Location {
+    /// A location on a line of a file.
+    pub fn line(file: &str, line: usize) -> Self {
+        Self {
+            file: file.to_string(),
+            line: Some(line),
+        }
+    }
+
+    /// A location for a whole file.
+    pub fn file(file: &str) -> Self {
+        Self {
+            file: file.to_string(),
+            line: None,
+        }
+    }
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            Some(line) => write!(f, "{}:{}", self.file, line),
+            None => f.write_str(&self.file),
+        }
+    }
+}
+
+/// A CSV column: its header name and 1-based position.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ColumnRef {
+    /// Header name as written in the file (trimmed).
+    pub name: String,
+    /// 1-based column number.
+    pub number: usize,
+}
+
+impl fmt::Display for ColumnRef {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "column '{}' ({})", self.name, self.number)
+    }
+}
+
+/// Everything that can go wrong reading or writing psdcal's files.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum IoError {
+    /// The file could not be opened or read.
+    #[error("{file}: cannot read the file: {source}")]
+    Read {
+        /// File name as given.
+        file: String,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The file could not be written.
+    #[error("{file}: cannot write the file: {source}")]
+    Write {
+        /// File name as given.
+        file: String,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The file is not UTF-8 text (binary data or another encoding).
+    #[error("{at}: {message}")]
+    Encoding {
+        /// Where the first offending byte is.
+        at: Location,
+        /// What was found and what was expected.
+        message: String,
+    },
+    /// The file's structure is wrong: empty, no header, wrong delimiter,
+    /// missing column, wrong number of fields, unterminated quote.
+    #[error("{at}: {message}")]
+    Structure {
+        /// Where.
+        at: Location,
+        /// What was found and what was expected.
+        message: String,
+    },
+    /// A value in a CSV column is unusable (not a number, not finite, empty).
+    #[error("{at}: {column}: {message}")]
+    Value {
+        /// Where.
+        at: Location,
+        /// Which column.
+        column: ColumnRef,
+        /// What was found and what was expected.
+        message: String,
+    },
+    /// An observation names an LED the template does not have.
+    #[error("{at}: LED '{led}' is not in the template {template}; expected one of its LED ids")]
+    UnknownLed {
+        /// Where the observation is.
+        at: Location,
+        /// The unknown identifier.
+        led: String,
+        /// The template file.
+        template: String,
+    },
+    /// The same key appears twice (an LED in the template, an (image, LED)
+    /// pair in the observations).
+    #[error("{at}: {what} appears twice (first on line {first_line})")]
+    Duplicate {
+        /// The second occurrence.
+        at: Location,
+        /// Line of the first occurrence.
+        first_line: usize,
+        /// What is duplicated, e.g. `LED '5'`.
+        what: String,
+    },
+    /// The data are well-formed but unusable as a whole (too few LEDs, no
+    /// usable image, inconsistent calibration fields).
+    #[error("{at}: {message}")]
+    Invalid {
+        /// Where.
+        at: Location,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// An amplitude row cannot give an impact point (MODEL.md §1).
+    #[error("{at}: {source}")]
+    Amplitudes {
+        /// The row.
+        at: Location,
+        /// The model's reason.
+        source: ModelError,
+    },
+    /// calibration.json could not be parsed or holds an invalid value; JSON
+    /// errors come with line and character column.
+    #[error("{file}:{line}:{column}: {message}")]
+    Json {
+        /// File name.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based character column.
+        column: usize,
+        /// What was found and what was expected.
+        message: String,
+    },
+    /// calibration.json was written by a newer psdcal, with a format version
+    /// this one cannot read.
+    #[error(
+        "{file}:{line}:{column}: format version {found} was written by a newer psdcal; this \
+         psdcal reads versions up to {supported}"
+    )]
+    NewerVersion {
+        /// File name.
+        file: String,
+        /// 1-based line of the version.
+        line: usize,
+        /// 1-based character column just after the version.
+        column: usize,
+        /// The file's version.
+        found: u64,
+        /// The newest version this psdcal reads.
+        supported: u32,
+    },
+    /// A warning raised to an error by strict validation.
+    #[error("{} (strict validation makes this warning an error)", .warning.problem())]
+    Strict {
+        /// The warning.
+        warning: Warning,
+    },
+}
+
+impl IoError {
+    /// The file the error is about.
+    pub fn file(&self) -> Option<&str> {
+        match self {
+            IoError::Read { file, .. }
+            | IoError::Write { file, .. }
+            | IoError::Json { file, .. }
+            | IoError::NewerVersion { file, .. } => Some(file),
+            IoError::Encoding { at, .. }
+            | IoError::Structure { at, .. }
+            | IoError::Value { at, .. }
+            | IoError::UnknownLed { at, .. }
+            | IoError::Duplicate { at, .. }
+            | IoError::Invalid { at, .. }
+            | IoError::Amplitudes { at, .. } => Some(&at.file),
+            IoError::Strict { warning } => Some(warning.file()),
+        }
+    }
+
+    /// The 1-based physical line the error is on, if it is on one.
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            IoError::Read { .. } | IoError::Write { .. } => None,
+            IoError::Json { line, .. } | IoError::NewerVersion { line, .. } => Some(*line),
+            IoError::Encoding { at, .. }
+            | IoError::Structure { at, .. }
+            | IoError::Value { at, .. }
+            | IoError::UnknownLed { at, .. }
+            | IoError::Duplicate { at, .. }
+            | IoError::Invalid { at, .. }
+            | IoError::Amplitudes { at, .. } => at.line,
+            IoError::Strict { warning } => warning.line(),
+        }
+    }
+}
+
+/// A raw field as shown in messages: quoted, control characters escaped,
+/// long text shortened.
+pub(crate) fn quoted(raw: &str) -> String {
+    const MAX_CHARS: usize = 40;
+    let mut shown: String = raw.chars().take(MAX_CHARS).collect();
+    if raw.chars().count() > MAX_CHARS {
+        shown.push('…');
+    }
+    format!("'{}'", shown.escape_debug())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn value_error_reads_like_the_spec_example() {
+        let e = IoError::Value {
+            at: Location::line("observations.csv", 17),
+            column: ColumnRef {
+                name: "x_mm".into(),
+                number: 3,
+            },
+            message: "expected a number, found 'abc'".into(),
+        };
+        assert_eq!(
+            e.to_string(),
+            "observations.csv:17: column 'x_mm' (3): expected a number, found 'abc'"
+        );
+        assert_eq!(e.line(), Some(17));
+        assert_eq!(e.file(), Some("observations.csv"));
+    }
+
+    #[test]
+    fn quoted_escapes_and_shortens() {
+        assert_eq!(quoted("a\tb"), "'a\\tb'");
+        let long = "x".repeat(50);
+        assert_eq!(quoted(&long), format!("'{}…'", "x".repeat(40)));
+    }
+}

@@ -1,0 +1,173 @@
+//! observations.csv: measured impact points, one row per LED per image
+//! (FORMATS.md).
+//!
+//! | column | meaning |
+//! | --- | --- |
+//! | `image` | image (template pose) identifier, text |
+//! | `led` | LED identifier, must exist in the template |
+//! | `x_mm`, `y_mm` | measured impact point on the PSD, mm, sensor frame |
+//!
+//! Reading checks each row on its own (non-empty identifiers, finite
+//! numbers); checks against the template (unknown LEDs, duplicates, points
+//! off the sensor) are [`crate::validate_data_set`]'s.
+
+use std::io::Read;
+use std::path::Path;
+
+use crate::csv_table::CsvTable;
+use crate::error::IoError;
+
+const EXPECTED_COLUMNS: &str = "image, led, x_mm, y_mm";
+
+/// One measured impact point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Observation {
+    /// Image identifier.
+    pub image: String,
+    /// LED identifier.
+    pub led: String,
+    /// Measured impact point, mm, sensor frame.
+    pub x_mm: f64,
+    /// Measured impact point, mm, sensor frame.
+    pub y_mm: f64,
+    /// Physical line of the row, 1-based.
+    pub line_no: usize,
+}
+
+/// The rows of an observations file (or of a signals file converted to
+/// impact points).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Observations {
+    /// File name, for messages.
+    pub source: String,
+    /// The rows, in file order.
+    pub rows: Vec<Observation>,
+}
+
+impl Observations {
+    /// Reads observations.csv from a file.
+    pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::read_path(path.as_ref(), EXPECTED_COLUMNS)?)
+    }
+
+    /// Reads observations.csv from a reader; `source` names it in messages.
+    pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::from_reader(source, reader, EXPECTED_COLUMNS)?)
+    }
+
+    /// Parses observations.csv text; `source` names it in messages.
+    pub fn from_str(source: &str, text: &str) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::parse(source, text.as_bytes(), EXPECTED_COLUMNS)?)
+    }
+
+    fn from_table(table: CsvTable) -> Result<Self, IoError> {
+        let image_col = table.column("image")?;
+        let led_col = table.column("led")?;
+        let x_col = table.column("x_mm")?;
+        let y_col = table.column("y_mm")?;
+        table.require_rows()?;
+        let rows = table
+            .rows
+            .iter()
+            .map(|row| {
+                Ok(Observation {
+                    image: table.identifier(row, &image_col, "an image identifier")?,
+                    led: table.identifier(row, &led_col, "an LED identifier")?,
+                    x_mm: table.number(row, &x_col)?,
+                    y_mm: table.number(row, &y_col)?,
+                    line_no: row.line,
+                })
+            })
+            .collect::<Result<_, IoError>>()?;
+        Ok(Self {
+            source: table.source,
+            rows,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn obs(image: &str, led: &str, x_mm: f64, y_mm: f64, line_no: usize) -> Observation {
+        Observation {
+            image: image.into(),
+            led: led.into(),
+            x_mm,
+            y_mm,
+            line_no,
+        }
+    }
+
+    #[test]
+    fn reads_comments_blank_lines_reordered_and_extra_columns() {
+        let text = "\
+# exported by the rig
+y_mm,quality,led,image,x_mm
+
+-0.5,good,3,A,1.25
+# second image
+2e-1,bad, 4 ,B,-3
+";
+        let o = Observations::from_str("observations.csv", text).unwrap();
+        assert_eq!(o.source, "observations.csv");
+        assert_eq!(
+            o.rows,
+            vec![obs("A", "3", 1.25, -0.5, 4), obs("B", "4", -3.0, 0.2, 6)]
+        );
+    }
+
+    #[test]
+    fn reads_crlf_and_bom() {
+        let text = "\u{feff}image,led,x_mm,y_mm\r\n1,1,0.5,0.25\r\n\r\n1,2,-1,1\r\n";
+        let o = Observations::from_str("o.csv", text).unwrap();
+        assert_eq!(
+            o.rows,
+            vec![obs("1", "1", 0.5, 0.25, 2), obs("1", "2", -1.0, 1.0, 4)]
+        );
+        let r = Observations::from_reader("o.csv", text.as_bytes()).unwrap();
+        assert_eq!(r, o);
+    }
+
+    #[test]
+    fn reads_a_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("observations.csv");
+        std::fs::write(&path, "image,led,x_mm,y_mm\n1,1,0,0\n").unwrap();
+        let o = Observations::read(&path).unwrap();
+        assert_eq!(o.rows, vec![obs("1", "1", 0.0, 0.0, 2)]);
+    }
+
+    #[test]
+    fn bad_values_name_file_line_and_column() {
+        let text = "image,led,x_mm,y_mm\n1,1,0,0\n\n1,2,abc,0\n";
+        let e = Observations::from_str("observations.csv", text).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "observations.csv:4: column 'x_mm' (3): expected a number, found 'abc'"
+        );
+        let text = "image,led,x_mm,y_mm\n1,1,0,NaN\n";
+        let e = Observations::from_str("observations.csv", text).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "observations.csv:2: column 'y_mm' (4): expected a finite number, found a \
+             not-a-number value"
+        );
+        let text = "image,led,x_mm,y_mm\n,1,0,0\n";
+        let e = Observations::from_str("observations.csv", text).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "observations.csv:2: column 'image' (1): expected an image identifier, found an \
+             empty field"
+        );
+    }
+
+    #[test]
+    fn missing_column_is_reported_on_the_header_line() {
+        let text = "# c\n# c\nimage,led,x_mm\n1,1,0\n";
+        let e = Observations::from_str("observations.csv", text).unwrap_err();
+        assert_eq!(e.line(), Some(3));
+        assert!(e.to_string().contains("missing column 'y_mm'"), "{e}");
+    }
+}
