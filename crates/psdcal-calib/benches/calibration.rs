@@ -24,7 +24,14 @@ fn paper_size(c: &mut Criterion) {
     let (mut m0, p0) = support::perturbed(&truth_psd, &s.poses);
     m0.distortion.l1 = 0.0;
     let options = RefineOptions {
-        free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2, Param::L1],
+        free: vec![
+            Param::F,
+            Param::Cx,
+            Param::Cy,
+            Param::K1,
+            Param::K2,
+            Param::L1,
+        ],
         ..RefineOptions::default()
     };
     let global = GlobalOptions::default();

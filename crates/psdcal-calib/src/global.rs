@@ -88,7 +88,12 @@ pub fn refine_global(
         return Ok((refine(data, model, poses, options)?, None));
     }
     let profile_options = RefineOptions {
-        free: options.free.iter().copied().filter(|p| *p != Param::L1).collect(),
+        free: options
+            .free
+            .iter()
+            .copied()
+            .filter(|p| *p != Param::L1)
+            .collect(),
         cost_tolerance: 1e-6,
         ..options.clone()
     };
@@ -96,15 +101,29 @@ pub fn refine_global(
     // Profile, continued outwards from the grid point nearest the start.
     let grid = &global.l1_grid;
     let start = (0..grid.len())
-        .min_by(|&a, &b| (grid[a] - model.distortion.l1).abs().total_cmp(&(grid[b] - model.distortion.l1).abs()))
-        .ok_or_else(|| CalibError::Numerical { stage: "global search", reason: "empty l1 grid".into() })?;
+        .min_by(|&a, &b| {
+            (grid[a] - model.distortion.l1)
+                .abs()
+                .total_cmp(&(grid[b] - model.distortion.l1).abs())
+        })
+        .ok_or_else(|| CalibError::Numerical {
+            stage: "global search",
+            reason: "empty l1 grid".into(),
+        })?;
     let mut profile: Vec<Option<Refined>> = vec![None; grid.len()];
     let downwards = (0..=start).rev();
     let upwards = start + 1..grid.len();
     let mut at_start = (*model, poses.to_vec());
-    for (pass, indices) in [downwards.collect::<Vec<_>>(), upwards.collect()].into_iter().enumerate() {
+    for (pass, indices) in [downwards.collect::<Vec<_>>(), upwards.collect()]
+        .into_iter()
+        .enumerate()
+    {
         // The upward pass continues from the profile's solution at the start.
-        let mut current = if pass == 0 { (*model, poses.to_vec()) } else { at_start.clone() };
+        let mut current = if pass == 0 {
+            (*model, poses.to_vec())
+        } else {
+            at_start.clone()
+        };
         for k in indices {
             let l1 = grid[k];
             let mut m = current.0;
@@ -121,7 +140,10 @@ pub fn refine_global(
         }
     }
     // Restart points: local minima of the profile and the lowest points.
-    let costs: Vec<f64> = profile.iter().map(|r| r.as_ref().map_or(f64::INFINITY, |r| r.cost)).collect();
+    let costs: Vec<f64> = profile
+        .iter()
+        .map(|r| r.as_ref().map_or(f64::INFINITY, |r| r.cost))
+        .collect();
     let mut seeds: Vec<usize> = (0..grid.len())
         .filter(|&k| {
             costs[k].is_finite()
@@ -153,7 +175,8 @@ pub fn refine_global(
     for r in &finals {
         let d = &r.model.distortion;
         let distinct = minima.iter().all(|m| {
-            (m.l1 - d.l1).abs() > 1e-6 * (1.0 + m.l1.abs()).max(1e-3) && (m.cost - r.cost).abs() > 1e-9 * m.cost.max(1e-300)
+            (m.l1 - d.l1).abs() > 1e-6 * (1.0 + m.l1.abs()).max(1e-3)
+                && (m.cost - r.cost).abs() > 1e-9 * m.cost.max(1e-300)
         });
         if distinct {
             minima.push(LocalMinimum {
@@ -166,11 +189,18 @@ pub fn refine_global(
             });
         }
     }
-    let best = finals.into_iter().next().ok_or_else(|| CalibError::NotConverged {
-        reason: "no refinement of the l1 profile succeeded".into(),
-    })?;
+    let best = finals
+        .into_iter()
+        .next()
+        .ok_or_else(|| CalibError::NotConverged {
+            reason: "no refinement of the l1 profile succeeded".into(),
+        })?;
     let report = GlobalReport {
-        profile: grid.iter().zip(&costs).map(|(l, c)| (*l, c.is_finite().then_some(*c))).collect(),
+        profile: grid
+            .iter()
+            .zip(&costs)
+            .map(|(l, c)| (*l, c.is_finite().then_some(*c)))
+            .collect(),
         minima,
         refinements,
     };

@@ -91,7 +91,11 @@ impl FullNormalEquations {
             u: DMatrix::from_fn(p, p, |i, j| self.u[(free[i].index(), free[j].index())]),
             g_a: DVector::from_fn(p, |i, _| self.g_a[free[i].index()]),
             v: self.v.clone(),
-            w: self.w.iter().map(|w| DMatrix::from_fn(p, 6, |i, j| w[(free[i].index(), j)])).collect(),
+            w: self
+                .w
+                .iter()
+                .map(|w| DMatrix::from_fn(p, 6, |i, j| w[(free[i].index(), j)]))
+                .collect(),
             g_b: self.g_b.clone(),
         }
     }
@@ -142,7 +146,11 @@ impl NormalEquations {
             }
             v_inv.push(inv);
         }
-        let da = if p > 0 { solve_scaled(&s, &rhs)? } else { DVector::zeros(0) };
+        let da = if p > 0 {
+            solve_scaled(&s, &rhs)?
+        } else {
+            DVector::zeros(0)
+        };
         let db = (0..self.v.len())
             .map(|i| {
                 let wt_da: Vector6<f64> = if p > 0 {
@@ -170,7 +178,11 @@ impl NormalEquations {
             }
             v_inv.push(inv);
         }
-        let s_inv = if p > 0 { inverse_scaled(&s)? } else { DMatrix::zeros(0, 0) };
+        let s_inv = if p > 0 {
+            inverse_scaled(&s)?
+        } else {
+            DMatrix::zeros(0, 0)
+        };
         let poses = (0..self.v.len())
             .map(|i| {
                 if p == 0 {
@@ -218,7 +230,9 @@ pub fn inverse_scaled(s: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     let d = jacobi_scale(s)?;
     let scaled = DMatrix::from_fn(s.nrows(), s.ncols(), |i, j| s[(i, j)] * d[i] * d[j]);
     let inv = scaled.cholesky()?.inverse();
-    Some(DMatrix::from_fn(s.nrows(), s.ncols(), |i, j| inv[(i, j)] * d[i] * d[j]))
+    Some(DMatrix::from_fn(s.nrows(), s.ncols(), |i, j| {
+        inv[(i, j)] * d[i] * d[j]
+    }))
 }
 
 fn jacobi_scale(s: &DMatrix<f64>) -> Option<DVector<f64>> {

@@ -209,7 +209,8 @@ fn residual_with_jacobians(
     rotation: &RotationJacobian,
     led: usize,
     measured: &Vector2<f64>,
-) -> Result<(Vector2<f64>, SMatrix<f64, 2, N_PARAMS>, SMatrix<f64, 2, 6>), psdcal_model::ModelError> {
+) -> Result<(Vector2<f64>, SMatrix<f64, 2, N_PARAMS>, SMatrix<f64, 2, 6>), psdcal_model::ModelError>
+{
     let xy = data.template[led];
     Ok(match cost {
         CostKind::Template => {
@@ -234,7 +235,8 @@ pub fn total_cost(
     let mut total = 0.0;
     for (i, image) in data.images.iter().enumerate() {
         for (k, obs) in image.points.iter().enumerate() {
-            let r = residual(data, cost, model, &poses[i], obs.led, &obs.measured).map_err(|e| (i, k, e))?;
+            let r = residual(data, cost, model, &poses[i], obs.led, &obs.measured)
+                .map_err(|e| (i, k, e))?;
             let s = r.norm_squared();
             total += robust.map_or(s, |l| l.rho(s));
         }
@@ -255,8 +257,16 @@ pub(crate) fn normal_equations(
     for (i, image) in data.images.iter().enumerate() {
         let rotation = poses[i].rotation_jacobian();
         for obs in &image.points {
-            let (r, a, b) = residual_with_jacobians(data, cost, model, &poses[i], &rotation, obs.led, &obs.measured)
-                .map_err(|e| point_error(data, i, obs.led, e))?;
+            let (r, a, b) = residual_with_jacobians(
+                data,
+                cost,
+                model,
+                &poses[i],
+                &rotation,
+                obs.led,
+                &obs.measured,
+            )
+            .map_err(|e| point_error(data, i, obs.led, e))?;
             let weight = robust.map_or(1.0, |l| l.weight(r.norm_squared()));
             ne.add(i, weight, &r, &a, &b);
         }
@@ -264,7 +274,12 @@ pub(crate) fn normal_equations(
     Ok(ne.select(free))
 }
 
-fn point_error(data: &CalibrationData, image: usize, led: usize, e: psdcal_model::ModelError) -> CalibError {
+fn point_error(
+    data: &CalibrationData,
+    image: usize,
+    led: usize,
+    e: psdcal_model::ModelError,
+) -> CalibError {
     CalibError::Numerical {
         stage: "refinement",
         reason: format!("image '{}', LED #{}: {e}", data.images[image].id, led + 1),
@@ -281,7 +296,10 @@ fn validate(data: &CalibrationData, poses: &[Pose], free: &[Param]) -> Result<()
     for image in &data.images {
         for obs in &image.points {
             if obs.led >= data.template.len() {
-                return Err(CalibError::UnknownLed { led: obs.led, template_len: data.template.len() });
+                return Err(CalibError::UnknownLed {
+                    led: obs.led,
+                    template_len: data.template.len(),
+                });
             }
         }
     }
@@ -314,7 +332,14 @@ pub fn refine(
     let mut nu = 2.0;
     let mut iterations = 0;
     let mut accepted = 0;
-    let mut ne = normal_equations(data, options.cost, &options.free, options.robust, &model, &poses)?;
+    let mut ne = normal_equations(
+        data,
+        options.cost,
+        &options.free,
+        options.robust,
+        &model,
+        &poses,
+    )?;
     let termination = loop {
         if cost <= EXACT_FIT_MS * data.point_count() as f64 {
             break Termination::ExactFit;
@@ -344,12 +369,20 @@ pub fn refine(
             })
             .collect();
         let trial_cost = if trial_model.validate().is_ok() {
-            total_cost(data, options.cost, options.robust, &trial_model, &trial_poses).unwrap_or(f64::INFINITY)
+            total_cost(
+                data,
+                options.cost,
+                options.robust,
+                &trial_model,
+                &trial_poses,
+            )
+            .unwrap_or(f64::INFINITY)
         } else {
             f64::INFINITY
         };
         if trial_cost < cost {
-            let small_step = step_is_negligible(&ne, &step, cost, data.point_count(), options.step_tolerance);
+            let small_step =
+                step_is_negligible(&ne, &step, cost, data.point_count(), options.step_tolerance);
             let small_change = (cost - trial_cost) <= options.cost_tolerance * cost;
             model = trial_model;
             poses = trial_poses;
@@ -364,7 +397,14 @@ pub fn refine(
             if small_change {
                 break Termination::CostConverged;
             }
-            ne = normal_equations(data, options.cost, &options.free, options.robust, &model, &poses)?;
+            ne = normal_equations(
+                data,
+                options.cost,
+                &options.free,
+                options.robust,
+                &model,
+                &poses,
+            )?;
         } else {
             lambda *= nu;
             nu *= 2.0;
@@ -374,7 +414,13 @@ pub fn refine(
         model,
         poses,
         cost,
-        report: RefineReport { termination, iterations, accepted, cost_history: history, final_lambda: lambda },
+        report: RefineReport {
+            termination,
+            iterations,
+            accepted,
+            cost_history: history,
+            final_lambda: lambda,
+        },
     })
 }
 

@@ -85,12 +85,26 @@ pub fn fit_statistics(
     for (i, image) in data.images.iter().enumerate() {
         let (mut img_t, mut img_m, mut img_n_m) = (0.0, 0.0, 0usize);
         for obs in &image.points {
-            let e_t = residual(data, CostKind::Template, model, &poses[i], obs.led, &obs.measured)
-                .map(|r| r.norm())
-                .unwrap_or(f64::INFINITY);
-            let e_m = residual(data, CostKind::Image, model, &poses[i], obs.led, &obs.measured)
-                .ok()
-                .map(|r| r.norm());
+            let e_t = residual(
+                data,
+                CostKind::Template,
+                model,
+                &poses[i],
+                obs.led,
+                &obs.measured,
+            )
+            .map(|r| r.norm())
+            .unwrap_or(f64::INFINITY);
+            let e_m = residual(
+                data,
+                CostKind::Image,
+                model,
+                &poses[i],
+                obs.led,
+                &obs.measured,
+            )
+            .ok()
+            .map(|r| r.norm());
             img_t += e_t * e_t;
             match e_m {
                 Some(e) => {
@@ -99,7 +113,12 @@ pub fn fit_statistics(
                 }
                 None => unprojectable += 1,
             }
-            let point = PointError { image: image.id.clone(), led: obs.led, template_mm: e_t, image_mm: e_m };
+            let point = PointError {
+                image: image.id.clone(),
+                led: obs.led,
+                template_mm: e_t,
+                image_mm: e_m,
+            };
             if let Some(loss) = robust {
                 let e = match cost {
                     CostKind::Template => Some(e_t),
@@ -116,7 +135,11 @@ pub fn fit_statistics(
             id: image.id.clone(),
             points: image.points.len(),
             rms_template_mm: (img_t / n).sqrt(),
-            rms_image_mm: if img_n_m > 0 { (img_m / img_n_m as f64).sqrt() } else { f64::INFINITY },
+            rms_image_mm: if img_n_m > 0 {
+                (img_m / img_n_m as f64).sqrt()
+            } else {
+                f64::INFINITY
+            },
         });
         sum_t += img_t;
         sum_m += img_m;
@@ -129,7 +152,11 @@ pub fn fit_statistics(
     FitStatistics {
         residual_mm2: sum_t,
         rms_template_mm: (sum_t / points.max(1) as f64).sqrt(),
-        rms_image_mm: if n_m > 0 { (sum_m / n_m as f64).sqrt() } else { f64::INFINITY },
+        rms_image_mm: if n_m > 0 {
+            (sum_m / n_m as f64).sqrt()
+        } else {
+            f64::INFINITY
+        },
         points,
         images: data.images.len(),
         per_image,

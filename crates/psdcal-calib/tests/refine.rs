@@ -16,17 +16,26 @@ fn assert_recovered(name: &str, got: &SensorModel, truth: &SensorModel, free: &[
             Param::F | Param::Cx | Param::Cy => t.abs().max(1.0),
             _ => t.abs().max(1e-8),
         };
-        assert!((g - t).abs() <= 1e-6 * scale, "{name}: {p} = {g:e}, truth {t:e}");
+        assert!(
+            (g - t).abs() <= 1e-6 * scale,
+            "{name}: {p} = {g:e}, truth {t:e}"
+        );
     }
 }
 
 #[test]
 fn noise_free_recovery_both_lenses_both_costs() {
-    for (name, truth) in [("lens1", SensorModel::paper_lens1()), ("lens2", SensorModel::paper_lens2())] {
+    for (name, truth) in [
+        ("lens1", SensorModel::paper_lens1()),
+        ("lens2", SensorModel::paper_lens2()),
+    ] {
         let s = scenario(truth, 9, 0.0, 7);
         let (m0, p0) = perturbed(&truth, &s.poses);
         for cost in [CostKind::Template, CostKind::Image] {
-            let options = RefineOptions { cost, ..RefineOptions::default() };
+            let options = RefineOptions {
+                cost,
+                ..RefineOptions::default()
+            };
             let r = refine(&s.data, &m0, &p0, &options).unwrap();
             assert!(r.report.termination.converged(), "{name}: {:?}", r.report);
             assert!(r.cost < 1e-12, "{name} {cost:?}: residual {:e} mm²", r.cost);
@@ -44,8 +53,21 @@ fn noise_free_recovery_with_every_lens_term_freed() {
     truth.distortion.p2 = -2e-4;
     let s = scenario(truth, 9, 0.0, 11);
     let (m0, p0) = perturbed(&truth, &s.poses);
-    let free = vec![Param::F, Param::Cx, Param::Cy, Param::Skew, Param::K1, Param::K2, Param::K3, Param::P1, Param::P2];
-    let options = RefineOptions { free: free.clone(), ..RefineOptions::default() };
+    let free = vec![
+        Param::F,
+        Param::Cx,
+        Param::Cy,
+        Param::Skew,
+        Param::K1,
+        Param::K2,
+        Param::K3,
+        Param::P1,
+        Param::P2,
+    ];
+    let options = RefineOptions {
+        free: free.clone(),
+        ..RefineOptions::default()
+    };
     let r = refine(&s.data, &m0, &p0, &options).unwrap();
     assert!(r.cost < 1e-12, "residual {:e}", r.cost);
     assert_recovered("full", &r.model, &truth, &free);
@@ -59,8 +81,18 @@ fn noise_free_recovery_with_l1_freed_on_psd_distortion() {
         let s = scenario(truth, 9, 0.0, 5);
         let (mut m0, p0) = perturbed(&truth, &s.poses);
         m0.distortion.l1 = 0.8 * SensorModel::PAPER_L1;
-        let free = vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2, Param::L1];
-        let options = RefineOptions { free: free.clone(), ..RefineOptions::default() };
+        let free = vec![
+            Param::F,
+            Param::Cx,
+            Param::Cy,
+            Param::K1,
+            Param::K2,
+            Param::L1,
+        ];
+        let options = RefineOptions {
+            free: free.clone(),
+            ..RefineOptions::default()
+        };
         let r = refine(&s.data, &m0, &p0, &options).unwrap();
         assert!(r.cost < 1e-12, "residual {:e}", r.cost);
         assert_recovered("l1", &r.model, &truth, &free);
@@ -84,8 +116,21 @@ fn monte_carlo_spread_matches_reported_sigma() {
         let data = support::observe(&truth, &base.poses, sigma_mm, &mut rng);
         let (m0, p0) = perturbed(&truth, &base.poses);
         let r = refine(&data, &m0, &p0, &options).unwrap();
-        let cov = covariance(&data, options.cost, &options.free, None, &r.model, &r.poses, r.cost).unwrap();
-        estimates.push([r.model.intrinsics.f, r.model.intrinsics.cx, r.model.intrinsics.cy]);
+        let cov = covariance(
+            &data,
+            options.cost,
+            &options.free,
+            None,
+            &r.model,
+            &r.poses,
+            r.cost,
+        )
+        .unwrap();
+        estimates.push([
+            r.model.intrinsics.f,
+            r.model.intrinsics.cx,
+            r.model.intrinsics.cy,
+        ]);
         reported.push([
             cov.std(Param::F).unwrap(),
             cov.std(Param::Cx).unwrap(),
@@ -94,10 +139,14 @@ fn monte_carlo_spread_matches_reported_sigma() {
     }
     for (k, name) in ["f", "cx", "cy"].iter().enumerate() {
         let mean = estimates.iter().map(|e| e[k]).sum::<f64>() / trials as f64;
-        let var = estimates.iter().map(|e| (e[k] - mean).powi(2)).sum::<f64>() / (trials - 1) as f64;
+        let var =
+            estimates.iter().map(|e| (e[k] - mean).powi(2)).sum::<f64>() / (trials - 1) as f64;
         let empirical = var.sqrt();
         let predicted = reported.iter().map(|r| r[k]).sum::<f64>() / trials as f64;
-        println!("{name}: empirical std {empirical:.4e}, reported σ {predicted:.4e}, ratio {:.3}", empirical / predicted);
+        println!(
+            "{name}: empirical std {empirical:.4e}, reported σ {predicted:.4e}, ratio {:.3}",
+            empirical / predicted
+        );
         // With 60 trials the sample std itself scatters by about 1/sqrt(2·59) ≈ 9 %:
         // 25 % is nearly three of those.
         assert!(
@@ -122,25 +171,52 @@ fn robust_loss_resists_outliers_and_reports_them() {
     let plain = refine(&s.data, &m0, &p0, &RefineOptions::default()).unwrap();
     // Huber scale: 3 σ on the template plane (σ_template ≈ σ · depth / f ≈ 0.04 mm).
     let robust = Some(RobustLoss::Huber { scale: 0.12 });
-    let options = RefineOptions { robust, ..RefineOptions::default() };
+    let options = RefineOptions {
+        robust,
+        ..RefineOptions::default()
+    };
     let r = refine(&s.data, &m0, &p0, &options).unwrap();
     let clean = scenario(truth, 9, sigma_mm, 21);
     let reference = refine(&clean.data, &m0, &p0, &RefineOptions::default()).unwrap();
-    let cov = covariance(&clean.data, options.cost, &options.free, None, &reference.model, &reference.poses, reference.cost)
-        .unwrap();
+    let cov = covariance(
+        &clean.data,
+        options.cost,
+        &options.free,
+        None,
+        &reference.model,
+        &reference.poses,
+        reference.cost,
+    )
+    .unwrap();
     let sigma_f = cov.std(Param::F).unwrap();
     // Robust: within 3 σ of the outlier-free estimate; plain: pulled far away.
     let robust_shift = (r.model.intrinsics.f - reference.model.intrinsics.f).abs();
     let plain_shift = (plain.model.intrinsics.f - reference.model.intrinsics.f).abs();
     println!("σ_f {sigma_f:.3e}: robust shift {robust_shift:.3e}, plain shift {plain_shift:.3e}");
-    assert!(robust_shift < 3.0 * sigma_f, "robust estimate moved {robust_shift:e} (σ {sigma_f:e})");
-    assert!(plain_shift > 10.0 * robust_shift, "plain least squares should suffer from the outliers");
+    assert!(
+        robust_shift < 3.0 * sigma_f,
+        "robust estimate moved {robust_shift:e} (σ {sigma_f:e})"
+    );
+    assert!(
+        plain_shift > 10.0 * robust_shift,
+        "plain least squares should suffer from the outliers"
+    );
     let stats = fit_statistics(&s.data, &r.model, &r.poses, options.cost, robust);
-    let mut flagged: Vec<(String, usize)> = stats.outliers.iter().map(|p| (p.image.clone(), p.led)).collect();
+    let mut flagged: Vec<(String, usize)> = stats
+        .outliers
+        .iter()
+        .map(|p| (p.image.clone(), p.led))
+        .collect();
     flagged.sort();
-    let mut expected: Vec<(String, usize)> = bad.iter().map(|&(i, k)| (format!("{}", i + 1), k)).collect();
+    let mut expected: Vec<(String, usize)> = bad
+        .iter()
+        .map(|&(i, k)| (format!("{}", i + 1), k))
+        .collect();
     expected.sort();
-    assert_eq!(flagged, expected, "exactly the displaced points are flagged");
+    assert_eq!(
+        flagged, expected,
+        "exactly the displaced points are flagged"
+    );
 }
 
 #[test]
@@ -154,11 +230,22 @@ fn fit_statistics_agree_with_the_cost() {
     assert!((stats.residual_mm2 - r.cost).abs() <= 1e-12 * r.cost);
     assert_eq!(stats.points, 126);
     assert_eq!(stats.per_image.len(), 9);
-    let from_images: f64 = stats.per_image.iter().map(|i| i.rms_template_mm.powi(2) * i.points as f64).sum();
+    let from_images: f64 = stats
+        .per_image
+        .iter()
+        .map(|i| i.rms_template_mm.powi(2) * i.points as f64)
+        .sum();
     assert!((from_images - stats.residual_mm2).abs() <= 1e-12 * r.cost);
     // Image-plane RMS near the injected noise: sqrt(2)·σ per point, less the
     // fraction absorbed by the 59 fitted parameters out of 252 coordinates.
     let expected = 5e-4 * (2.0f64 * (252.0 - 59.0) / 252.0).sqrt();
-    assert!((stats.rms_image_mm / expected - 1.0).abs() < 0.2, "{} vs {expected}", stats.rms_image_mm);
-    assert!(stats.worst_points.windows(2).all(|w| w[0].template_mm >= w[1].template_mm));
+    assert!(
+        (stats.rms_image_mm / expected - 1.0).abs() < 0.2,
+        "{} vs {expected}",
+        stats.rms_image_mm
+    );
+    assert!(stats
+        .worst_points
+        .windows(2)
+        .all(|w| w[0].template_mm >= w[1].template_mm));
 }

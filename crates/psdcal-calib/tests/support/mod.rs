@@ -40,7 +40,12 @@ pub const EXTRA_MM: [(f64, f64); 6] = [
 
 /// The first `leds` LEDs of the 20-LED template (14 or 20).
 pub fn template(leds: usize) -> Vec<Vector2<f64>> {
-    TEMPLATE_MM.iter().chain(EXTRA_MM.iter()).take(leds).map(|&(x, y)| Vector2::new(x, y)).collect()
+    TEMPLATE_MM
+        .iter()
+        .chain(EXTRA_MM.iter())
+        .take(leds)
+        .map(|&(x, y)| Vector2::new(x, y))
+        .collect()
 }
 
 /// A scenario: the truth and the data it produced.
@@ -59,7 +64,12 @@ pub fn poses(truth: &SensorModel, n: usize, rng: &mut ChaCha8Rng) -> Vec<Pose> {
 }
 
 /// [`poses`] for a given template.
-pub fn poses_for(truth: &SensorModel, template: &[Vector2<f64>], n: usize, rng: &mut ChaCha8Rng) -> Vec<Pose> {
+pub fn poses_for(
+    truth: &SensorModel,
+    template: &[Vector2<f64>],
+    n: usize,
+    rng: &mut ChaCha8Rng,
+) -> Vec<Pose> {
     let mut out = Vec::with_capacity(n);
     while out.len() < n {
         let k = out.len() % 9;
@@ -69,7 +79,10 @@ pub fn poses_for(truth: &SensorModel, template: &[Vector2<f64>], n: usize, rng: 
         let tilt: f64 = rng.random_range(0.0..30f64.to_radians());
         let axis_angle: f64 = rng.random_range(0.0..std::f64::consts::TAU);
         let roll: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-        let tilt_pose = Pose::new(Vector3::new(axis_angle.cos(), axis_angle.sin(), 0.0) * tilt, Vector3::zeros());
+        let tilt_pose = Pose::new(
+            Vector3::new(axis_angle.cos(), axis_angle.sin(), 0.0) * tilt,
+            Vector3::zeros(),
+        );
         let roll_pose = Pose::new(Vector3::new(0.0, 0.0, roll), Vector3::zeros());
         let rot = tilt_pose.compose(&roll_pose);
         let t = Vector3::new(
@@ -98,7 +111,13 @@ pub fn scenario(truth: SensorModel, n: usize, sigma_mm: f64, seed: u64) -> Scena
 }
 
 /// A scenario with a template of `leds` LEDs (14 or 20).
-pub fn scenario_with(truth: SensorModel, leds: usize, n: usize, sigma_mm: f64, seed: u64) -> Scenario {
+pub fn scenario_with(
+    truth: SensorModel,
+    leds: usize,
+    n: usize,
+    sigma_mm: f64,
+    seed: u64,
+) -> Scenario {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let poses = poses(&truth, n, &mut rng);
     let data = observe_with(&truth, &template(leds), &poses, sigma_mm, &mut rng);
@@ -106,7 +125,12 @@ pub fn scenario_with(truth: SensorModel, leds: usize, n: usize, sigma_mm: f64, s
 }
 
 /// Measures every LED in every pose, adding Gaussian noise.
-pub fn observe(truth: &SensorModel, poses: &[Pose], sigma_mm: f64, rng: &mut ChaCha8Rng) -> CalibrationData {
+pub fn observe(
+    truth: &SensorModel,
+    poses: &[Pose],
+    sigma_mm: f64,
+    rng: &mut ChaCha8Rng,
+) -> CalibrationData {
     observe_with(truth, &template(14), poses, sigma_mm, rng)
 }
 
@@ -135,12 +159,20 @@ pub fn observe_with(
                     } else {
                         Vector2::zeros()
                     };
-                    Observation { led, measured: m + n }
+                    Observation {
+                        led,
+                        measured: m + n,
+                    }
                 })
                 .collect(),
         })
         .collect();
-    CalibrationData { template, lines: Vec::new(), images, geometry: PsdGeometry::default() }
+    CalibrationData {
+        template,
+        lines: Vec::new(),
+        images,
+        geometry: PsdGeometry::default(),
+    }
 }
 
 /// The truth disturbed: a start for the refinement that is near but not at it.
@@ -153,7 +185,12 @@ pub fn perturbed(truth: &SensorModel, poses: &[Pose]) -> (SensorModel, Vec<Pose>
     m.distortion.k2 = 0.0;
     let p = poses
         .iter()
-        .map(|p| Pose::new(p.rvec + Vector3::new(0.01, -0.015, 0.02), p.t + Vector3::new(8.0, -5.0, 30.0)))
+        .map(|p| {
+            Pose::new(
+                p.rvec + Vector3::new(0.01, -0.015, 0.02),
+                p.t + Vector3::new(8.0, -5.0, 30.0),
+            )
+        })
         .collect();
     (m, p)
 }
