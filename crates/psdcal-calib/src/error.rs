@@ -55,4 +55,23 @@ pub enum CalibError {
     /// The sensor model could not be evaluated.
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// An input is malformed (mismatched lengths, non-finite numbers, ...).
+    #[error("invalid input: {reason}")]
+    InvalidInput {
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The closed-form intrinsics (MODEL.md §4.4) give `f² ≤ 0`: the images
+    /// do not determine the focal length linearly (nearly affine images,
+    /// e.g. poses nearly parallel to the sensor or a long focal length, or
+    /// uncorrected distortion).
+    #[error(
+        "closed-form intrinsics give f² = {f_squared:.3e} mm² (must be positive): the images do \
+         not determine the focal length linearly (poses too close to parallel to the sensor, \
+         or uncorrected distortion)"
+    )]
+    NonPositiveFocalSquared {
+        /// The computed `f²`, mm².
+        f_squared: f64,
+    },
 }

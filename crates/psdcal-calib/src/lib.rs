@@ -8,23 +8,30 @@
 #![warn(missing_docs)]
 
 pub mod data;
+mod error;
 pub mod homography;
 pub mod initialize;
 pub mod preliminary;
 pub mod straightness;
 pub mod zhang;
-mod error;
 
 pub use data::{CalibrationData, ImageObservations, Observation};
 pub use error::CalibError;
 pub use homography::{fit_homography, Homography, HomographyFit, HomographyOptions};
-pub mod normal_equations;
+pub use initialize::{initialize, InitOptions, InitReport, InitRoute, Initialization};
+pub use preliminary::{estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport};
+pub use zhang::{closed_form, pose_from_homography, ClosedFormSolution};
 pub mod covariance;
 pub mod global;
+pub mod normal_equations;
 pub mod refine;
 pub mod report;
 
 pub use covariance::{covariance, Covariance};
 pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
-pub use report::{fit_statistics, FitStatistics, ImageStats, PointError};
 pub use refine::{refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination};
+pub use report::{fit_statistics, FitStatistics, ImageStats, PointError};
+pub mod calibrate;
+pub use calibrate::{
+    calibrate, CalibrateOptions, CalibrationResult, CalibrationSummary, ParameterSummary,
+};

@@ -199,6 +199,10 @@ pub fn residual(
     })
 }
 
+/// A residual with its Jacobians with respect to the model (2×11) and the
+/// pose (2×6).
+type ResidualWithJacobians = (Vector2<f64>, SMatrix<f64, 2, N_PARAMS>, SMatrix<f64, 2, 6>);
+
 /// Residual of one observation with its Jacobians with respect to every
 /// model parameter (2×11) and to the pose (2×6).
 fn residual_with_jacobians(
@@ -209,8 +213,7 @@ fn residual_with_jacobians(
     rotation: &RotationJacobian,
     led: usize,
     measured: &Vector2<f64>,
-) -> Result<(Vector2<f64>, SMatrix<f64, 2, N_PARAMS>, SMatrix<f64, 2, 6>), psdcal_model::ModelError>
-{
+) -> Result<ResidualWithJacobians, psdcal_model::ModelError> {
     let xy = data.template[led];
     Ok(match cost {
         CostKind::Template => {

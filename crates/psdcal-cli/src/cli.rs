@@ -4,11 +4,13 @@
 use std::path::PathBuf;
 
 use clap::{ArgGroup, Args, CommandFactory, Parser, Subcommand};
-use psdcal_model::PsdGeometry;
+use psdcal_calib::{CostKind, RobustLoss};
+use psdcal_model::{Param, PsdGeometry};
 
 const MAIN_EXAMPLES: &str = "\
 Examples:
   psdcal check --template template.csv --observations observations.csv
+  psdcal calibrate --template template.csv --observations observations.csv --out calibration.json
   psdcal correct --calibration calibration.json --points points.csv --out ideal.csv
 
 Exit codes: 0 success, 1 failure (one 'error:' line on stderr), 2 usage error.";
@@ -30,6 +32,24 @@ Files:
   observations.csv  image, led, x_mm, y_mm
   signals.csv       image, led, vx1, vx2, vy1, vy2
 Columns are found by name; '#' lines and blank lines are ignored.";
+
+const CALIBRATE_EXAMPLES: &str = "\
+Examples:
+  psdcal calibrate --template data/example/template.csv \\
+                   --observations data/example/observations.csv --out calibration.json
+
+  fits f, cx, cy, k1, k2 (the paper's set) from automatic initialisation and
+  prints each parameter with its standard deviation, the residual (sum of
+  squared template-plane errors, mm^2), RMS errors and iterations.
+
+  psdcal calibrate -t template.csv -o observations.csv --fit f,cx,cy,skew,k1,k2,k3,p1,p2 \\
+                   --focal-guess 8 --robust huber:0.1 --residuals residuals.csv --out cal.json
+  psdcal calibrate -t template.csv -o observations.csv --fit f,cx,cy,k1,k2,l1 --out cal.json
+  psdcal calibrate -t template.csv -o observations.csv --set l1=-1.3058e-3 --out cal.json
+
+Parameters: f cx cy skew k1 k2 k3 p1 p2 l1 l2 (MODEL.md). Freeing l1 with k1 runs a
+global search over l1 (the cost has several minima). A calibration that does not
+converge, or degenerate data, exits 1 with the reason.";
 
 const CORRECT_EXAMPLES: &str = "\
 Example:
@@ -63,6 +83,9 @@ pub enum Command {
     /// Validate a calibration data set and summarise images, points and sensor coverage
     #[command(after_help = CHECK_EXAMPLES)]
     Check(CheckArgs),
+    /// Calibrate a sensor from images of an LED template (adapted Zhang method + Levenberg-Marquardt)
+    #[command(after_help = CALIBRATE_EXAMPLES)]
+    Calibrate(CalibrateArgs),
     /// Correct measured points (or electrode amplitudes) to ideal points with a calibration
     #[command(after_help = CORRECT_EXAMPLES)]
     Correct(CorrectArgs),
@@ -91,6 +114,61 @@ pub struct CheckArgs {
     #[arg(long)]
     pub strict: bool,
 }
+
+/// Arguments of `psdcal calibrate`.
+#[derive(Debug, Args)]
+#[command(group(ArgGroup::new("input").required(true).args(["observations", "signals"])))]
+pub struct CalibrateArgs {
+    /// Template: led, X_mm, Y_mm[, lines]
+    #[arg(long, short = 't', value_name = "FILE")]
+    pub template: PathBuf,
+    /// Measured impact points: image, led, x_mm, y_mm
+    #[arg(long, short = 'o', value_name = "FILE")]
+    pub observations: Option<PathBuf>,
+    /// Electrode amplitudes instead of impact points: image, led, vx1, vx2, vy1, vy2
+    #[arg(long, short = 's', value_name = "FILE")]
+    pub signals: Option<PathBuf>,
+    /// Where to write calibration.json (atomically)
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Parameters to estimate, comma-separated (the others stay fixed)
+    #[arg(long, value_name = "LIST", default_value = "f,cx,cy,k1,k2", value_parser = parse_fit)]
+    pub fit: FitList,
+    /// Nominal focal length of the lens, mm (narrows the start's search)
+    #[arg(long, value_name = "MM", value_parser = positive_mm)]
+    pub focal_guess: Option<f64>,
+    /// Cost to minimise: template (the paper's template-plane error) or image
+    #[arg(long, value_name = "KIND", default_value = "template", value_parser = ["template", "image"])]
+    pub cost: String,
+    /// Skip the preliminary distortion correction before the linear stage
+    #[arg(long)]
+    pub no_preliminary: bool,
+    /// Skip the data normalisation of the homographies
+    #[arg(long)]
+    pub no_normalize: bool,
+    /// Robust loss: huber:SCALE or cauchy:SCALE (SCALE in mm of the cost)
+    #[arg(long, value_name = "LOSS:SCALE", value_parser = parse_robust)]
+    pub robust: Option<RobustLoss>,
+    /// Value of a fixed parameter, NAME=VALUE (repeatable), e.g. l1=-1.3058e-3
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment, allow_negative_numbers = true)]
+    pub set: Vec<(Param, f64)>,
+    /// Also write every point's residuals to this CSV
+    #[arg(long, value_name = "FILE")]
+    pub residuals: Option<PathBuf>,
+    /// Active area side along x, mm
+    #[arg(long, value_name = "MM", default_value = "9", value_parser = positive_mm, allow_negative_numbers = true)]
+    pub lx: f64,
+    /// Active area side along y, mm
+    #[arg(long, value_name = "MM", default_value = "9", value_parser = positive_mm, allow_negative_numbers = true)]
+    pub ly: f64,
+    /// Treat every data warning as an error instead of dropping the data
+    #[arg(long)]
+    pub strict: bool,
+}
+
+/// The parameters named by `--fit`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitList(pub Vec<Param>);
 
 /// Arguments of `psdcal correct`.
 #[derive(Debug, Args)]
@@ -143,10 +221,29 @@ pub struct CorrectConfig {
     pub out: Option<PathBuf>,
 }
 
+/// Validated configuration of `psdcal calibrate`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrateConfig {
+    pub template: PathBuf,
+    pub points: PointSource,
+    pub geometry: PsdGeometry,
+    pub strict: bool,
+    pub out: PathBuf,
+    pub residuals: Option<PathBuf>,
+    pub free: Vec<Param>,
+    pub fixed_values: Vec<(Param, f64)>,
+    pub focal_guess: Option<f64>,
+    pub cost: CostKind,
+    pub preliminary: bool,
+    pub normalize: bool,
+    pub robust: Option<RobustLoss>,
+}
+
 /// What to run.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Job {
     Check(CheckConfig),
+    Calibrate(CalibrateConfig),
     Correct(CorrectConfig),
 }
 
@@ -183,6 +280,49 @@ impl Cli {
                     strict: args.strict,
                 })
             }
+            Command::Calibrate(args) => {
+                let points = match (args.observations, args.signals) {
+                    (Some(path), None) => PointSource::Observations(path),
+                    (None, Some(path)) => PointSource::Signals(path),
+                    _ => {
+                        return Err(Cli::command().error(
+                            clap::error::ErrorKind::ArgumentConflict,
+                            "give exactly one of --observations and --signals",
+                        ))
+                    }
+                };
+                let free = args.fit.0;
+                for (p, _) in &args.set {
+                    if free.contains(p) {
+                        return Err(Cli::command().error(
+                            clap::error::ErrorKind::ArgumentConflict,
+                            format!("--set {p}=... fixes {p}, but --fit also frees it; drop one of them"),
+                        ));
+                    }
+                }
+                Job::Calibrate(CalibrateConfig {
+                    template: args.template,
+                    points,
+                    geometry: PsdGeometry {
+                        lx: args.lx,
+                        ly: args.ly,
+                    },
+                    strict: args.strict,
+                    out: args.out,
+                    residuals: args.residuals,
+                    free,
+                    fixed_values: args.set,
+                    focal_guess: args.focal_guess,
+                    cost: if args.cost == "image" {
+                        CostKind::Image
+                    } else {
+                        CostKind::Template
+                    },
+                    preliminary: !args.no_preliminary,
+                    normalize: !args.no_normalize,
+                    robust: args.robust,
+                })
+            }
             Command::Correct(args) => {
                 if output == Output::Json && args.out.is_none() {
                     return Err(Cli::command().error(
@@ -199,6 +339,58 @@ impl Cli {
             }
         };
         Ok((output, job))
+    }
+}
+
+/// `--fit`: comma-separated parameter names, each at most once.
+fn parse_fit(text: &str) -> Result<FitList, String> {
+    let mut out: Vec<Param> = Vec::new();
+    for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        if name.eq_ignore_ascii_case("gains") {
+            return Err(
+                "fitting channel gains is not available yet; calibrate from impact points, \
+                        or divide known gains out of the amplitudes"
+                    .into(),
+            );
+        }
+        let p: Param = name
+            .parse()
+            .map_err(|e: psdcal_model::UnknownParam| e.to_string())?;
+        if out.contains(&p) {
+            return Err(format!("'{p}' is listed twice"));
+        }
+        out.push(p);
+    }
+    if out.is_empty() {
+        return Err("expected at least one parameter, e.g. f,cx,cy,k1,k2".into());
+    }
+    Ok(FitList(out))
+}
+
+/// `--robust huber:0.1` or `cauchy:0.1`.
+fn parse_robust(text: &str) -> Result<RobustLoss, String> {
+    let (kind, scale) = text
+        .split_once(':')
+        .ok_or_else(|| format!("expected LOSS:SCALE such as huber:0.1, found '{text}'"))?;
+    let scale = positive_mm(scale)?;
+    match kind.trim().to_ascii_lowercase().as_str() {
+        "huber" => Ok(RobustLoss::Huber { scale }),
+        "cauchy" => Ok(RobustLoss::Cauchy { scale }),
+        other => Err(format!("unknown loss '{other}' (expected huber or cauchy)")),
+    }
+}
+
+/// `--set NAME=VALUE`.
+fn parse_assignment(text: &str) -> Result<(Param, f64), String> {
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=VALUE such as l1=-1.3e-3, found '{text}'"))?;
+    let p: Param = name
+        .parse()
+        .map_err(|e: psdcal_model::UnknownParam| e.to_string())?;
+    match value.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok((p, v)),
+        _ => Err(format!("expected a finite number for {p}, found '{value}'")),
     }
 }
 

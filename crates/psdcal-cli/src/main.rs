@@ -1,10 +1,11 @@
 //! `psdcal`: the command-line tool. Argument parsing and output only; the
-//! work is done by psdcal-io and psdcal-model.
+//! work is done by psdcal-io, psdcal-calib and psdcal-model.
 //!
 //! Exit codes: 0 success, 1 failure (one `error: ...` line on stderr),
 //! 2 usage error (clap).
 
 mod cli;
+mod cmd_calibrate;
 mod cmd_check;
 mod cmd_correct;
 mod report;
@@ -22,6 +23,7 @@ fn main() -> ExitCode {
     };
     let result = match &job {
         Job::Check(config) => cmd_check::run(config, output),
+        Job::Calibrate(config) => cmd_calibrate::run(config, output),
         Job::Correct(config) => cmd_correct::run(config, output),
     };
     match result {

@@ -34,6 +34,20 @@ pub fn print_warnings(warnings: &[Warning]) {
 
 /// What the user can do about an error.
 fn hint(error: &anyhow::Error) -> &'static str {
+    if let Some(calib) = error.downcast_ref::<psdcal_calib::CalibError>() {
+        return match calib {
+            psdcal_calib::CalibError::TooFewImages { .. } | psdcal_calib::CalibError::TooFewPoints { .. } => {
+                "add template poses (images) with at least 4 LEDs each"
+            }
+            psdcal_calib::CalibError::Degenerate { .. } => {
+                "vary the template's tilt and position between images, or fix the parameters the data cannot determine"
+            }
+            psdcal_calib::CalibError::NotConverged { .. } => {
+                "give --focal-guess, free fewer parameters (--fit), or add images"
+            }
+            _ => "check the data with 'psdcal check', or give --focal-guess",
+        };
+    }
     let Some(io) = error.downcast_ref::<IoError>() else {
         return "see 'psdcal --help'";
     };

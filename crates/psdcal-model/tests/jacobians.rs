@@ -153,7 +153,18 @@ fn pinhole_and_normalize_jacobians() {
 fn rotation_derivatives_at_every_angle() {
     let axis = Vector3::new(0.3, -0.5, 0.8).normalize();
     let angles = [
-        0.0, 1e-12, 1e-9, 1e-5, 0.05, 0.0999999, 0.1, 0.1000001, 0.7, 1.5, 3.0, 3.1415,
+        0.0,
+        1e-12,
+        1e-9,
+        1e-5,
+        0.05,
+        0.0999999,
+        0.1,
+        0.1000001,
+        0.7,
+        1.5,
+        3.0,
+        std::f64::consts::PI - 1e-4,
     ];
     for theta in angles {
         let rvec = axis * theta;
@@ -162,8 +173,8 @@ fn rotation_derivatives_at_every_angle() {
         assert!((r * r.transpose() - nalgebra::Matrix3::identity()).norm() < 1e-14);
         assert!((r.determinant() - 1.0).abs() < 1e-14);
         let mut analytic = DMatrix::zeros(9, 3);
-        for i in 0..3 {
-            analytic.set_column(i, &DVector::from_column_slice(dr[i].as_slice()));
+        for (i, dri) in dr.iter().enumerate() {
+            analytic.set_column(i, &DVector::from_column_slice(dri.as_slice()));
         }
         check_jacobian(
             &format!("rotation wrt rvec at θ = {theta}"),

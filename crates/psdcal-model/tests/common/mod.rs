@@ -110,7 +110,7 @@ pub fn check_jacobian(
         let mut xm = x.clone();
         xm[j] -= h;
         let fd = (f(&xp) - f(&xm)) / (2.0 * h) * scales[j];
-        let err = (&col - &fd).norm();
+        let err = (col - &fd).norm();
         assert!(
             err <= rel_tol * fd.norm() + 1e-8 * largest,
             "{name}: column {j} analytic {:?} vs finite difference {:?} (scaled by {}; error {err:.3e})",

@@ -1,0 +1,268 @@
+//! The whole calibration, end to end (MODEL.md §4): the robust start
+//! ([`crate::initialize`]: preliminary correction, normalised DLT, closed
+//! form or focal search), Levenberg–Marquardt on the template-plane cost
+//! (P29) with the global search over `l1` when it is freed
+//! ([`crate::global`]), the covariance ([`crate::covariance`]) and the fit
+//! statistics ([`crate::report`]).
+//!
+//! Fixed parameters keep the values of [`CalibrateOptions::base`] (zero
+//! distortion by default, or e.g. an `l1` known from a PSD scan). Freed
+//! parameters start from the initialisation where it estimates them
+//! (`f, cx, cy, k1, k2`) and from `base` otherwise.
+//!
+//! A refinement that runs out of iterations is an error, never a result.
+
+use psdcal_model::{Param, Pose, SensorModel};
+use serde::Serialize;
+
+use crate::covariance::{covariance, Covariance};
+use crate::data::CalibrationData;
+use crate::global::{refine_global, GlobalOptions, GlobalReport};
+use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
+use crate::refine::{CostKind, RefineOptions, RefineReport, RobustLoss, Termination};
+use crate::report::{fit_statistics, FitStatistics};
+use crate::CalibError;
+
+/// Options of [`calibrate`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrateOptions {
+    /// The start.
+    pub init: InitOptions,
+    /// The refinement (cost, freed parameters, robust loss, tolerances).
+    pub refine: RefineOptions,
+    /// The global search used when `l1` is freed.
+    pub global: GlobalOptions,
+    /// Values of the parameters that are not freed.
+    pub base: SensorModel,
+}
+
+impl Default for CalibrateOptions {
+    /// The paper's defaults: template-plane cost, `f, cx, cy, k1, k2` freed,
+    /// every other parameter fixed at zero (`f` at 8 mm only matters if the
+    /// user fixes it).
+    fn default() -> Self {
+        Self {
+            init: InitOptions::default(),
+            refine: RefineOptions::default(),
+            global: GlobalOptions::default(),
+            base: SensorModel::pinhole(8.0, 0.0, 0.0),
+        }
+    }
+}
+
+/// A finished calibration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationResult {
+    /// The estimated sensor model.
+    pub model: SensorModel,
+    /// One `sensor_from_template` pose per image.
+    pub poses: Vec<Pose>,
+    /// The freed parameters.
+    pub free: Vec<Param>,
+    /// The cost minimised.
+    pub cost_kind: CostKind,
+    /// The robust loss, if any.
+    pub robust: Option<RobustLoss>,
+    /// Final cost.
+    pub cost: f64,
+    /// How the start was found.
+    pub init: InitReport,
+    /// The refinement's report.
+    pub refine: RefineReport,
+    /// The global search's report (when `l1` was freed).
+    pub global: Option<GlobalReport>,
+    /// Uncertainty of the estimate.
+    pub covariance: Covariance,
+    /// Fit statistics.
+    pub statistics: FitStatistics,
+    /// Everything the user should know (identifiability, start, outliers).
+    pub warnings: Vec<String>,
+}
+
+/// Calibrates a sensor from `data`.
+pub fn calibrate(
+    data: &CalibrationData,
+    options: &CalibrateOptions,
+) -> Result<CalibrationResult, CalibError> {
+    let free = &options.refine.free;
+    let init = initialize(data, &options.init)?;
+    let mut start = options.base;
+    for p in [Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2] {
+        if free.contains(&p) {
+            start.set(p, init.model.get(p));
+        }
+    }
+    // A fixed f, cx or cy must have been given; the poses come from the start.
+    start.validate()?;
+    let (refined, global) =
+        refine_global(data, &start, &init.poses, &options.refine, &options.global)?;
+    if !refined.report.termination.converged() {
+        return Err(CalibError::NotConverged {
+            reason: format!(
+                "{} iterations without meeting a stopping criterion (cost {:.6e}); \
+                 try --focal-guess, fewer freed parameters, or more images",
+                refined.report.iterations, refined.cost
+            ),
+        });
+    }
+    let covariance = covariance(
+        data,
+        options.refine.cost,
+        free,
+        options.refine.robust,
+        &refined.model,
+        &refined.poses,
+        refined.cost,
+    )?;
+    let statistics = fit_statistics(
+        data,
+        &refined.model,
+        &refined.poses,
+        options.refine.cost,
+        options.refine.robust,
+    );
+    let mut warnings = covariance.warnings.clone();
+    if let Some(note) = &init.report.preliminary_note {
+        warnings.push(note.clone());
+    }
+    if let Some(reason) = &init.report.closed_form_rejection {
+        warnings.push(format!(
+            "closed form rejected ({reason}); started from a focal-length search"
+        ));
+    }
+    if statistics.unprojectable > 0 {
+        warnings.push(format!(
+            "{} point(s) cannot be reprojected onto the sensor with the fitted model (outside its valid region)",
+            statistics.unprojectable
+        ));
+    }
+    if !statistics.outliers.is_empty() {
+        warnings.push(format!(
+            "{} point(s) down-weighted as outliers by the robust loss",
+            statistics.outliers.len()
+        ));
+    }
+    if let Some(g) = &global {
+        if g.minima.len() > 1 {
+            warnings.push(format!(
+                "the cost has {} local minima over l1; the lowest ({:.4e}) was kept, the next is {:.4e}",
+                g.minima.len(),
+                g.minima[0].cost,
+                g.minima[1].cost
+            ));
+        }
+    }
+    Ok(CalibrationResult {
+        model: refined.model,
+        poses: refined.poses,
+        free: free.clone(),
+        cost_kind: options.refine.cost,
+        robust: options.refine.robust,
+        cost: refined.cost,
+        init: init.report,
+        refine: refined.report,
+        global,
+        covariance,
+        statistics,
+        warnings,
+    })
+}
+
+/// One parameter of a summary.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ParameterSummary {
+    /// Its name (`f`, `cx`, …).
+    pub name: String,
+    /// Its value.
+    pub value: f64,
+    /// Its standard deviation (`None` when fixed).
+    pub std: Option<f64>,
+    /// Its unit.
+    pub unit: String,
+    /// Whether it was estimated.
+    pub estimated: bool,
+}
+
+/// A serialisable summary of a calibration, for `--json` output and reports.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CalibrationSummary {
+    /// Every sensor parameter.
+    pub parameters: Vec<ParameterSummary>,
+    /// The cost minimised.
+    pub cost: CostKind,
+    /// The robust loss, if any.
+    pub robust: Option<RobustLoss>,
+    /// How the start was found (`closed_form`, `focal_search`, `focal_guess`).
+    pub start: String,
+    /// The closed form's focal length, when it had one (mm).
+    pub closed_form_f: Option<f64>,
+    /// Why the refinement stopped.
+    pub termination: Termination,
+    /// Iterations of the final refinement.
+    pub iterations: usize,
+    /// Cost after each accepted step.
+    pub cost_history: Vec<f64>,
+    /// Fit statistics.
+    pub statistics: FitStatistics,
+    /// Names of the estimated parameters, in the order of `covariance` and `correlation`.
+    pub covariance_parameters: Vec<String>,
+    /// Their covariance.
+    pub covariance: Vec<Vec<f64>>,
+    /// Their correlations.
+    pub correlation: Vec<Vec<f64>>,
+    /// Residual variance σ² per coordinate (cost units).
+    pub sigma2: f64,
+    /// Degrees of freedom.
+    pub dof: usize,
+    /// The global search over `l1`, when run.
+    pub global: Option<GlobalReport>,
+    /// Warnings.
+    pub warnings: Vec<String>,
+}
+
+impl CalibrationResult {
+    /// The serialisable summary.
+    pub fn summary(&self) -> CalibrationSummary {
+        let rows = |m: &nalgebra::DMatrix<f64>| -> Vec<Vec<f64>> {
+            (0..m.nrows())
+                .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+                .collect()
+        };
+        CalibrationSummary {
+            parameters: Param::ALL
+                .iter()
+                .map(|p| ParameterSummary {
+                    name: p.name().into(),
+                    value: self.model.get(*p),
+                    std: self.covariance.std(*p),
+                    unit: p.unit().into(),
+                    estimated: self.free.contains(p),
+                })
+                .collect(),
+            cost: self.cost_kind,
+            robust: self.robust,
+            start: match self.init.route {
+                InitRoute::ClosedForm => "closed_form",
+                InitRoute::FocalSearch => "focal_search",
+                InitRoute::FocalGuess => "focal_guess",
+            }
+            .into(),
+            closed_form_f: self
+                .init
+                .closed_form
+                .as_ref()
+                .and_then(|c| c.focal_length().ok()),
+            termination: self.refine.termination,
+            iterations: self.refine.iterations,
+            cost_history: self.refine.cost_history.clone(),
+            statistics: self.statistics.clone(),
+            covariance_parameters: self.free.iter().map(|p| p.name().to_string()).collect(),
+            covariance: rows(&self.covariance.matrix),
+            correlation: rows(&self.covariance.correlation()),
+            sigma2: self.covariance.sigma2,
+            dof: self.covariance.dof,
+            global: self.global.clone(),
+            warnings: self.warnings.clone(),
+        }
+    }
+}

@@ -1,0 +1,468 @@
+//! Preliminary distortion correction (MODEL.md §4.1, the paper's Section 3.2
+//! and (P30)): a rough radial correction estimated before the linear stage,
+//! which is very sensitive to distortion.
+//!
+//! The correction has the form of the lens radial term of MODEL.md §2 with
+//! the centre `c` held fixed (the sensor centre `(0, 0)` by default):
+//!
+//! ```text
+//! d = m − c,   ρ = ‖d‖² / R²,   p = c + d (1 + u1 ρ + u2 ρ²),
+//! k1 = u1 / R²,   k2 = u2 / R⁴
+//! ```
+//!
+//! where `m` is a measured point, `p` the corrected one, and `R` the largest
+//! distance of a measured point from `c` (the solver works in the
+//! dimensionless `u1, u2`, each of which moves the outermost point by
+//! `u·R`). A candidate must keep the correction monotone over the data,
+//! `1 + 3 k1 r² + 5 k2 r⁴ > 0.1` for `r ≤ R` (no fold-over).
+//!
+//! Two costs, both scale-free, so that a correction that merely shrinks the
+//! points cannot win:
+//!
+//! - *Line straightness* ([`crate::straightness`]; the paper's choice, in the
+//!   Devernay–Faugeras form instead of the slopes of (P30)–(P35)): for every
+//!   declared line seen with ≥ 3 LEDs in an image, the orthogonal distances of
+//!   the corrected points to their total-least-squares line, divided by the
+//!   square root of the scatter along the line, `e_j = n·(p_j − p̄)/√λ_max`;
+//!   the sum of squares per line is `λ_min/λ_max` of its scatter matrix.
+//! - *Homography consistency* (any template): for every image with ≥ 5
+//!   points, the transfer residuals `H P_j − p_j` of the normalised-DLT
+//!   homography of the corrected points, measured in the image's Hartley
+//!   coordinates (multiplied by `√2 / mean distance to the centroid`).
+//!
+//! Both are minimised by a two-parameter Levenberg–Marquardt from `k = 0`
+//! (analytic Jacobian for straightness, central differences for homography
+//! consistency).
+
+use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+
+use crate::homography::{fit_homography, normalizing_transform, HomographyOptions};
+use crate::{CalibError, CalibrationData};
+
+/// Which preliminary correction to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Preliminary {
+    /// No correction (`k1 = k2 = 0`).
+    Off,
+    /// Line straightness; needs declared lines.
+    Straightness,
+    /// Homography consistency; any template.
+    HomographyConsistency,
+    /// Straightness when the template declares usable lines, homography
+    /// consistency otherwise. A report never carries `Auto`.
+    #[default]
+    Auto,
+}
+
+/// Options of [`estimate_preliminary`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreliminaryOptions {
+    /// The method.
+    pub method: Preliminary,
+    /// The fixed centre of the correction, mm (default `(0, 0)`, the sensor
+    /// centre).
+    pub centre: Vector2<f64>,
+    /// Levenberg–Marquardt iteration budget (default 50).
+    pub max_iterations: usize,
+}
+
+impl Default for PreliminaryOptions {
+    fn default() -> Self {
+        Self {
+            method: Preliminary::Auto,
+            centre: Vector2::zeros(),
+            max_iterations: 50,
+        }
+    }
+}
+
+/// Why the two-parameter solver stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PreliminaryTermination {
+    /// The method was `Off`: nothing to do.
+    NotRun,
+    /// The cost (or the step) stopped changing.
+    Converged,
+    /// The damping grew without finding a better point.
+    Stalled,
+    /// The iteration budget ran out.
+    MaxIterations,
+}
+
+/// What the preliminary correction did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreliminaryReport {
+    /// The method actually run (never `Auto`).
+    pub method: Preliminary,
+    /// Estimated `k1`, mm⁻².
+    pub k1: f64,
+    /// Estimated `k2`, mm⁻⁴.
+    pub k2: f64,
+    /// The fixed centre, mm.
+    pub centre: Vector2<f64>,
+    /// Cost at `k = 0` (dimensionless, see the module documentation).
+    pub cost_before: f64,
+    /// Cost at the estimate.
+    pub cost_after: f64,
+    /// Accepted Levenberg–Marquardt iterations.
+    pub iterations: usize,
+    /// Cost evaluations.
+    pub evaluations: usize,
+    /// Terms of the cost: lines (straightness) or images (consistency).
+    pub terms: usize,
+    /// Why the solver stopped.
+    pub termination: PreliminaryTermination,
+}
+
+impl PreliminaryReport {
+    /// The report of no correction.
+    pub fn off(centre: Vector2<f64>) -> Self {
+        Self {
+            method: Preliminary::Off,
+            k1: 0.0,
+            k2: 0.0,
+            centre,
+            cost_before: 0.0,
+            cost_after: 0.0,
+            iterations: 0,
+            evaluations: 0,
+            terms: 0,
+            termination: PreliminaryTermination::NotRun,
+        }
+    }
+
+    /// Applies the estimated correction to one measured point.
+    pub fn correct(&self, measured: &Vector2<f64>) -> Vector2<f64> {
+        radial_correct(measured, &self.centre, self.k1, self.k2)
+    }
+
+    /// The corrected points of every image, in the order of
+    /// `data.images[i].points`.
+    pub fn correct_data(&self, data: &CalibrationData) -> Vec<Vec<Vector2<f64>>> {
+        data.images
+            .iter()
+            .map(|im| {
+                im.points
+                    .iter()
+                    .map(|o| self.correct(&o.measured))
+                    .collect()
+            })
+            .collect()
+    }
+}
+
+/// `c + (m − c)(1 + k1 r² + k2 r⁴)`, `r = ‖m − c‖`.
+pub fn radial_correct(
+    measured: &Vector2<f64>,
+    centre: &Vector2<f64>,
+    k1: f64,
+    k2: f64,
+) -> Vector2<f64> {
+    let d = measured - centre;
+    let r2 = d.norm_squared();
+    centre + d * (1.0 + r2 * (k1 + r2 * k2))
+}
+
+/// Checks the data for what every linear-stage routine relies on: finite
+/// template and measured points, LED indices inside the template, each LED at
+/// most once per image.
+pub fn check_data(data: &CalibrationData) -> Result<(), CalibError> {
+    if !data
+        .template
+        .iter()
+        .all(|p| p.x.is_finite() && p.y.is_finite())
+    {
+        return Err(CalibError::InvalidInput {
+            reason: "the template has non-finite LED coordinates".into(),
+        });
+    }
+    for im in &data.images {
+        let mut seen = vec![false; data.template.len()];
+        for o in &im.points {
+            if o.led >= data.template.len() {
+                return Err(CalibError::UnknownLed {
+                    led: o.led,
+                    template_len: data.template.len(),
+                });
+            }
+            if seen[o.led] {
+                return Err(CalibError::InvalidInput {
+                    reason: format!("image '{}' has LED {} more than once", im.id, o.led),
+                });
+            }
+            seen[o.led] = true;
+            if !(o.measured.x.is_finite() && o.measured.y.is_finite()) {
+                return Err(CalibError::InvalidInput {
+                    reason: format!("image '{}' has a non-finite point for LED {}", im.id, o.led),
+                });
+            }
+        }
+    }
+    for line in &data.lines {
+        if let Some(&led) = line.iter().find(|&&l| l >= data.template.len()) {
+            return Err(CalibError::UnknownLed {
+                led,
+                template_len: data.template.len(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// A scale-free least-squares cost in the two dimensionless parameters
+/// `u = (k1 R², k2 R⁴)`.
+pub(crate) trait TwoParameterCost {
+    /// The residual vector (fixed length for a given problem).
+    fn residuals(&self, u: [f64; 2]) -> Result<DVector<f64>, CalibError>;
+
+    /// Its Jacobian (n × 2); central differences unless overridden.
+    fn jacobian(&self, u: [f64; 2], _r: &DVector<f64>) -> Result<DMatrix<f64>, CalibError> {
+        const H: f64 = 1e-6;
+        let mut cols = Vec::with_capacity(2);
+        for k in 0..2 {
+            let (mut up, mut um) = (u, u);
+            up[k] += H;
+            um[k] -= H;
+            cols.push((self.residuals(up)? - self.residuals(um)?) / (2.0 * H));
+        }
+        Ok(DMatrix::from_columns(&cols))
+    }
+}
+
+/// Whether `1 + 3 u1 s + 5 u2 s² > 0.1` for `s ∈ [0, 1]` (monotone correction
+/// over the data's radius).
+pub(crate) fn is_monotone(u: [f64; 2]) -> bool {
+    let g = |s: f64| 1.0 + 3.0 * u[0] * s + 5.0 * u[1] * s * s;
+    let mut ok = g(1.0) > 0.1 && u.iter().all(|v| v.is_finite());
+    if u[1] > 0.0 {
+        let s = -3.0 * u[0] / (10.0 * u[1]);
+        if s > 0.0 && s < 1.0 {
+            ok &= g(s) > 0.1;
+        }
+    }
+    ok
+}
+
+/// Outcome of [`minimise`].
+pub(crate) struct Minimum {
+    pub u: [f64; 2],
+    pub cost_before: f64,
+    pub cost_after: f64,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub termination: PreliminaryTermination,
+}
+
+/// Levenberg–Marquardt (Marquardt's diagonal damping) from `u = 0`.
+pub(crate) fn minimise(
+    cost: &dyn TwoParameterCost,
+    max_iterations: usize,
+) -> Result<Minimum, CalibError> {
+    let mut u = [0.0, 0.0];
+    let mut r = cost.residuals(u)?;
+    let mut evaluations = 1;
+    let mut c = r.norm_squared();
+    let cost_before = c;
+    if !c.is_finite() {
+        return Err(CalibError::Numerical {
+            stage: "preliminary correction",
+            reason: "non-finite cost at k = 0".into(),
+        });
+    }
+    let mut lambda = 1e-3;
+    let mut iterations = 0;
+    let mut termination = PreliminaryTermination::MaxIterations;
+    'outer: while iterations < max_iterations {
+        if c <= 1e-30 {
+            termination = PreliminaryTermination::Converged;
+            break;
+        }
+        let j = cost.jacobian(u, &r)?;
+        let g = j.transpose() * &r;
+        let h = j.transpose() * &j;
+        let h = Matrix2::new(h[(0, 0)], h[(0, 1)], h[(1, 0)], h[(1, 1)]);
+        let g = Vector2::new(g[0], g[1]);
+        if !(h.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
+            return Err(CalibError::Numerical {
+                stage: "preliminary correction",
+                reason: "non-finite Jacobian".into(),
+            });
+        }
+        let floor = 1e-12 * (h[(0, 0)] + h[(1, 1)]).max(1e-300);
+        loop {
+            let damped = Matrix2::new(
+                h[(0, 0)] * (1.0 + lambda) + floor,
+                h[(0, 1)],
+                h[(1, 0)],
+                h[(1, 1)] * (1.0 + lambda) + floor,
+            );
+            let step = damped.try_inverse().map(|inv| -(inv * g));
+            if let Some(step) = step.filter(|s| s.iter().all(|v| v.is_finite())) {
+                let trial = [u[0] + step.x, u[1] + step.y];
+                if is_monotone(trial) {
+                    evaluations += 1;
+                    if let Ok(rt) = cost.residuals(trial) {
+                        let ct = rt.norm_squared();
+                        if ct.is_finite() && ct < c {
+                            let decrease = c - ct;
+                            u = trial;
+                            r = rt;
+                            c = ct;
+                            iterations += 1;
+                            lambda = (lambda / 10.0).max(1e-12);
+                            let small_step = step.norm() <= 1e-12 * (1.0 + u[0].abs() + u[1].abs());
+                            if decrease <= 1e-14 * (c + decrease) || small_step {
+                                termination = PreliminaryTermination::Converged;
+                                break 'outer;
+                            }
+                            continue 'outer;
+                        }
+                    }
+                }
+            }
+            lambda *= 10.0;
+            if lambda > 1e12 {
+                // No descent even for tiny steps: at a minimum to rounding.
+                termination = PreliminaryTermination::Stalled;
+                break 'outer;
+            }
+        }
+    }
+    Ok(Minimum {
+        u,
+        cost_before,
+        cost_after: c,
+        iterations,
+        evaluations,
+        termination,
+    })
+}
+
+/// Largest distance of a measured point from `centre`.
+pub(crate) fn data_radius(data: &CalibrationData, centre: &Vector2<f64>) -> f64 {
+    data.images
+        .iter()
+        .flat_map(|im| im.points.iter())
+        .map(|o| (o.measured - centre).norm())
+        .fold(0.0, f64::max)
+}
+
+/// Template points and measured points of one image.
+type ImagePoints = (Vec<Vector2<f64>>, Vec<Vector2<f64>>);
+
+/// Homography-consistency cost (module documentation).
+struct Consistency {
+    /// Per usable image: template points and measured points.
+    images: Vec<ImagePoints>,
+    centre: Vector2<f64>,
+    radius: f64,
+}
+
+impl TwoParameterCost for Consistency {
+    fn residuals(&self, u: [f64; 2]) -> Result<DVector<f64>, CalibError> {
+        let (k1, k2) = (u[0] / self.radius.powi(2), u[1] / self.radius.powi(4));
+        let n: usize = self.images.iter().map(|(t, _)| 2 * t.len()).sum();
+        let mut r = DVector::zeros(n);
+        let mut row = 0;
+        let options = HomographyOptions { normalize: true };
+        for (template, measured) in &self.images {
+            let corrected: Vec<_> = measured
+                .iter()
+                .map(|m| radial_correct(m, &self.centre, k1, k2))
+                .collect();
+            let fit = fit_homography(template, &corrected, &options)?;
+            let s = normalizing_transform(&corrected)?[(0, 0)];
+            for (p, q) in template.iter().zip(&corrected) {
+                let e = (fit.homography.apply(p)? - q) * s;
+                r[row] = e.x;
+                r[row + 1] = e.y;
+                row += 2;
+            }
+        }
+        Ok(r)
+    }
+}
+
+/// Estimates the preliminary radial correction (module documentation).
+///
+/// Errors: [`CalibError::Degenerate`] when the chosen method has nothing to
+/// work on (straightness without lines of ≥ 3 observed LEDs, consistency
+/// without an image of ≥ 5 points, or all points at the centre), data errors
+/// from [`check_data`], and homography failures of the consistency cost.
+pub fn estimate_preliminary(
+    data: &CalibrationData,
+    options: &PreliminaryOptions,
+) -> Result<PreliminaryReport, CalibError> {
+    check_data(data)?;
+    let centre = options.centre;
+    if !(centre.x.is_finite() && centre.y.is_finite()) {
+        return Err(CalibError::InvalidInput {
+            reason: "non-finite preliminary-correction centre".into(),
+        });
+    }
+    let method = match options.method {
+        Preliminary::Off => return Ok(PreliminaryReport::off(centre)),
+        Preliminary::Auto => {
+            if crate::straightness::usable_lines(data) > 0 {
+                Preliminary::Straightness
+            } else {
+                Preliminary::HomographyConsistency
+            }
+        }
+        m => m,
+    };
+    let radius = data_radius(data, &centre);
+    if radius.is_nan() || radius <= 0.0 {
+        return Err(CalibError::Degenerate {
+            reason: "every measured point is at the correction centre".into(),
+        });
+    }
+    let (minimum, terms) = match method {
+        Preliminary::Straightness => {
+            let cost = crate::straightness::StraightnessCost::new(data, centre, radius)?;
+            let terms = cost.lines();
+            (minimise(&cost, options.max_iterations)?, terms)
+        }
+        _ => {
+            let images: Vec<_> = data
+                .images
+                .iter()
+                .filter(|im| im.points.len() >= 5)
+                .map(|im| {
+                    (
+                        im.points
+                            .iter()
+                            .map(|o| data.template[o.led])
+                            .collect::<Vec<_>>(),
+                        im.points.iter().map(|o| o.measured).collect::<Vec<_>>(),
+                    )
+                })
+                .collect();
+            if images.is_empty() {
+                return Err(CalibError::Degenerate {
+                    reason: "homography-consistency correction needs images of at least 5 points"
+                        .into(),
+                });
+            }
+            let terms = images.len();
+            let cost = Consistency {
+                images,
+                centre,
+                radius,
+            };
+            (minimise(&cost, options.max_iterations)?, terms)
+        }
+    };
+    Ok(PreliminaryReport {
+        method,
+        k1: minimum.u[0] / radius.powi(2),
+        k2: minimum.u[1] / radius.powi(4),
+        centre,
+        cost_before: minimum.cost_before,
+        cost_after: minimum.cost_after,
+        iterations: minimum.iterations,
+        evaluations: minimum.evaluations,
+        terms,
+        termination: minimum.termination,
+    })
+}

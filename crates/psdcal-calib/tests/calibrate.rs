@@ -1,0 +1,86 @@
+//! The whole calibration from automatic initialisation (no focal guess).
+
+mod support;
+
+use psdcal_calib::{calibrate, CalibError, CalibrateOptions, RefineOptions};
+use psdcal_model::{Param, SensorModel};
+use support::scenario;
+
+fn check_close(name: &str, got: &SensorModel, truth: &SensorModel, free: &[Param]) {
+    for p in free {
+        let (g, t) = (got.get(*p), truth.get(*p));
+        let scale = match p {
+            Param::F | Param::Cx | Param::Cy => t.abs().max(1.0),
+            _ => t.abs().max(1e-8),
+        };
+        assert!(
+            (g - t).abs() <= 1e-6 * scale,
+            "{name}: {p} = {g:e}, truth {t:e}"
+        );
+    }
+}
+
+#[test]
+fn noise_free_end_to_end_both_lenses() {
+    for (name, truth) in [
+        ("lens1", SensorModel::paper_lens1()),
+        ("lens2", SensorModel::paper_lens2()),
+    ] {
+        for seed in [1, 2] {
+            let s = scenario(truth, 9, 0.0, seed);
+            let r = calibrate(&s.data, &CalibrateOptions::default()).unwrap();
+            assert!(
+                r.statistics.residual_mm2 < 1e-12,
+                "{name}: residual {:e}",
+                r.statistics.residual_mm2
+            );
+            check_close(name, &r.model, &truth, &r.free);
+        }
+    }
+}
+
+#[test]
+fn noise_free_end_to_end_with_l1_freed() {
+    for (name, base) in [
+        ("lens1", SensorModel::paper_lens1()),
+        ("lens2", SensorModel::paper_lens2()),
+    ] {
+        let mut truth = base;
+        truth.distortion.l1 = SensorModel::PAPER_L1;
+        let s = scenario(truth, 9, 0.0, 3);
+        let options = CalibrateOptions {
+            refine: RefineOptions {
+                free: vec![
+                    Param::F,
+                    Param::Cx,
+                    Param::Cy,
+                    Param::K1,
+                    Param::K2,
+                    Param::L1,
+                ],
+                ..RefineOptions::default()
+            },
+            ..CalibrateOptions::default()
+        };
+        let r = calibrate(&s.data, &options).unwrap();
+        assert!(
+            r.statistics.residual_mm2 < 1e-12,
+            "{name}: residual {:e}",
+            r.statistics.residual_mm2
+        );
+        check_close(name, &r.model, &truth, &r.free);
+        let g = r.global.as_ref().expect("global search ran");
+        assert!(g.minima[0].cost < 1e-12);
+    }
+}
+
+#[test]
+fn degenerate_input_is_refused_with_its_cause() {
+    let truth = SensorModel::paper_lens2();
+    let mut s = scenario(truth, 9, 0.0, 1);
+    s.data.images.truncate(2);
+    match calibrate(&s.data, &CalibrateOptions::default()) {
+        Err(CalibError::TooFewImages { usable: 2, .. }) => {}
+        other => panic!("expected TooFewImages, got {other:?}"),
+    }
+}
