@@ -1,12 +1,15 @@
 //! Refinement speed: the paper's size (9 images × 14 LEDs), with l1 freed
 //! (global search), and a large set (10 to 1000 images × 20 LEDs) to show the
-//! cost per image stays flat (Schur complement on the pose blocks).
+//! cost per image stays flat (Schur complement on the pose blocks); and the
+//! whole calibration from automatic initialisation.
 
 #[path = "../tests/support/mod.rs"]
 mod support;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use psdcal_calib::{refine, refine_global, GlobalOptions, RefineOptions};
+use psdcal_calib::{
+    calibrate, refine, refine_global, CalibrateOptions, GlobalOptions, RefineOptions,
+};
 use psdcal_model::{Param, SensorModel};
 use std::hint::black_box;
 
@@ -56,5 +59,27 @@ fn scaling(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, paper_size, scaling);
+/// The whole calibration from automatic initialisation (preliminary
+/// correction, homographies, closed form and its check, refinement,
+/// covariance, statistics).
+fn end_to_end(c: &mut Criterion) {
+    let truth = SensorModel::paper_lens2();
+    let s = support::scenario(truth, 9, 3e-4, 1);
+    let options = CalibrateOptions::default();
+    c.bench_function("calibrate 9x14 lens2", |b| {
+        b.iter(|| calibrate(black_box(&s.data), &options).unwrap())
+    });
+    let mut group = c.benchmark_group("calibrate x20 LEDs");
+    group.sample_size(10);
+    for n in [10usize, 1000] {
+        let s = support::scenario_with(truth, 20, n, 3e-4, 2);
+        group.throughput(Throughput::Elements(n as u64));
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| calibrate(black_box(&s.data), &options).unwrap())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, paper_size, scaling, end_to_end);
 criterion_main!(benches);

@@ -10,7 +10,9 @@
 //! parameters start from the initialisation where it estimates them
 //! (`f, cx, cy, k1, k2`) and from `base` otherwise.
 //!
-//! A refinement that runs out of iterations is an error, never a result.
+//! A refinement that runs out of iterations is an error, never a result;
+//! so is a fit whose focal length has a standard deviation above
+//! [`MAX_RELATIVE_STD_F`] of its value (nearly parallel template poses).
 
 use psdcal_model::{Param, Pose, SensorModel};
 use serde::Serialize;
@@ -22,6 +24,10 @@ use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
 use crate::refine::{CostKind, RefineOptions, RefineReport, RobustLoss, Termination};
 use crate::report::{fit_statistics, FitStatistics};
 use crate::CalibError;
+
+/// Largest relative standard deviation of a freed `f` accepted as a
+/// calibration: beyond it the images do not determine the focal length.
+pub const MAX_RELATIVE_STD_F: f64 = 0.2;
 
 /// Options of [`calibrate`].
 #[derive(Debug, Clone, PartialEq)]
@@ -114,6 +120,18 @@ pub fn calibrate(
         &refined.poses,
         refined.cost,
     )?;
+    if let Some(sd) = covariance.std(Param::F) {
+        let f = refined.model.intrinsics.f;
+        if sd > MAX_RELATIVE_STD_F * f {
+            return Err(CalibError::Degenerate {
+                reason: format!(
+                    "the focal length is not determined by these images (f = {f:.4} ± {sd:.4} mm): \
+                     the template poses are (nearly) parallel to the sensor or too few; tilt the \
+                     template 10°–40° in several directions"
+                ),
+            });
+        }
+    }
     let statistics = fit_statistics(
         data,
         &refined.model,

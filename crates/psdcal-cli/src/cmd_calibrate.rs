@@ -267,6 +267,24 @@ fn write_summary(
         }
     }
     writeln!(out)?;
+    let corr = r.covariance.correlation();
+    if r.free.len() > 1 {
+        write!(out, "correlation")?;
+        for p in &r.free {
+            write!(out, " {:>6}", p.name())?;
+        }
+        writeln!(out)?;
+        for (i, p) in r.free.iter().enumerate() {
+            write!(out, "{:<11}", p.name())?;
+            for j in 0..r.free.len() {
+                if j <= i {
+                    write!(out, " {:>+6.3}", corr[(i, j)])?;
+                }
+            }
+            writeln!(out)?;
+        }
+        writeln!(out)?;
+    }
     let cost = match r.cost_kind {
         CostKind::Template => "template plane",
         CostKind::Image => "image plane",

@@ -3,6 +3,8 @@
 //! together cover the sensor, optional Gaussian noise on the measured points.
 #![allow(dead_code)]
 
+pub mod robustness;
+
 use nalgebra::{Vector2, Vector3};
 use psdcal_calib::{CalibrationData, ImageObservations, Observation};
 use psdcal_model::{Pose, PsdGeometry, SensorModel};
