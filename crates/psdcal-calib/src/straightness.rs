@@ -75,7 +75,7 @@ impl StraightnessCost {
     ) -> Result<Self, CalibError> {
         let terms = line_terms(data);
         if terms.is_empty() {
-            return Err(CalibError::Degenerate {
+            return Err(CalibError::InvalidInput {
                 reason: "line-straightness correction needs template lines with at least 3 LEDs \
                          observed in an image; the template declares none (use the \
                          homography-consistency correction)"

@@ -205,8 +205,8 @@ fn method_selection_and_refusals() {
             ..Default::default()
         },
     ) {
-        Err(CalibError::Degenerate { reason }) => assert!(reason.contains("lines"), "{reason}"),
-        other => panic!("expected Degenerate, got {other:?}"),
+        Err(CalibError::InvalidInput { reason }) => assert!(reason.contains("lines"), "{reason}"),
+        other => panic!("expected InvalidInput, got {other:?}"),
     }
     let mut bad = una.data.clone();
     bad.images[0].points[0].led = 99;

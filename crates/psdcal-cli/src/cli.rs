@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use clap::{ArgGroup, Args, CommandFactory, Parser, Subcommand};
-use psdcal_calib::{CostKind, RobustLoss};
+use psdcal_calib::{CostKind, Preliminary, RobustLoss};
 use psdcal_model::{Param, PsdGeometry};
 
 const MAIN_EXAMPLES: &str = "\
@@ -140,8 +140,13 @@ pub struct CalibrateArgs {
     /// Cost to minimise: template (the paper's template-plane error) or image
     #[arg(long, value_name = "KIND", default_value = "template", value_parser = ["template", "image"])]
     pub cost: String,
-    /// Skip the preliminary distortion correction before the linear stage
-    #[arg(long)]
+    /// Preliminary distortion correction before the linear stage: auto (line
+    /// straightness when the template declares lines, else homography
+    /// consistency), straightness, homography, or off
+    #[arg(long, value_name = "METHOD", default_value = "auto", value_parser = ["auto", "straightness", "homography", "off"])]
+    pub preliminary: String,
+    /// Skip the preliminary distortion correction (same as --preliminary off)
+    #[arg(long, conflicts_with = "preliminary")]
     pub no_preliminary: bool,
     /// Skip the data normalisation of the homographies
     #[arg(long)]
@@ -234,7 +239,7 @@ pub struct CalibrateConfig {
     pub fixed_values: Vec<(Param, f64)>,
     pub focal_guess: Option<f64>,
     pub cost: CostKind,
-    pub preliminary: bool,
+    pub preliminary: Preliminary,
     pub normalize: bool,
     pub robust: Option<RobustLoss>,
 }
@@ -318,7 +323,16 @@ impl Cli {
                     } else {
                         CostKind::Template
                     },
-                    preliminary: !args.no_preliminary,
+                    preliminary: if args.no_preliminary {
+                        Preliminary::Off
+                    } else {
+                        match args.preliminary.as_str() {
+                            "straightness" => Preliminary::Straightness,
+                            "homography" => Preliminary::HomographyConsistency,
+                            "off" => Preliminary::Off,
+                            _ => Preliminary::Auto,
+                        }
+                    },
                     normalize: !args.no_normalize,
                     robust: args.robust,
                 })

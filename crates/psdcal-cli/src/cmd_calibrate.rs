@@ -7,7 +7,7 @@ use std::io::Write as _;
 use anyhow::Context as _;
 use psdcal_calib::{
     calibrate, CalibrateOptions, CalibrationData, CalibrationResult, CostKind, ImageObservations,
-    InitOptions, Observation, Preliminary, RefineOptions,
+    InitOptions, Observation, RefineOptions,
 };
 use psdcal_io::{
     validate_data_set, write_atomic, write_calibration, Calibration, Observations, Signals,
@@ -92,11 +92,7 @@ fn calibrate_options(config: &CalibrateConfig) -> CalibrateOptions {
     }
     CalibrateOptions {
         init: InitOptions {
-            preliminary: if config.preliminary {
-                Preliminary::Auto
-            } else {
-                Preliminary::Off
-            },
+            preliminary: config.preliminary,
             normalize: config.normalize,
             focal_guess: config.focal_guess,
             ..InitOptions::default()

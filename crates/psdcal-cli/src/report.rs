@@ -42,6 +42,7 @@ fn hint(error: &anyhow::Error) -> &'static str {
             psdcal_calib::CalibError::Degenerate { .. } => {
                 "vary the template's tilt and position between images, or fix the parameters the data cannot determine"
             }
+            psdcal_calib::CalibError::InvalidInput { .. } => "change the options or the data as the message says",
             psdcal_calib::CalibError::NotConverged { .. } => {
                 "give --focal-guess, free fewer parameters (--fit), or add images"
             }
