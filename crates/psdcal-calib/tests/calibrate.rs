@@ -40,6 +40,42 @@ fn noise_free_end_to_end_both_lenses() {
 }
 
 #[test]
+fn noise_free_end_to_end_with_every_lens_term_freed() {
+    for base in [SensorModel::paper_lens1(), SensorModel::paper_lens2()] {
+        let mut truth = base;
+        truth.intrinsics.skew = 0.01;
+        truth.distortion.k3 = 1e-7;
+        truth.distortion.p1 = 2e-4;
+        truth.distortion.p2 = -3e-4;
+        let s = scenario(truth, 9, 0.0, 8);
+        let options = CalibrateOptions {
+            refine: RefineOptions {
+                free: vec![
+                    Param::F,
+                    Param::Cx,
+                    Param::Cy,
+                    Param::Skew,
+                    Param::K1,
+                    Param::K2,
+                    Param::K3,
+                    Param::P1,
+                    Param::P2,
+                ],
+                ..RefineOptions::default()
+            },
+            ..CalibrateOptions::default()
+        };
+        let r = calibrate(&s.data, &options).unwrap();
+        assert!(
+            r.statistics.residual_mm2 < 1e-12,
+            "residual {:e}",
+            r.statistics.residual_mm2
+        );
+        check_close("all lens terms", &r.model, &truth, &r.free);
+    }
+}
+
+#[test]
 fn noise_free_end_to_end_with_l1_freed() {
     for (name, base) in [
         ("lens1", SensorModel::paper_lens1()),
