@@ -104,6 +104,12 @@ pub struct InitOptions {
     pub focal_guess: Option<f64>,
     /// Try the closed form (default `true`); `false` uses the search only.
     pub use_closed_form: bool,
+    /// Refine the closed-form start over `k1` and the poses before handing
+    /// it on, and check it against its neighbours (default `true`). `false`
+    /// reproduces the paper's start — the closed-form intrinsics whenever
+    /// they are plausible, the preliminary `k1, k2` and the poses of the
+    /// homographies — for studies that compare iteration counts with it.
+    pub refine_start: bool,
 }
 
 impl Default for InitOptions {
@@ -114,6 +120,7 @@ impl Default for InitOptions {
             normalize: true,
             focal_guess: None,
             use_closed_form: true,
+            refine_start: true,
         }
     }
 }
@@ -307,6 +314,21 @@ impl Problem {
                 break;
             }
         }
+        Ok(Profile { cost, model, poses })
+    }
+
+    /// The paper's start at `(f, cx, cy)`: the preliminary `k1, k2` and the
+    /// poses of the homographies, unrefined.
+    fn plain_start(&self, f: f64, cx: f64, cy: f64) -> Result<Profile, CalibError> {
+        let mut model = SensorModel::pinhole(f, cx, cy);
+        model.distortion.k1 = self.k1_start;
+        model.distortion.k2 = self.k2;
+        let poses = self
+            .homographies
+            .iter()
+            .map(|h| pose_from_homography(h, f, cx, cy))
+            .collect::<Result<Vec<_>, _>>()?;
+        let cost = self.sum_squares(&model, &poses);
         Ok(Profile { cost, model, poses })
     }
 
@@ -576,7 +598,7 @@ pub fn initialize(
     // The closed form must also be a local minimum of the profile at the
     // scale of its own error: J at 0.5, 0.7, 1.4 and 2 × f, with its centre
     // and with the centre at (0, 0) (where the search starts), on the subset.
-    if let Some((f, cx, cy, _)) = candidate {
+    if let Some((f, cx, cy, _)) = candidate.filter(|_| options.refine_start) {
         let subset = problem.subset(SEARCH_IMAGES);
         let here = subset.cost_or_inf(f, cx, cy);
         let mut best = (f, f64::INFINITY);
@@ -650,6 +672,11 @@ pub fn initialize(
     // in f. With noise, the covariance of the refined fit judges instead
     // (crate::calibrate).
     let start = match (route, candidate) {
+        (InitRoute::ClosedForm, Some(_)) if !options.refine_start => problem
+            .plain_start(f, cx, cy)
+            .ok()
+            .filter(|p| p.cost.is_finite())
+            .or(closed_profile.take()),
         (InitRoute::ClosedForm, Some(_)) => closed_profile.take(),
         _ => None,
     };

@@ -123,8 +123,8 @@ impl Default for RefineOptions {
             cost: CostKind::Template,
             free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2],
             robust: None,
-            max_iterations: 200,
-            cost_tolerance: 1e-12,
+            max_iterations: 500,
+            cost_tolerance: 1e-10,
             step_tolerance: 1e-10,
             initial_lambda: 1e-3,
         }

@@ -9,9 +9,14 @@ use psdcal_model::{Param, PsdGeometry};
 
 const MAIN_EXAMPLES: &str = "\
 Examples:
+  psdcal demo
+  psdcal simulate --lens 2 --snr 40 --out sim
   psdcal check --template template.csv --observations observations.csv
   psdcal calibrate --template template.csv --observations observations.csv --out calibration.json
   psdcal correct --calibration calibration.json --points points.csv --out ideal.csv
+  psdcal aoa --calibration calibration.json --points points.csv --out aoa.csv
+  psdcal locate --calibration calibration.json --points points.csv --distance 5000
+  psdcal map --lens 2 --error f=0.1,cx=0.05 --out map.csv
 
 Exit codes: 0 success, 1 failure (one 'error:' line on stderr), 2 usage error.";
 
@@ -86,9 +91,27 @@ pub enum Command {
     /// Calibrate a sensor from images of an LED template (adapted Zhang method + Levenberg-Marquardt)
     #[command(after_help = CALIBRATE_EXAMPLES)]
     Calibrate(CalibrateArgs),
+    /// Simulate a calibration data set through the whole signal chain
+    #[command(after_help = crate::cli_sim::SIMULATE_EXAMPLES)]
+    Simulate(crate::cli_sim::SimulateArgs),
+    /// Run the paper's Monte Carlo evaluation (Tables 1-10, Figure 9) next to the paper's numbers
+    #[command(after_help = crate::cli_sim::STUDY_EXAMPLES)]
+    Study(crate::cli_sim::StudyArgs),
+    /// Simulate, calibrate and compare with the truth in a few seconds (start here)
+    #[command(after_help = crate::cli_sim::DEMO_EXAMPLES)]
+    Demo(crate::cli_sim::DemoArgs),
     /// Correct measured points (or electrode amplitudes) to ideal points with a calibration
     #[command(after_help = CORRECT_EXAMPLES)]
     Correct(CorrectArgs),
+    /// Angles of arrival of measured points (or amplitudes) with their uncertainty
+    #[command(after_help = crate::cli_locate::AOA_EXAMPLES)]
+    Aoa(crate::cli_locate::AoaArgs),
+    /// Emitter positions on a plane, or from a rig of sensors, with their 3-D covariance
+    #[command(after_help = crate::cli_locate::LOCATE_EXAMPLES)]
+    Locate(crate::cli_locate::LocateArgs),
+    /// Maps of the AoA and position errors over the sensor area (the paper's Figure 9)
+    #[command(after_help = crate::cli_locate::MAP_EXAMPLES)]
+    Map(crate::cli_locate::MapArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -247,9 +270,15 @@ pub struct CalibrateConfig {
 /// What to run.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Job {
+    Simulate(crate::cli_sim::SimulateArgs),
+    Study(crate::cli_sim::StudyConfig),
+    Demo(crate::cli_sim::DemoArgs),
     Check(CheckConfig),
     Calibrate(CalibrateConfig),
     Correct(CorrectConfig),
+    Aoa(crate::cli_locate::AoaConfig),
+    Locate(crate::cli_locate::LocateConfig),
+    Map(crate::cli_locate::MapConfig),
 }
 
 impl Cli {
@@ -285,6 +314,12 @@ impl Cli {
                     strict: args.strict,
                 })
             }
+            Command::Simulate(args) => Job::Simulate(args),
+            Command::Study(args) => Job::Study(args.into_config()),
+            Command::Demo(args) => Job::Demo(args),
+            Command::Aoa(args) => Job::Aoa(args.into_config(output)?),
+            Command::Locate(args) => Job::Locate(args.into_config(output)?),
+            Command::Map(args) => Job::Map(args.into_config(output)?),
             Command::Calibrate(args) => {
                 let points = match (args.observations, args.signals) {
                     (Some(path), None) => PointSource::Observations(path),

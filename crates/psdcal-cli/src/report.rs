@@ -34,6 +34,9 @@ pub fn print_warnings(warnings: &[Warning]) {
 
 /// What the user can do about an error.
 fn hint(error: &anyhow::Error) -> &'static str {
+    if let Some(hint) = crate::locate_output::hint(error) {
+        return hint;
+    }
     if let Some(calib) = error.downcast_ref::<psdcal_calib::CalibError>() {
         return match calib {
             psdcal_calib::CalibError::TooFewImages { .. } | psdcal_calib::CalibError::TooFewPoints { .. } => {

@@ -187,6 +187,17 @@ pub enum IoError {
         /// The newest version this psdcal reads.
         supported: u32,
     },
+    /// A JSON field (named by its path, e.g. `sensors[1].t_mm`) is missing or
+    /// holds an invalid value: the rig file's errors.
+    #[error("{file}: field '{field}': {message}")]
+    Field {
+        /// File name.
+        file: String,
+        /// Path of the field, e.g. `sensors[1].world_from_sensor.t_mm`.
+        field: String,
+        /// What was found and what was expected.
+        message: String,
+    },
     /// A warning raised to an error by strict validation.
     #[error("{} (strict validation makes this warning an error)", .warning.problem())]
     Strict {
@@ -202,7 +213,8 @@ impl IoError {
             IoError::Read { file, .. }
             | IoError::Write { file, .. }
             | IoError::Json { file, .. }
-            | IoError::NewerVersion { file, .. } => Some(file),
+            | IoError::NewerVersion { file, .. }
+            | IoError::Field { file, .. } => Some(file),
             IoError::Encoding { at, .. }
             | IoError::Structure { at, .. }
             | IoError::Value { at, .. }
@@ -217,7 +229,7 @@ impl IoError {
     /// The 1-based physical line the error is on, if it is on one.
     pub fn line(&self) -> Option<usize> {
         match self {
-            IoError::Read { .. } | IoError::Write { .. } => None,
+            IoError::Read { .. } | IoError::Write { .. } | IoError::Field { .. } => None,
             IoError::Json { line, .. } | IoError::NewerVersion { line, .. } => Some(*line),
             IoError::Encoding { at, .. }
             | IoError::Structure { at, .. }

@@ -9,7 +9,9 @@
 //! - [`Points`] — points.csv, points to correct, written back with their
 //!   original columns ([`correct_points`]);
 //! - [`Calibration`] — calibration.json, versioned, read with
-//!   [`read_calibration`] and written with [`write_calibration`].
+//!   [`read_calibration`] and written with [`write_calibration`];
+//! - [`RigFile`] — rig.json, sensors with poses in a world frame, and
+//!   [`RigObservations`], what they measured per emitter.
 //!
 //! [`validate_data_set`] checks a template and its observations together and
 //! groups the usable points by image; [`DataSetSummary`] and [`Coverage`]
@@ -30,11 +32,15 @@ mod coverage;
 mod csv_fields;
 mod csv_table;
 mod error;
+mod export;
 mod observations;
 mod points;
+mod rig;
+mod rig_observations;
 mod signals;
 mod summary;
 mod template;
+mod truth;
 mod validate;
 mod warning;
 
@@ -47,11 +53,20 @@ pub use calibration::{
 pub use correct::{correct_points, Correction, IDEAL_COLUMNS, MEASURED_COLUMNS};
 pub use coverage::{Bounds, Coverage};
 pub use error::{ColumnRef, IoError, Location};
+pub use export::{
+    write_observations, write_signals, write_template, ObservationRow, SignalRowOut, TemplateLed,
+};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, Points};
+pub use rig::{read_rig, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION};
+pub use rig_observations::{RigObservation, RigObservations};
 pub use signals::{SignalRow, Signals};
 pub use summary::{DataSetSummary, ImageSummary, LineSummary, TemplateSummary};
 pub use template::{Led, LineGroup, Template};
+pub use truth::{
+    read_truth, write_truth, SimulationSettings, TrueGains, TruePose, Truth, TRUTH_FORMAT,
+    TRUTH_VERSION,
+};
 pub use validate::{
     validate_data_set, Image, ValidatedDataSet, ValidationOptions, MIN_IMAGES, MIN_POINTS_PER_IMAGE,
 };

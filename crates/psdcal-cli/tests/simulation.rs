@@ -1,0 +1,226 @@
+//! `psdcal demo`, `simulate` and `study` end to end, and their refusals.
+
+mod common;
+
+use common::{psdcal, stderr, stdout};
+use psdcal_io::{read_calibration, read_truth};
+
+#[test]
+fn demo_runs_and_reports_against_the_truth() {
+    let run = psdcal(["demo"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let text = stdout(&run);
+    assert!(text.contains("angle-of-arrival error"), "{text}");
+    assert!(text.contains("error/std"));
+    let json = psdcal(["--json", "demo"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&json)).unwrap();
+    // 40 dB: the focal length within 4σ of the truth, the AoA error below a degree.
+    let f = v["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "f")
+        .unwrap();
+    let (truth, est, sd) = (
+        f["truth"].as_f64().unwrap(),
+        f["estimate"].as_f64().unwrap(),
+        f["std"].as_f64().unwrap(),
+    );
+    assert!((est - truth).abs() < 4.0 * sd, "f {est} ± {sd} vs {truth}");
+    assert!(v["aoa_rms_error_deg"].as_f64().unwrap() < 1.0);
+}
+
+#[test]
+fn simulated_files_calibrate_back_to_their_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let run = psdcal([
+        "simulate",
+        "--lens",
+        "1",
+        "--snr",
+        "50",
+        "--images",
+        "12",
+        "--template",
+        "grid",
+        "--seed",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    for f in [
+        "template.csv",
+        "observations.csv",
+        "signals.csv",
+        "truth.json",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let truth = read_truth(out.join("truth.json")).unwrap();
+    assert_eq!(truth.images.len(), 12);
+    assert_eq!(truth.simulation.snr_db, Some(50.0));
+    let cal_path = out.join("cal.json");
+    let path = |f: &str| out.join(f).display().to_string();
+    for input in ["--observations", "--signals"] {
+        let file = if input == "--observations" {
+            path("observations.csv")
+        } else {
+            path("signals.csv")
+        };
+        let run = psdcal([
+            "calibrate",
+            "-t",
+            &path("template.csv"),
+            input,
+            &file,
+            "--out",
+            cal_path.to_str().unwrap(),
+        ]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let cal = read_calibration(&cal_path).unwrap();
+        let sd = cal.std.get("f").unwrap();
+        assert!(
+            (cal.intrinsics.f_mm - truth.intrinsics.f_mm).abs() < 5.0 * sd,
+            "{input}: f {} ± {sd}",
+            cal.intrinsics.f_mm
+        );
+        let sd = cal.std.get("cx").unwrap();
+        assert!((cal.intrinsics.cx_mm - truth.intrinsics.cx_mm).abs() < 5.0 * sd);
+    }
+    // The same seed writes the same bytes.
+    let again = dir.path().join("again");
+    assert!(psdcal([
+        "simulate",
+        "--lens",
+        "1",
+        "--snr",
+        "50",
+        "--images",
+        "12",
+        "--template",
+        "grid",
+        "--seed",
+        "3",
+        "--out",
+        again.to_str().unwrap(),
+    ])
+    .status
+    .success());
+    assert_eq!(
+        std::fs::read(out.join("observations.csv")).unwrap(),
+        std::fs::read(again.join("observations.csv")).unwrap()
+    );
+}
+
+#[test]
+fn study_is_identical_whatever_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.path().join(format!("t{threads}"));
+        let run = psdcal([
+            "-q",
+            "study",
+            "table2",
+            "table6",
+            "--trials",
+            "3",
+            "--threads",
+            threads,
+            "--seed",
+            "5",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        for f in ["study.md", "study.csv", "study.json"] {
+            assert!(out.join(f).exists());
+        }
+        csv.push(std::fs::read_to_string(out.join("study.csv")).unwrap());
+    }
+    assert_eq!(csv[0], csv[1]);
+    assert!(csv[0].starts_with("table,condition,quantity"));
+    // Two tables: 4 first-stage columns × 3 rows + 3 columns × 8 rows.
+    assert_eq!(csv[0].lines().count(), 1 + 4 * 3 + 3 * 8);
+}
+
+#[test]
+fn bad_options_are_refused_before_any_work() {
+    for args in [
+        vec!["study", "table11"],
+        vec!["study", "--trials", "0"],
+        vec!["study", "--threads", "0"],
+        vec!["simulate", "--images", "2", "--out", "x"],
+        vec!["simulate", "--snr", "abc", "--out", "x"],
+        vec!["simulate", "--lens", "3", "--out", "x"],
+        vec!["simulate", "--template", "ring", "--out", "x"],
+    ] {
+        let run = psdcal(&args);
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {}", stderr(&run));
+        assert!(
+            stderr(&run).contains("expected") || stderr(&run).contains("unknown"),
+            "{args:?}: {}",
+            stderr(&run)
+        );
+    }
+    // An output folder that cannot be written: refused at once, nothing left behind.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "").unwrap();
+    let blocked = file.join("study");
+    let run = psdcal([
+        "study",
+        "table1",
+        "--trials",
+        "1",
+        "--out",
+        blocked.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(stderr(&run).contains("output folder"), "{}", stderr(&run));
+}
+
+#[test]
+fn an_interrupted_study_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("study");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_psdcal"))
+        .args([
+            "study",
+            "all",
+            "--trials",
+            "200",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Let it start (the folder is checked and created first), then Ctrl-C.
+    let started = std::time::Instant::now();
+    while !out.exists() && started.elapsed().as_secs() < 10 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let status = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let output = child.wait_with_output().unwrap();
+    assert_eq!(
+        output.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(String::from_utf8_lossy(&output.stderr).contains("interrupted"));
+    let left: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(left.is_empty(), "files left behind: {left:?}");
+}

@@ -1,0 +1,312 @@
+//! A calibrated sensor: its model, active area, channel gains and the
+//! covariance of its calibration, and what it answers for one measurement —
+//! the angle of arrival with its uncertainty (MODEL.md §5, (P39)) and the
+//! emitter position on a plane with its 3-D covariance.
+//!
+//! Amplitude measurements are first turned into impact points with
+//! MODEL.md §1 after dividing out the gains (with `∂m/∂g` for the gains'
+//! uncertainty). Then, with `J = ∂(a, b)/∂·` from [`crate::aoa`] and
+//! `P = P(a, b)` from [`crate::plane`]:
+//!
+//! ```text
+//! Σ_ab = Σ_ab,cal + Σ_ab,meas           (crate::uncertainty)
+//! Σ_P  = (∂P/∂(a,b)) Σ_ab (∂P/∂(a,b))ᵀ   3×3, sensor frame, mm²
+//! ```
+
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Vector2};
+use psdcal_model::sensor::{
+    impact_point_gain_jacobian, impact_point_with_gains, is_on_active_area,
+};
+use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry, SensorModel};
+
+use crate::aoa::{alpha_wrt_ray, angle_of_arrival_with_jacobians, AngleOfArrival, AoaJacobians};
+use crate::caution::Caution;
+use crate::error::{finite, LocateError};
+use crate::plane::{intersect_plane, Plane, PlaneIntersection};
+use crate::uncertainty::{point_noise_covariance, ParameterCovariance};
+
+/// What a sensor measured for one emitter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Measurement {
+    /// A measured impact point, mm, sensor frame.
+    Point(Vector2<f64>),
+    /// The four electrode amplitudes (MODEL.md §1).
+    Amplitudes(Amplitudes),
+}
+
+/// Options of the location functions.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocateOptions {
+    /// Standard deviation of the measured point per coordinate, mm (0: the
+    /// measurement noise is not counted).
+    pub point_sigma_mm: f64,
+    /// A ray meeting a plane at less than this angle is flagged
+    /// [`Caution::GrazingPlane`], rad.
+    pub grazing_warning_rad: f64,
+    /// Rays whose largest mutual angle is below this are flagged
+    /// [`Caution::NearlyParallelRays`], rad.
+    pub ray_angle_warning_rad: f64,
+    /// Weight each ray of a triangulation by its inverse covariance (when
+    /// every ray has a positive-definite one); `false`: unweighted.
+    pub weight_rays: bool,
+}
+
+impl Default for LocateOptions {
+    /// No point noise; grazing below 10°; rays within 5° of each other;
+    /// rays weighted.
+    fn default() -> Self {
+        Self {
+            point_sigma_mm: 0.0,
+            grazing_warning_rad: 10f64.to_radians(),
+            ray_angle_warning_rad: 5f64.to_radians(),
+            weight_rays: true,
+        }
+    }
+}
+
+impl LocateOptions {
+    pub(crate) fn check(&self) -> Result<(), LocateError> {
+        finite(self.point_sigma_mm, "point sigma")?;
+        if self.point_sigma_mm < 0.0 {
+            return Err(LocateError::InvalidInput {
+                what: "point sigma",
+                reason: format!("{} mm; expected zero or more", self.point_sigma_mm),
+            });
+        }
+        finite(self.grazing_warning_rad, "grazing warning angle")?;
+        finite(self.ray_angle_warning_rad, "ray angle warning")?;
+        Ok(())
+    }
+}
+
+/// A calibrated sensor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibratedSensor {
+    /// The sensor model.
+    pub model: SensorModel,
+    /// The PSD's active area.
+    pub geometry: PsdGeometry,
+    /// Relative channel gains to divide out of amplitudes (`None`: balanced).
+    pub gains: Option<ChannelGains>,
+    /// Covariance of the calibration's estimated quantities.
+    pub covariance: ParameterCovariance,
+}
+
+/// A measured point and, for amplitude input through gains, `∂m/∂g`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeasuredPoint {
+    /// The impact point, mm.
+    pub point: Vector2<f64>,
+    /// `∂m/∂(g_x2, g_y1, g_y2)` when the point came from amplitudes.
+    pub wrt_gains: Option<Matrix2x3<f64>>,
+}
+
+/// An angle of arrival with its uncertainty.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AoaEstimate {
+    /// The angle of arrival.
+    pub aoa: AngleOfArrival,
+    /// Its Jacobians.
+    pub jacobians: AoaJacobians,
+    /// Covariance of `(a, b)` from the calibration's covariance.
+    pub ray_covariance_calibration: Matrix2<f64>,
+    /// Covariance of `(a, b)` from the point noise.
+    pub ray_covariance_measurement: Matrix2<f64>,
+    /// Whether the point is off the active area.
+    pub off_active_area: bool,
+}
+
+impl AoaEstimate {
+    /// Total covariance of `(a, b)`.
+    pub fn ray_covariance(&self) -> Matrix2<f64> {
+        self.ray_covariance_calibration + self.ray_covariance_measurement
+    }
+
+    fn alpha_of_ray_covariance(&self, cov: &Matrix2<f64>) -> Matrix2<f64> {
+        let d = alpha_wrt_ray(&self.aoa.ray_ab);
+        d * cov * d
+    }
+
+    /// Covariance of `(αx, αy)` from the calibration, rad².
+    pub fn alpha_covariance_calibration(&self) -> Matrix2<f64> {
+        self.alpha_of_ray_covariance(&self.ray_covariance_calibration)
+    }
+
+    /// Covariance of `(αx, αy)` from the point noise, rad².
+    pub fn alpha_covariance_measurement(&self) -> Matrix2<f64> {
+        self.alpha_of_ray_covariance(&self.ray_covariance_measurement)
+    }
+
+    /// Total covariance of `(αx, αy)`, rad².
+    pub fn alpha_covariance(&self) -> Matrix2<f64> {
+        self.alpha_of_ray_covariance(&self.ray_covariance())
+    }
+
+    /// The cautions of this estimate.
+    pub fn cautions(&self) -> Vec<Caution> {
+        if self.off_active_area {
+            vec![Caution::OffActiveArea {
+                x_mm: self.aoa.measured.x,
+                y_mm: self.aoa.measured.y,
+            }]
+        } else {
+            Vec::new()
+        }
+    }
+}
+
+/// A position on a plane with its uncertainty.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlaneLocation {
+    /// The angle of arrival it comes from.
+    pub aoa: AoaEstimate,
+    /// The intersection.
+    pub intersection: PlaneIntersection,
+    /// Covariance of the position from the calibration, sensor frame, mm².
+    pub covariance_calibration: Matrix3<f64>,
+    /// Covariance of the position from the point noise, mm².
+    pub covariance_measurement: Matrix3<f64>,
+    /// Reasons for care (off the active area, grazing plane).
+    pub cautions: Vec<Caution>,
+}
+
+impl PlaneLocation {
+    /// Total covariance of the position, mm².
+    pub fn covariance(&self) -> Matrix3<f64> {
+        self.covariance_calibration + self.covariance_measurement
+    }
+}
+
+impl CalibratedSensor {
+    /// A sensor with balanced channels and no calibration uncertainty.
+    pub fn new(model: SensorModel, geometry: PsdGeometry) -> Self {
+        Self {
+            model,
+            geometry,
+            gains: None,
+            covariance: ParameterCovariance::none(),
+        }
+    }
+
+    /// The same sensor with a covariance.
+    pub fn with_covariance(mut self, covariance: ParameterCovariance) -> Self {
+        self.covariance = covariance;
+        self
+    }
+
+    /// The same sensor with channel gains.
+    pub fn with_gains(mut self, gains: ChannelGains) -> Self {
+        self.gains = Some(gains);
+        self
+    }
+
+    /// The measured impact point of a measurement.
+    pub fn measured_point(&self, measurement: &Measurement) -> Result<MeasuredPoint, LocateError> {
+        match measurement {
+            Measurement::Point(p) => Ok(MeasuredPoint {
+                point: *p,
+                wrt_gains: None,
+            }),
+            Measurement::Amplitudes(a) => match &self.gains {
+                Some(g) => {
+                    let (point, jac) = impact_point_gain_jacobian(&self.geometry, a, g)?;
+                    Ok(MeasuredPoint {
+                        point,
+                        wrt_gains: Some(jac),
+                    })
+                }
+                None => Ok(MeasuredPoint {
+                    point: impact_point_with_gains(&self.geometry, a, &ChannelGains::UNIT)?,
+                    wrt_gains: None,
+                }),
+            },
+        }
+    }
+
+    /// The angle of arrival of a measurement with its uncertainty.
+    ///
+    /// ```
+    /// use nalgebra::{DMatrix, Vector2};
+    /// use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, ParameterCovariance};
+    /// use psdcal_model::{Param, PsdGeometry, SensorModel};
+    ///
+    /// // Only cx uncertain (σ = 0.01 mm): σ_αx = σ_cx · cos²αx / f at the centre.
+    /// let cov = ParameterCovariance::from_params(&[Param::Cx], &DMatrix::from_element(1, 1, 1e-4)).unwrap();
+    /// let sensor = CalibratedSensor::new(SensorModel::pinhole(8.0, 0.0, 0.0), PsdGeometry::default())
+    ///     .with_covariance(cov);
+    /// let est = sensor.aoa(&Measurement::Point(Vector2::zeros()), &LocateOptions::default()).unwrap();
+    /// let sigma_x = est.alpha_covariance()[(0, 0)].sqrt();
+    /// assert!((sigma_x - 0.01 / 8.0).abs() < 1e-15);
+    /// ```
+    pub fn aoa(
+        &self,
+        measurement: &Measurement,
+        options: &LocateOptions,
+    ) -> Result<AoaEstimate, LocateError> {
+        options.check()?;
+        let measured = self.measured_point(measurement)?;
+        let (aoa, jacobians) = angle_of_arrival_with_jacobians(&self.model, &measured.point)?;
+        let wrt_gains = measured.wrt_gains.map(|g| jacobians.ray_wrt_measured * g);
+        let ray_covariance_calibration = self
+            .covariance
+            .propagate(&jacobians.ray_wrt_model, wrt_gains.as_ref());
+        let ray_covariance_measurement =
+            point_noise_covariance(&jacobians.ray_wrt_measured, options.point_sigma_mm);
+        Ok(AoaEstimate {
+            aoa,
+            jacobians,
+            ray_covariance_calibration,
+            ray_covariance_measurement,
+            off_active_area: !is_on_active_area(&self.geometry, &measured.point),
+        })
+    }
+
+    /// The position of the emitter on `plane` (sensor frame) with its
+    /// covariance.
+    ///
+    /// ```
+    /// use nalgebra::Vector2;
+    /// use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, Plane};
+    /// use psdcal_model::{PsdGeometry, SensorModel};
+    ///
+    /// let sensor = CalibratedSensor::new(SensorModel::paper_lens1(), PsdGeometry::default());
+    /// let at = sensor
+    ///     .locate_on_plane(
+    ///         &Measurement::Point(Vector2::new(1.0, 2.0)),
+    ///         &Plane::parallel(5000.0).unwrap(),
+    ///         &LocateOptions { point_sigma_mm: 1e-3, ..LocateOptions::default() },
+    ///     )
+    ///     .unwrap();
+    /// assert_eq!(at.intersection.position.z, 5000.0);
+    /// // 1 µm on the PSD is about S/f = 200 µm at 5 m.
+    /// let sigma_x = at.covariance()[(0, 0)].sqrt();
+    /// assert!((sigma_x / 0.2 - 1.0).abs() < 0.05);
+    /// ```
+    pub fn locate_on_plane(
+        &self,
+        measurement: &Measurement,
+        plane: &Plane,
+        options: &LocateOptions,
+    ) -> Result<PlaneLocation, LocateError> {
+        let aoa = self.aoa(measurement, options)?;
+        let intersection = intersect_plane(plane, &aoa.aoa.ray_ab)?;
+        let j = &intersection.wrt_ray;
+        let covariance_calibration = j * aoa.ray_covariance_calibration * j.transpose();
+        let covariance_measurement = j * aoa.ray_covariance_measurement * j.transpose();
+        let mut cautions = aoa.cautions();
+        if intersection.grazing_angle < options.grazing_warning_rad {
+            cautions.push(Caution::GrazingPlane {
+                angle_deg: intersection.grazing_angle.to_degrees(),
+            });
+        }
+        Ok(PlaneLocation {
+            aoa,
+            intersection,
+            covariance_calibration: (covariance_calibration + covariance_calibration.transpose())
+                * 0.5,
+            covariance_measurement: (covariance_measurement + covariance_measurement.transpose())
+                * 0.5,
+            cautions,
+        })
+    }
+}

@@ -1,0 +1,260 @@
+//! One simulated calibration data set: the paper's signal chain end to end
+//! (MODEL.md §1, §6, §7).
+//!
+//! For every template pose and LED: the LED's ideal image point
+//! (pinhole, MODEL.md §3) is distorted by the lens and — when switched on —
+//! the PSD (`SensorModel::distort`, §2) into the true impact point; the
+//! pin-cushion forward model gives the four electrode currents for a total
+//! photocurrent `I0` (§1); the amplifiers multiply them by their gains (the
+//! chain's amplifier gain (`ChainConfig::amplifier_gain_v_per_a`), times the relative gains when the
+//! imbalance is switched on, (P43)); the signal chain modulates, adds noise at
+//! the requested SNR, band-pass filters and demodulates each channel (§6,
+//! [`crate::signal`]); and the impact point is computed from the demodulated
+//! amplitudes with the balanced formula (the calibration does not know the
+//! gains). Without noise the chain is skipped: it returns the amplitudes
+//! exactly (its own tests show it), and skipping keeps noise-free studies fast.
+
+use nalgebra::Vector2;
+use psdcal_calib::{CalibrationData, ImageObservations, Observation};
+use psdcal_model::sensor::{electrode_currents, impact_point};
+use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+
+use crate::scenario::{draw_imbalance, draw_poses, Lens, Template, TemplateKind};
+use crate::signal::SignalChain;
+use crate::SimError;
+
+/// Total photocurrent of one LED's spot, A (20 µA: about 1.9 V summed over
+/// the four channels at the nominal gain at 1 kHz).
+pub const DEFAULT_PHOTOCURRENT_A: f64 = 20e-6;
+
+/// What to simulate.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SimulationOptions {
+    /// The lens.
+    pub lens: Lens,
+    /// Per-channel SNR, dB (`None`: no noise).
+    pub snr_db: Option<f64>,
+    /// Amplifier gain imbalance (P43).
+    pub imbalance: bool,
+    /// The PSD's own distortion, `l1 = −1.3058e-3`.
+    pub psd_distortion: bool,
+    /// Number of images (template poses).
+    pub images: usize,
+    /// The template.
+    pub template: TemplateKind,
+    /// The PSD's active area.
+    pub geometry: PsdGeometry,
+    /// LED spot photocurrent, A.
+    pub photocurrent_a: f64,
+    /// The signal chain.
+    #[serde(skip)]
+    pub chain: SignalChain,
+}
+
+impl Default for SimulationOptions {
+    /// The paper's lens 2 at 40 dB with nine images of the 14-LED template.
+    fn default() -> Self {
+        Self {
+            lens: Lens::Two,
+            snr_db: Some(40.0),
+            imbalance: false,
+            psd_distortion: false,
+            images: 9,
+            template: TemplateKind::Scatter14,
+            geometry: PsdGeometry::default(),
+            photocurrent_a: DEFAULT_PHOTOCURRENT_A,
+            chain: SignalChain::default(),
+        }
+    }
+}
+
+/// One simulated point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimulatedPoint {
+    /// LED index in the template.
+    pub led: usize,
+    /// Ideal (pinhole) image point, mm.
+    pub ideal: Vector2<f64>,
+    /// True impact point (after lens and PSD distortion), mm.
+    pub true_measured: Vector2<f64>,
+    /// Demodulated electrode amplitudes, V.
+    pub amplitudes: Amplitudes,
+    /// Impact point computed from the amplitudes (balanced formula), mm.
+    pub measured: Vector2<f64>,
+}
+
+/// One simulated image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulatedImage {
+    /// Image id (`1`, `2`, …).
+    pub id: String,
+    /// Its points.
+    pub points: Vec<SimulatedPoint>,
+}
+
+/// A simulated data set with its truth.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Simulation {
+    /// The options it was made with.
+    pub options: SimulationOptions,
+    /// The true sensor model (with `l1` when the PSD distorts).
+    pub truth: SensorModel,
+    /// The true relative channel gains (unit without imbalance).
+    pub gains: ChannelGains,
+    /// The absolute gain of channel x1, V/A.
+    pub gain_x1: f64,
+    /// The true `sensor_from_template` poses.
+    pub poses: Vec<Pose>,
+    /// The template.
+    pub template: Template,
+    /// The images.
+    pub images: Vec<SimulatedImage>,
+}
+
+/// Simulates a data set (module documentation); every random draw comes from
+/// `rng`: poses, then gains, then noise.
+pub fn simulate(options: &SimulationOptions, rng: &mut ChaCha8Rng) -> Result<Simulation, SimError> {
+    if options.images < 3 {
+        return Err(SimError::Options(format!(
+            "{} image(s) requested; a calibration needs at least 3",
+            options.images
+        )));
+    }
+    if !(options.photocurrent_a.is_finite() && options.photocurrent_a > 0.0) {
+        return Err(SimError::Options(
+            "the photocurrent must be positive".into(),
+        ));
+    }
+    let mut truth = options.lens.model();
+    if options.psd_distortion {
+        truth.distortion.l1 = SensorModel::PAPER_L1;
+    }
+    let template = options.template.template();
+    let poses =
+        draw_poses(&truth, &options.geometry, &template, options.images, rng).ok_or_else(|| {
+            SimError::Options(
+                "no template pose keeps every LED on the active area for this lens and sensor"
+                    .into(),
+            )
+        })?;
+    let gains = if options.imbalance {
+        draw_imbalance(rng)
+    } else {
+        ChannelGains::UNIT
+    };
+    let gain_x1 = options.chain.config().amplifier_gain_v_per_a;
+    let mut images = Vec::with_capacity(poses.len());
+    for (i, pose) in poses.iter().enumerate() {
+        let mut points = Vec::with_capacity(template.leds.len());
+        for (led, xy) in template.leds.iter().enumerate() {
+            let ideal = truth.project_ideal(pose, xy)?;
+            let true_measured = truth.distort(&ideal)?;
+            let clean = scale(
+                &electrode_currents(&options.geometry, &true_measured, options.photocurrent_a)
+                    .apply_gains(&gains),
+                gain_x1,
+            );
+            let amplitudes = match options.snr_db {
+                None => clean,
+                Some(snr) => options.chain.measure(&clean, Some(snr), rng)?,
+            };
+            let measured = impact_point(&options.geometry, &amplitudes)?;
+            points.push(SimulatedPoint {
+                led,
+                ideal,
+                true_measured,
+                amplitudes,
+                measured,
+            });
+        }
+        images.push(SimulatedImage {
+            id: format!("{}", i + 1),
+            points,
+        });
+    }
+    Ok(Simulation {
+        options: options.clone(),
+        truth,
+        gains,
+        gain_x1,
+        poses,
+        template,
+        images,
+    })
+}
+
+fn scale(a: &Amplitudes, k: f64) -> Amplitudes {
+    Amplitudes {
+        vx1: a.vx1 * k,
+        vx2: a.vx2 * k,
+        vy1: a.vy1 * k,
+        vy2: a.vy2 * k,
+    }
+}
+
+impl Simulation {
+    /// The calibration's input: the measured points of every image.
+    pub fn calibration_data(&self) -> CalibrationData {
+        CalibrationData {
+            template: self.template.leds.clone(),
+            lines: self.template.lines.clone(),
+            images: self
+                .images
+                .iter()
+                .map(|im| ImageObservations {
+                    id: im.id.clone(),
+                    points: im
+                        .points
+                        .iter()
+                        .map(|p| Observation {
+                            led: p.led,
+                            measured: p.measured,
+                        })
+                        .collect(),
+                })
+                .collect(),
+            geometry: self.options.geometry,
+        }
+    }
+
+    /// RMS angle-of-arrival error (rad) of a calibrated `model` over held-out
+    /// directions: a 9 × 9 grid of true ideal points over 80 % of the sensor,
+    /// each measured through the true distortion and the true (possibly
+    /// unbalanced) electronics without noise, corrected with `model` and
+    /// compared with the true ray. Directions the truth cannot image are
+    /// skipped. The error of a point is the angle between the two rays.
+    pub fn aoa_rms_error(&self, model: &SensorModel, gains: &ChannelGains) -> f64 {
+        let geometry = &self.options.geometry;
+        let (mut sum, mut n) = (0.0, 0usize);
+        for i in 0..9 {
+            for j in 0..9 {
+                let ideal = Vector2::new(
+                    0.4 * geometry.lx * (i as f64 / 4.0 - 1.0),
+                    0.4 * geometry.ly * (j as f64 / 4.0 - 1.0),
+                );
+                let Ok(true_measured) = self.truth.distort(&ideal) else {
+                    continue;
+                };
+                let amps =
+                    electrode_currents(geometry, &true_measured, 1.0).apply_gains(&self.gains);
+                let Ok(measured) =
+                    psdcal_model::sensor::impact_point_with_gains(geometry, &amps, gains)
+                else {
+                    continue;
+                };
+                let est = model.ray_direction(&model.undistort(&measured));
+                let truth = self.truth.ray_direction(&ideal);
+                let angle = est.cross(&truth).norm().atan2(est.dot(&truth));
+                sum += angle * angle;
+                n += 1;
+            }
+        }
+        if n == 0 {
+            f64::INFINITY
+        } else {
+            (sum / n as f64).sqrt()
+        }
+    }
+}
