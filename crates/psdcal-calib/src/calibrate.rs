@@ -14,15 +14,17 @@
 //! so is a fit whose focal length has a standard deviation above
 //! [`MAX_RELATIVE_STD_F`] of its value (nearly parallel template poses).
 
-use psdcal_model::{Param, Pose, SensorModel};
+use psdcal_model::{ChannelGains, Param, Pose, SensorModel};
 use serde::Serialize;
 
-use crate::covariance::{covariance, Covariance};
+use crate::covariance::{covariance_with_gains, Covariance};
 use crate::data::CalibrationData;
 use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
-use crate::refine::{CostKind, RefineOptions, RefineReport, RobustLoss, Termination};
-use crate::report::{fit_statistics, FitStatistics};
+use crate::refine::{
+    refine_with_gains, CostKind, RefineOptions, RefineReport, RobustLoss, Termination,
+};
+use crate::report::{fit_statistics_with_gains, FitStatistics};
 use crate::CalibError;
 
 /// Largest relative standard deviation of a freed `f` accepted as a
@@ -61,6 +63,10 @@ impl Default for CalibrateOptions {
 pub struct CalibrationResult {
     /// The estimated sensor model.
     pub model: SensorModel,
+    /// The estimated relative channel gains, when they were freed.
+    pub gains: Option<ChannelGains>,
+    /// Which start won the gain estimation, when the gains were freed.
+    pub gain_start: Option<String>,
     /// One `sensor_from_template` pose per image.
     pub poses: Vec<Pose>,
     /// The freed parameters.
@@ -100,8 +106,42 @@ pub fn calibrate(
     }
     // A fixed f, cx or cy must have been given; the poses come from the start.
     start.validate()?;
-    let (refined, global) =
-        refine_global(data, &start, &init.poses, &options.refine, &options.global)?;
+    let (refined, global, gain_start) = if options.refine.fit_gains {
+        // Several starts, the lowest cost wins: (a) the start with the gains
+        // freed from unit at once; (b) the fit with the gains held at unit
+        // first, then freed. A wrong minimum stands out by a residual orders
+        // of magnitude larger.
+        let (a, global) =
+            refine_global(data, &start, &init.poses, &options.refine, &options.global)?;
+        let fixed = RefineOptions {
+            fit_gains: false,
+            ..options.refine.clone()
+        };
+        let b = refine_global(data, &start, &init.poses, &fixed, &options.global).and_then(
+            |(plain, _)| {
+                refine_with_gains(
+                    data,
+                    &plain.model,
+                    &ChannelGains::UNIT,
+                    &plain.poses,
+                    &options.refine,
+                )
+            },
+        );
+        match b {
+            Ok(b)
+                if b.report.termination.converged()
+                    && (b.cost < a.cost || !a.report.termination.converged()) =>
+            {
+                (b, None, Some("gains fixed first, then freed".to_string()))
+            }
+            _ => (a, global, Some("gains freed from the start".to_string())),
+        }
+    } else {
+        let (r, g) = refine_global(data, &start, &init.poses, &options.refine, &options.global)?;
+        (r, g, None)
+    };
+    let fitted_gains = options.refine.fit_gains.then_some(refined.gains);
     if !refined.report.termination.converged() {
         return Err(CalibError::NotConverged {
             reason: format!(
@@ -111,12 +151,13 @@ pub fn calibrate(
             ),
         });
     }
-    let covariance = covariance(
+    let covariance = covariance_with_gains(
         data,
         options.refine.cost,
         free,
         options.refine.robust,
         &refined.model,
+        fitted_gains.as_ref(),
         &refined.poses,
         refined.cost,
     )?;
@@ -132,9 +173,10 @@ pub fn calibrate(
             });
         }
     }
-    let statistics = fit_statistics(
+    let statistics = fit_statistics_with_gains(
         data,
         &refined.model,
+        fitted_gains.as_ref(),
         &refined.poses,
         options.refine.cost,
         options.refine.robust,
@@ -171,6 +213,8 @@ pub fn calibrate(
         }
     }
     Ok(CalibrationResult {
+        gains: fitted_gains,
+        gain_start,
         model: refined.model,
         poses: refined.poses,
         free: free.clone(),
@@ -206,6 +250,10 @@ pub struct ParameterSummary {
 pub struct CalibrationSummary {
     /// Every sensor parameter.
     pub parameters: Vec<ParameterSummary>,
+    /// The relative channel gains `g_x2, g_y1, g_y2`, when estimated.
+    pub gains: Vec<ParameterSummary>,
+    /// Which start won the gain estimation.
+    pub gain_start: Option<String>,
     /// The cost minimised.
     pub cost: CostKind,
     /// The robust loss, if any.
@@ -257,6 +305,22 @@ impl CalibrationResult {
                     estimated: self.free.contains(p),
                 })
                 .collect(),
+            gains: match (self.gains, self.covariance.gain_std()) {
+                (Some(g), sd) => crate::covariance::GAIN_NAMES
+                    .iter()
+                    .zip(g.to_array())
+                    .enumerate()
+                    .map(|(k, (name, value))| ParameterSummary {
+                        name: name.to_string(),
+                        value,
+                        std: sd.map(|s| s[k]),
+                        unit: "1".into(),
+                        estimated: true,
+                    })
+                    .collect(),
+                (None, _) => Vec::new(),
+            },
+            gain_start: self.gain_start.clone(),
             cost: self.cost_kind,
             robust: self.robust,
             start: match self.init.route {
@@ -274,7 +338,7 @@ impl CalibrationResult {
             iterations: self.refine.iterations,
             cost_history: self.refine.cost_history.clone(),
             statistics: self.statistics.clone(),
-            covariance_parameters: self.free.iter().map(|p| p.name().to_string()).collect(),
+            covariance_parameters: self.covariance.names.clone(),
             covariance: rows(&self.covariance.matrix),
             correlation: rows(&self.covariance.correlation()),
             sigma2: self.covariance.sigma2,

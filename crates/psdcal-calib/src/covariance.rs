@@ -13,10 +13,13 @@
 //! k1 with l1 when the centres nearly coincide), are reported as warnings.
 
 use nalgebra::{DMatrix, Matrix6};
-use psdcal_model::{Param, Pose, SensorModel};
+use psdcal_model::{ChannelGains, Param, Pose, SensorModel};
 
 use crate::data::CalibrationData;
-use crate::refine::{normal_equations, CostKind, RobustLoss};
+use crate::refine::{free_columns, normal_equations, CostKind, RobustLoss};
+
+/// Names of the relative gains in covariance rows and files.
+pub const GAIN_NAMES: [&str; 3] = ["g_x2", "g_y1", "g_y2"];
 use crate::CalibError;
 
 /// Correlation magnitude above which a pair of parameters is flagged.
@@ -27,8 +30,12 @@ pub const INFLATION_WARNING: f64 = 1e4;
 /// The covariance of a calibration's estimate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Covariance {
-    /// The estimated sensor parameters, in the order of `matrix`.
+    /// The estimated sensor parameters, in the order of `matrix` (the gains,
+    /// when estimated, follow them).
     pub params: Vec<Param>,
+    /// Names of every row of `matrix`: the parameters, then `g_x2`, `g_y1`,
+    /// `g_y2` when the gains were estimated.
+    pub names: Vec<String>,
     /// Their covariance (σ² S⁻¹), in their units squared.
     pub matrix: DMatrix<f64>,
     /// Per image, the 6 × 6 covariance of `(rvec, t)`.
@@ -48,9 +55,17 @@ impl Covariance {
         Some(self.matrix[(k, k)].max(0.0).sqrt())
     }
 
+    /// Standard deviations of the relative gains `(g_x2, g_y1, g_y2)`, when
+    /// they were estimated.
+    pub fn gain_std(&self) -> Option<[f64; 3]> {
+        let k = self.params.len();
+        (self.names.len() == k + 3)
+            .then(|| std::array::from_fn(|i| self.matrix[(k + i, k + i)].max(0.0).sqrt()))
+    }
+
     /// Correlation matrix of the estimated parameters.
     pub fn correlation(&self) -> DMatrix<f64> {
-        let n = self.params.len();
+        let n = self.matrix.nrows();
         DMatrix::from_fn(n, n, |i, j| {
             let d = (self.matrix[(i, i)] * self.matrix[(j, j)]).sqrt();
             if d > 0.0 {
@@ -73,8 +88,35 @@ pub fn covariance(
     poses: &[Pose],
     cost: f64,
 ) -> Result<Covariance, CalibError> {
-    let ne = normal_equations(data, cost_kind, free, robust, model, poses)?;
-    let parameters = free.len() + 6 * poses.len();
+    covariance_with_gains(data, cost_kind, free, robust, model, None, poses, cost)
+}
+
+/// [`covariance`] of a fit that also estimated the channel gains (`gains`
+/// = their estimate): the matrix then has three more trailing rows and
+/// columns, `g_x2, g_y1, g_y2`.
+#[allow(clippy::too_many_arguments)]
+pub fn covariance_with_gains(
+    data: &CalibrationData,
+    cost_kind: CostKind,
+    free: &[Param],
+    robust: Option<RobustLoss>,
+    model: &SensorModel,
+    gains: Option<&ChannelGains>,
+    poses: &[Pose],
+    cost: f64,
+) -> Result<Covariance, CalibError> {
+    let columns = free_columns(free, gains.is_some());
+    let ne = normal_equations(data, cost_kind, &columns, robust, model, gains, poses)?;
+    let names: Vec<String> = free
+        .iter()
+        .map(|p| p.name().to_string())
+        .chain(
+            gains
+                .iter()
+                .flat_map(|_| GAIN_NAMES.iter().map(|n| n.to_string())),
+        )
+        .collect();
+    let parameters = columns.len() + 6 * poses.len();
     let observations = 2 * data.point_count();
     if observations <= parameters {
         return Err(CalibError::Degenerate {
@@ -92,7 +134,7 @@ pub fn covariance(
     })?;
     let mut warnings = Vec::new();
     if let Some(s) = ne.schur_complement() {
-        for (k, p) in free.iter().enumerate() {
+        for (k, p) in names.iter().enumerate() {
             let inflation = s_inv[(k, k)] * s[(k, k)];
             if inflation > INFLATION_WARNING {
                 warnings.push(format!(
@@ -105,6 +147,7 @@ pub fn covariance(
     let matrix = s_inv * sigma2;
     let cov = Covariance {
         params: free.to_vec(),
+        names: names.clone(),
         matrix,
         pose_blocks: pose_inv.into_iter().map(|b| b * sigma2).collect(),
         sigma2,
@@ -113,13 +156,13 @@ pub fn covariance(
     };
     let corr = cov.correlation();
     let mut warnings = cov.warnings.clone();
-    for i in 0..free.len() {
-        for j in (i + 1)..free.len() {
+    for i in 0..names.len() {
+        for j in (i + 1)..names.len() {
             if corr[(i, j)].abs() > CORRELATION_WARNING {
                 warnings.push(format!(
                     "{} and {} are strongly correlated ({:+.3}): the data barely separate them",
-                    free[i],
-                    free[j],
+                    names[i],
+                    names[j],
                     corr[(i, j)]
                 ));
             }

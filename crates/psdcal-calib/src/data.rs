@@ -3,7 +3,7 @@
 //! (MODEL.md §4).
 
 use nalgebra::Vector2;
-use psdcal_model::PsdGeometry;
+use psdcal_model::{Amplitudes, PsdGeometry};
 
 /// One measured impact point of one LED in one image.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,9 +35,25 @@ pub struct CalibrationData {
     pub images: Vec<ImageObservations>,
     /// The PSD's active area.
     pub geometry: PsdGeometry,
+    /// The electrode amplitudes behind every point (`[image][point]`, same
+    /// order as `images`), when the data came as signals: needed to estimate
+    /// the channel gains, which recompute each impact point from its
+    /// amplitudes (MODEL.md §1). `measured` then holds the points computed
+    /// with the starting gains.
+    pub amplitudes: Option<Vec<Vec<Amplitudes>>>,
 }
 
 impl CalibrationData {
+    /// Whether amplitudes are present for every point.
+    pub fn has_amplitudes(&self) -> bool {
+        self.amplitudes.as_ref().is_some_and(|a| {
+            a.len() == self.images.len()
+                && a.iter()
+                    .zip(&self.images)
+                    .all(|(a, im)| a.len() == im.points.len())
+        })
+    }
+
     /// Total number of observed points.
     pub fn point_count(&self) -> usize {
         self.images.iter().map(|i| i.points.len()).sum()

@@ -601,24 +601,25 @@ pub fn initialize(
     if let Some((f, cx, cy, _)) = candidate.filter(|_| options.refine_start) {
         let subset = problem.subset(SEARCH_IMAGES);
         let here = subset.cost_or_inf(f, cx, cy);
-        let mut best = (f, f64::INFINITY);
+        let mut best = (f, (cx, cy), f64::INFINITY);
         for &k in &NEIGHBOUR_FACTORS {
             for (x, y) in [(cx, cy), (0.0, 0.0)] {
                 let c = subset.cost_or_inf(k * f, x, y);
-                if c < best.1 {
-                    best = (k * f, c);
+                if c < best.2 {
+                    best = (k * f, (x, y), c);
                 }
             }
         }
         let at_origin = subset.cost_or_inf(f, 0.0, 0.0);
-        if at_origin < best.1 {
-            best = (f, at_origin);
+        if at_origin < best.2 {
+            best = (f, (0.0, 0.0), at_origin);
         }
-        if best.1 < 0.5 * here {
+        if best.2 < 0.5 * here {
             rejection = Some(format!(
-                "closed-form f = {f:.4} mm is not a minimum of the template-plane error: \
-                 f = {:.4} mm lowers it from {here:.4e} to {:.4e} mm²",
-                best.0, best.1
+                "closed-form f = {f:.4} mm, centre ({cx:.3}, {cy:.3}) mm is not a minimum of the \
+                 template-plane error: f = {:.4} mm, centre ({:.3}, {:.3}) mm lowers it from \
+                 {here:.4e} to {:.4e} mm²",
+                best.0, best.1 .0, best.1 .1, best.2
             ));
             candidate = None;
             closed_profile = None;

@@ -22,15 +22,22 @@ pub use initialize::{initialize, InitOptions, InitReport, InitRoute, Initializat
 pub use preliminary::{estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport};
 pub use zhang::{closed_form, pose_from_homography, ClosedFormSolution};
 pub mod covariance;
+pub mod electrical;
 pub mod global;
 pub mod normal_equations;
 pub mod refine;
 pub mod report;
 
-pub use covariance::{covariance, Covariance};
+pub use covariance::{covariance, covariance_with_gains, Covariance, GAIN_NAMES};
+pub use electrical::{equal_current_gains, GainEstimate};
 pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
-pub use refine::{refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination};
-pub use report::{fit_statistics, FitStatistics, ImageStats, PointError};
+pub use refine::{
+    refine, refine_with_gains, CostKind, RefineOptions, RefineReport, Refined, RobustLoss,
+    Termination,
+};
+pub use report::{
+    fit_statistics, fit_statistics_with_gains, FitStatistics, ImageStats, PointError,
+};
 pub mod calibrate;
 pub use calibrate::{
     calibrate, CalibrateOptions, CalibrationResult, CalibrationSummary, ParameterSummary,

@@ -24,7 +24,11 @@
 //! `Cov(a) = S⁻¹`, `Cov(b_i) = V_i⁻¹ + V_i⁻¹ W_iᵀ S⁻¹ W_i V_i⁻¹`, both times σ².
 
 use nalgebra::{DMatrix, DVector, Matrix6, SMatrix, Vector2, Vector6};
-use psdcal_model::{Param, N_PARAMS};
+use psdcal_model::N_PARAMS;
+
+/// Columns of the global block: the 11 sensor parameters, then the relative
+/// channel gains `g_x2, g_y1, g_y2`.
+pub const N_GLOBAL: usize = N_PARAMS + 3;
 
 /// Accumulated normal equations of one evaluation.
 #[derive(Debug, Clone)]
@@ -46,10 +50,10 @@ pub struct NormalEquations {
 /// then keeps the freed ones.
 #[derive(Debug, Clone)]
 pub struct FullNormalEquations {
-    u: SMatrix<f64, N_PARAMS, N_PARAMS>,
-    g_a: SMatrix<f64, N_PARAMS, 1>,
+    u: SMatrix<f64, N_GLOBAL, N_GLOBAL>,
+    g_a: SMatrix<f64, N_GLOBAL, 1>,
     v: Vec<Matrix6<f64>>,
-    w: Vec<SMatrix<f64, N_PARAMS, 6>>,
+    w: Vec<SMatrix<f64, N_GLOBAL, 6>>,
     g_b: Vec<Vector6<f64>>,
 }
 
@@ -66,13 +70,13 @@ impl FullNormalEquations {
     }
 
     /// Adds one weighted 2-vector residual `r` of image `i` with its Jacobians
-    /// `a = ∂r/∂model` (all 11 parameters) and `b = ∂r/∂pose_i`.
+    /// `a = ∂r/∂(model, gains)` (all [`N_GLOBAL`] columns) and `b = ∂r/∂pose_i`.
     pub fn add(
         &mut self,
         i: usize,
         weight: f64,
         r: &Vector2<f64>,
-        a: &SMatrix<f64, 2, N_PARAMS>,
+        a: &SMatrix<f64, 2, N_GLOBAL>,
         b: &SMatrix<f64, 2, 6>,
     ) {
         let at = a.transpose() * weight;
@@ -84,17 +88,18 @@ impl FullNormalEquations {
         self.w[i] += at * b;
     }
 
-    /// The normal equations of the freed parameters only.
-    pub fn select(&self, free: &[Param]) -> NormalEquations {
+    /// The normal equations of the freed global columns only (indices into
+    /// the [`N_GLOBAL`] columns).
+    pub fn select(&self, free: &[usize]) -> NormalEquations {
         let p = free.len();
         NormalEquations {
-            u: DMatrix::from_fn(p, p, |i, j| self.u[(free[i].index(), free[j].index())]),
-            g_a: DVector::from_fn(p, |i, _| self.g_a[free[i].index()]),
+            u: DMatrix::from_fn(p, p, |i, j| self.u[(free[i], free[j])]),
+            g_a: DVector::from_fn(p, |i, _| self.g_a[free[i]]),
             v: self.v.clone(),
             w: self
                 .w
                 .iter()
-                .map(|w| DMatrix::from_fn(p, 6, |i, j| w[(free[i].index(), j)]))
+                .map(|w| DMatrix::from_fn(p, 6, |i, j| w[(free[i], j)]))
                 .collect(),
             g_b: self.g_b.clone(),
         }

@@ -30,12 +30,14 @@
 //! back-projection), a negligible step or cost change, saturated damping, or
 //! the iteration budget.
 
+use nalgebra::Matrix2x3;
 use nalgebra::{SMatrix, Vector2};
-use psdcal_model::{Param, Pose, RotationJacobian, SensorModel, N_PARAMS};
+use psdcal_model::sensor::impact_point_gain_jacobian;
+use psdcal_model::{ChannelGains, Param, Pose, RotationJacobian, SensorModel, N_PARAMS};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::normal_equations::{FullNormalEquations, NormalEquations};
+use crate::normal_equations::{FullNormalEquations, NormalEquations, N_GLOBAL};
 use crate::CalibError;
 
 /// Mean squared residual per point below which the fit is exact (RMS 1e-10).
@@ -104,6 +106,10 @@ pub struct RefineOptions {
     pub cost: CostKind,
     /// The freed sensor parameters (the others stay at their start values).
     pub free: Vec<Param>,
+    /// Also estimate the relative channel gains `g_x2, g_y1, g_y2` (issue 7):
+    /// needs the data's amplitudes; every impact point is then recomputed
+    /// from its amplitudes divided by the current gains (MODEL.md §1).
+    pub fit_gains: bool,
     /// Optional robust loss (off by default).
     pub robust: Option<RobustLoss>,
     /// Iteration budget (accepted and rejected steps both count).
@@ -123,6 +129,7 @@ impl Default for RefineOptions {
             cost: CostKind::Template,
             free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2],
             robust: None,
+            fit_gains: false,
             max_iterations: 500,
             cost_tolerance: 1e-10,
             step_tolerance: 1e-10,
@@ -175,6 +182,8 @@ pub struct RefineReport {
 pub struct Refined {
     /// Sensor parameters.
     pub model: SensorModel,
+    /// Relative channel gains (the start's when not fitted).
+    pub gains: ChannelGains,
     /// One `sensor_from_template` pose per image.
     pub poses: Vec<Pose>,
     /// Final cost (robust cost when a loss is set).
@@ -199,12 +208,34 @@ pub fn residual(
     })
 }
 
-/// A residual with its Jacobians with respect to the model (2×11) and the
-/// pose (2×6).
-type ResidualWithJacobians = (Vector2<f64>, SMatrix<f64, 2, N_PARAMS>, SMatrix<f64, 2, 6>);
+/// A residual with its Jacobians with respect to the global parameters
+/// (2×14: model, then gains) and the pose (2×6).
+type ResidualWithJacobians = (Vector2<f64>, SMatrix<f64, 2, N_GLOBAL>, SMatrix<f64, 2, 6>);
+
+/// The measured point of observation `k` of image `i`: the stored point, or,
+/// with `gains`, the point recomputed from its amplitudes divided by them,
+/// with its Jacobian with respect to `(g_x2, g_y1, g_y2)`.
+pub fn measured_point(
+    data: &CalibrationData,
+    i: usize,
+    k: usize,
+    gains: Option<&ChannelGains>,
+) -> Result<(Vector2<f64>, Option<Matrix2x3<f64>>), psdcal_model::ModelError> {
+    match (gains, data.amplitudes.as_ref()) {
+        (Some(g), Some(amps)) => {
+            let (m, j) = impact_point_gain_jacobian(&data.geometry, &amps[i][k], g)?;
+            Ok((m, Some(j)))
+        }
+        _ => Ok((data.images[i].points[k].measured, None)),
+    }
+}
 
 /// Residual of one observation with its Jacobians with respect to every
-/// model parameter (2×11) and to the pose (2×6).
+/// global parameter and to the pose. `dm_dg` is the measured point's
+/// Jacobian with respect to the gains, when they are estimated.
+// The arguments are the point's whole context on the solver's hot path;
+// bundling them would only add a struct built per point.
+#[allow(clippy::too_many_arguments)]
 fn residual_with_jacobians(
     data: &CalibrationData,
     cost: CostKind,
@@ -213,18 +244,41 @@ fn residual_with_jacobians(
     rotation: &RotationJacobian,
     led: usize,
     measured: &Vector2<f64>,
+    dm_dg: Option<&Matrix2x3<f64>>,
 ) -> Result<ResidualWithJacobians, psdcal_model::ModelError> {
     let xy = data.template[led];
-    Ok(match cost {
+    let mut a = SMatrix::<f64, 2, N_GLOBAL>::zeros();
+    let (r, b) = match cost {
         CostKind::Template => {
             let (p, j) = model.back_project_with_jacobians_using(pose, rotation, measured)?;
-            (p - xy, j.wrt_model, j.wrt_pose)
+            a.fixed_view_mut::<2, N_PARAMS>(0, 0)
+                .copy_from(&j.wrt_model);
+            if let Some(g) = dm_dg {
+                a.fixed_view_mut::<2, 3>(0, N_PARAMS)
+                    .copy_from(&(j.wrt_measured * g));
+            }
+            (p - xy, j.wrt_pose)
         }
         CostKind::Image => {
             let (p, j) = model.project_with_jacobians_using(pose, rotation, &xy)?;
-            (p - measured, j.wrt_model, j.wrt_pose)
+            a.fixed_view_mut::<2, N_PARAMS>(0, 0)
+                .copy_from(&j.wrt_model);
+            if let Some(g) = dm_dg {
+                a.fixed_view_mut::<2, 3>(0, N_PARAMS).copy_from(&(-g));
+            }
+            (p - measured, j.wrt_pose)
         }
-    })
+    };
+    Ok((r, a, b))
+}
+
+/// The global columns of the freed parameters (and of the gains).
+pub(crate) fn free_columns(free: &[Param], fit_gains: bool) -> Vec<usize> {
+    let mut cols: Vec<usize> = free.iter().map(|p| p.index()).collect();
+    if fit_gains {
+        cols.extend(N_PARAMS..N_GLOBAL);
+    }
+    cols
 }
 
 /// Total cost, or the first observation that cannot be evaluated.
@@ -235,11 +289,24 @@ pub fn total_cost(
     model: &SensorModel,
     poses: &[Pose],
 ) -> Result<f64, (usize, usize, psdcal_model::ModelError)> {
+    total_cost_with_gains(data, cost, robust, model, None, poses)
+}
+
+/// [`total_cost`] with the measured points recomputed from the amplitudes
+/// with `gains` (when given).
+pub fn total_cost_with_gains(
+    data: &CalibrationData,
+    cost: CostKind,
+    robust: Option<RobustLoss>,
+    model: &SensorModel,
+    gains: Option<&ChannelGains>,
+    poses: &[Pose],
+) -> Result<f64, (usize, usize, psdcal_model::ModelError)> {
     let mut total = 0.0;
     for (i, image) in data.images.iter().enumerate() {
         for (k, obs) in image.points.iter().enumerate() {
-            let r = residual(data, cost, model, &poses[i], obs.led, &obs.measured)
-                .map_err(|e| (i, k, e))?;
+            let (m, _) = measured_point(data, i, k, gains).map_err(|e| (i, k, e))?;
+            let r = residual(data, cost, model, &poses[i], obs.led, &m).map_err(|e| (i, k, e))?;
             let s = r.norm_squared();
             total += robust.map_or(s, |l| l.rho(s));
         }
@@ -251,15 +318,18 @@ pub fn total_cost(
 pub(crate) fn normal_equations(
     data: &CalibrationData,
     cost: CostKind,
-    free: &[Param],
+    free: &[usize],
     robust: Option<RobustLoss>,
     model: &SensorModel,
+    gains: Option<&ChannelGains>,
     poses: &[Pose],
 ) -> Result<NormalEquations, CalibError> {
     let mut ne = FullNormalEquations::zeros(data.images.len());
     for (i, image) in data.images.iter().enumerate() {
         let rotation = poses[i].rotation_jacobian();
-        for obs in &image.points {
+        for (k, obs) in image.points.iter().enumerate() {
+            let (m, dm_dg) =
+                measured_point(data, i, k, gains).map_err(|e| point_error(data, i, obs.led, e))?;
             let (r, a, b) = residual_with_jacobians(
                 data,
                 cost,
@@ -267,7 +337,8 @@ pub(crate) fn normal_equations(
                 &poses[i],
                 &rotation,
                 obs.led,
-                &obs.measured,
+                &m,
+                dm_dg.as_ref(),
             )
             .map_err(|e| point_error(data, i, obs.led, e))?;
             let weight = robust.map_or(1.0, |l| l.weight(r.norm_squared()));
@@ -325,11 +396,39 @@ pub fn refine(
     poses: &[Pose],
     options: &RefineOptions,
 ) -> Result<Refined, CalibError> {
+    refine_with_gains(data, model, &ChannelGains::UNIT, poses, options)
+}
+
+/// [`refine`] from given channel gains; with `options.fit_gains` they are
+/// estimated too (the data must carry amplitudes).
+pub fn refine_with_gains(
+    data: &CalibrationData,
+    model: &SensorModel,
+    gains: &ChannelGains,
+    poses: &[Pose],
+    options: &RefineOptions,
+) -> Result<Refined, CalibError> {
     validate(data, poses, &options.free)?;
+    if options.fit_gains && !data.has_amplitudes() {
+        return Err(CalibError::InvalidInput {
+            reason: "estimating the channel gains needs the electrode amplitudes of every point (signals.csv)".into(),
+        });
+    }
+    gains.validate()?;
+    let columns = free_columns(&options.free, options.fit_gains);
     let mut model = *model;
+    let mut gains = *gains;
+    let gains_in_cost = |g: &ChannelGains| if options.fit_gains { Some(*g) } else { None };
     let mut poses = poses.to_vec();
-    let mut cost = total_cost(data, options.cost, options.robust, &model, &poses)
-        .map_err(|(i, k, e)| point_error(data, i, data.images[i].points[k].led, e))?;
+    let mut cost = total_cost_with_gains(
+        data,
+        options.cost,
+        options.robust,
+        &model,
+        gains_in_cost(&gains).as_ref(),
+        &poses,
+    )
+    .map_err(|(i, k, e)| point_error(data, i, data.images[i].points[k].led, e))?;
     let mut history = vec![cost];
     let mut lambda = options.initial_lambda;
     let mut nu = 2.0;
@@ -338,9 +437,10 @@ pub fn refine(
     let mut ne = normal_equations(
         data,
         options.cost,
-        &options.free,
+        &columns,
         options.robust,
         &model,
+        gains_in_cost(&gains).as_ref(),
         &poses,
     )?;
     let termination = loop {
@@ -363,6 +463,13 @@ pub fn refine(
         for (k, p) in options.free.iter().enumerate() {
             trial_model.set(*p, model.get(*p) + step.da[k]);
         }
+        let mut trial_gains = gains;
+        if options.fit_gains {
+            let n = options.free.len();
+            trial_gains.x2 += step.da[n];
+            trial_gains.y1 += step.da[n + 1];
+            trial_gains.y2 += step.da[n + 2];
+        }
         let trial_poses: Vec<Pose> = poses
             .iter()
             .zip(&step.db)
@@ -371,12 +478,13 @@ pub fn refine(
                 Pose::from_array(&std::array::from_fn(|k| a[k] + d[k]))
             })
             .collect();
-        let trial_cost = if trial_model.validate().is_ok() {
-            total_cost(
+        let trial_cost = if trial_model.validate().is_ok() && trial_gains.validate().is_ok() {
+            total_cost_with_gains(
                 data,
                 options.cost,
                 options.robust,
                 &trial_model,
+                gains_in_cost(&trial_gains).as_ref(),
                 &trial_poses,
             )
             .unwrap_or(f64::INFINITY)
@@ -388,6 +496,7 @@ pub fn refine(
                 step_is_negligible(&ne, &step, cost, data.point_count(), options.step_tolerance);
             let small_change = (cost - trial_cost) <= options.cost_tolerance * cost;
             model = trial_model;
+            gains = trial_gains;
             poses = trial_poses;
             cost = trial_cost;
             history.push(cost);
@@ -403,9 +512,10 @@ pub fn refine(
             ne = normal_equations(
                 data,
                 options.cost,
-                &options.free,
+                &columns,
                 options.robust,
                 &model,
+                gains_in_cost(&gains).as_ref(),
                 &poses,
             )?;
         } else {
@@ -415,6 +525,7 @@ pub fn refine(
     };
     Ok(Refined {
         model,
+        gains,
         poses,
         cost,
         report: RefineReport {

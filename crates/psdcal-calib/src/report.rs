@@ -9,11 +9,11 @@
 //! `e_m = ‖project(θ, pose_i, X_j, Y_j) − m_ij‖` (mm on the sensor).
 //! RMS values are `sqrt(mean(e²))` over points.
 
-use psdcal_model::{Pose, SensorModel};
+use psdcal_model::{ChannelGains, Pose, SensorModel};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::{residual, CostKind, RobustLoss};
+use crate::refine::{measured_point, residual, CostKind, RobustLoss};
 
 /// How many of the worst points a report lists.
 pub const WORST_POINTS: usize = 10;
@@ -78,33 +78,40 @@ pub fn fit_statistics(
     cost: CostKind,
     robust: Option<RobustLoss>,
 ) -> FitStatistics {
+    fit_statistics_with_gains(data, model, None, poses, cost, robust)
+}
+
+/// [`fit_statistics`] with the measured points recomputed from the
+/// amplitudes with estimated `gains` (when given).
+pub fn fit_statistics_with_gains(
+    data: &CalibrationData,
+    model: &SensorModel,
+    gains: Option<&ChannelGains>,
+    poses: &[Pose],
+    cost: CostKind,
+    robust: Option<RobustLoss>,
+) -> FitStatistics {
     let mut all: Vec<PointError> = Vec::with_capacity(data.point_count());
     let mut outliers = Vec::new();
     let mut per_image = Vec::with_capacity(data.images.len());
     let (mut sum_t, mut sum_m, mut n_m, mut unprojectable) = (0.0, 0.0, 0usize, 0usize);
     for (i, image) in data.images.iter().enumerate() {
         let (mut img_t, mut img_m, mut img_n_m) = (0.0, 0.0, 0usize);
-        for obs in &image.points {
+        for (k, obs) in image.points.iter().enumerate() {
+            let measured = measured_point(data, i, k, gains).map_or(obs.measured, |(m, _)| m);
             let e_t = residual(
                 data,
                 CostKind::Template,
                 model,
                 &poses[i],
                 obs.led,
-                &obs.measured,
+                &measured,
             )
             .map(|r| r.norm())
             .unwrap_or(f64::INFINITY);
-            let e_m = residual(
-                data,
-                CostKind::Image,
-                model,
-                &poses[i],
-                obs.led,
-                &obs.measured,
-            )
-            .ok()
-            .map(|r| r.norm());
+            let e_m = residual(data, CostKind::Image, model, &poses[i], obs.led, &measured)
+                .ok()
+                .map(|r| r.norm());
             img_t += e_t * e_t;
             match e_m {
                 Some(e) => {

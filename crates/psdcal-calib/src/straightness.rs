@@ -212,6 +212,7 @@ mod tests {
             })
             .collect();
         let data = CalibrationData {
+            amplitudes: None,
             template,
             lines,
             images: vec![ImageObservations {

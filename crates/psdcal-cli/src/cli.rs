@@ -51,6 +51,7 @@ Examples:
                    --focal-guess 8 --robust huber:0.1 --residuals residuals.csv --out cal.json
   psdcal calibrate -t template.csv -o observations.csv --fit f,cx,cy,k1,k2,l1 --out cal.json
   psdcal calibrate -t template.csv -o observations.csv --set l1=-1.3058e-3 --out cal.json
+  psdcal calibrate -t template.csv -s signals.csv --fit f,cx,cy,k1,k2,gains --out cal.json
 
 Parameters: f cx cy skew k1 k2 k3 p1 p2 l1 l2 (MODEL.md). Freeing l1 with k1 runs a
 global search over l1 (the cost has several minima). A calibration that does not
@@ -100,6 +101,9 @@ pub enum Command {
     /// Simulate, calibrate and compare with the truth in a few seconds (start here)
     #[command(after_help = crate::cli_sim::DEMO_EXAMPLES)]
     Demo(crate::cli_sim::DemoArgs),
+    /// Estimate the amplifier gains from equal-current records (electrical calibration)
+    #[command(after_help = crate::cli_gains::GAINS_EXAMPLES)]
+    Gains(crate::cli_gains::GainsArgs),
     /// Correct measured points (or electrode amplitudes) to ideal points with a calibration
     #[command(after_help = CORRECT_EXAMPLES)]
     Correct(CorrectArgs),
@@ -112,6 +116,9 @@ pub enum Command {
     /// Maps of the AoA and position errors over the sensor area (the paper's Figure 9)
     #[command(after_help = crate::cli_locate::MAP_EXAMPLES)]
     Map(crate::cli_locate::MapArgs),
+    /// A self-contained HTML report of a calibration with its plots (SVG and PNG)
+    #[command(after_help = crate::cli_report::REPORT_EXAMPLES)]
+    Report(crate::cli_report::ReportArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -154,7 +161,8 @@ pub struct CalibrateArgs {
     /// Where to write calibration.json (atomically)
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
-    /// Parameters to estimate, comma-separated (the others stay fixed)
+    /// Parameters to estimate, comma-separated (the others stay fixed); add
+    /// `gains` to self-calibrate the amplifier gains (needs --signals)
     #[arg(long, value_name = "LIST", default_value = "f,cx,cy,k1,k2", value_parser = parse_fit)]
     pub fit: FitList,
     /// Nominal focal length of the lens, mm (narrows the start's search)
@@ -180,6 +188,10 @@ pub struct CalibrateArgs {
     /// Value of a fixed parameter, NAME=VALUE (repeatable), e.g. l1=-1.3058e-3
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment, allow_negative_numbers = true)]
     pub set: Vec<(Param, f64)>,
+    /// Channel gains from `psdcal gains` (gains.json), divided out of the
+    /// amplitudes and held fixed (needs --signals)
+    #[arg(long, value_name = "FILE")]
+    pub gains: Option<PathBuf>,
     /// Also write every point's residuals to this CSV
     #[arg(long, value_name = "FILE")]
     pub residuals: Option<PathBuf>,
@@ -194,9 +206,9 @@ pub struct CalibrateArgs {
     pub strict: bool,
 }
 
-/// The parameters named by `--fit`.
+/// The parameters named by `--fit`, and whether `gains` was named.
 #[derive(Debug, Clone, PartialEq)]
-pub struct FitList(pub Vec<Param>);
+pub struct FitList(pub Vec<Param>, pub bool);
 
 /// Arguments of `psdcal correct`.
 #[derive(Debug, Args)]
@@ -259,6 +271,8 @@ pub struct CalibrateConfig {
     pub out: PathBuf,
     pub residuals: Option<PathBuf>,
     pub free: Vec<Param>,
+    pub fit_gains: bool,
+    pub gains_file: Option<PathBuf>,
     pub fixed_values: Vec<(Param, f64)>,
     pub focal_guess: Option<f64>,
     pub cost: CostKind,
@@ -270,6 +284,7 @@ pub struct CalibrateConfig {
 /// What to run.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Job {
+    Gains(crate::cli_gains::GainsArgs),
     Simulate(crate::cli_sim::SimulateArgs),
     Study(crate::cli_sim::StudyConfig),
     Demo(crate::cli_sim::DemoArgs),
@@ -279,6 +294,7 @@ pub enum Job {
     Aoa(crate::cli_locate::AoaConfig),
     Locate(crate::cli_locate::LocateConfig),
     Map(crate::cli_locate::MapConfig),
+    Report(crate::cli_report::ReportConfig),
 }
 
 impl Cli {
@@ -314,12 +330,14 @@ impl Cli {
                     strict: args.strict,
                 })
             }
+            Command::Gains(args) => Job::Gains(args),
             Command::Simulate(args) => Job::Simulate(args),
             Command::Study(args) => Job::Study(args.into_config()),
             Command::Demo(args) => Job::Demo(args),
             Command::Aoa(args) => Job::Aoa(args.into_config(output)?),
             Command::Locate(args) => Job::Locate(args.into_config(output)?),
             Command::Map(args) => Job::Map(args.into_config(output)?),
+            Command::Report(args) => Job::Report(args.into_config()),
             Command::Calibrate(args) => {
                 let points = match (args.observations, args.signals) {
                     (Some(path), None) => PointSource::Observations(path),
@@ -331,7 +349,20 @@ impl Cli {
                         ))
                     }
                 };
-                let free = args.fit.0;
+                let FitList(free, fit_gains) = args.fit;
+                if args.gains.is_some() && (fit_gains || !matches!(points, PointSource::Signals(_)))
+                {
+                    return Err(Cli::command().error(
+                        clap::error::ErrorKind::ArgumentConflict,
+                        "--gains FILE holds known gains fixed: it needs --signals and excludes 'gains' in --fit",
+                    ));
+                }
+                if fit_gains && !matches!(points, PointSource::Signals(_)) {
+                    return Err(Cli::command().error(
+                        clap::error::ErrorKind::ArgumentConflict,
+                        "--fit ...,gains needs the electrode amplitudes: give --signals signals.csv",
+                    ));
+                }
                 for (p, _) in &args.set {
                     if free.contains(p) {
                         return Err(Cli::command().error(
@@ -351,6 +382,8 @@ impl Cli {
                     out: args.out,
                     residuals: args.residuals,
                     free,
+                    fit_gains,
+                    gains_file: args.gains,
                     fixed_values: args.set,
                     focal_guess: args.focal_guess,
                     cost: if args.cost == "image" {
@@ -394,13 +427,14 @@ impl Cli {
 /// `--fit`: comma-separated parameter names, each at most once.
 fn parse_fit(text: &str) -> Result<FitList, String> {
     let mut out: Vec<Param> = Vec::new();
+    let mut gains = false;
     for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         if name.eq_ignore_ascii_case("gains") {
-            return Err(
-                "fitting channel gains is not available yet; calibrate from impact points, \
-                        or divide known gains out of the amplitudes"
-                    .into(),
-            );
+            if gains {
+                return Err("'gains' is listed twice".into());
+            }
+            gains = true;
+            continue;
         }
         let p: Param = name
             .parse()
@@ -413,7 +447,7 @@ fn parse_fit(text: &str) -> Result<FitList, String> {
     if out.is_empty() {
         return Err("expected at least one parameter, e.g. f,cx,cy,k1,k2".into());
     }
-    Ok(FitList(out))
+    Ok(FitList(out, gains))
 }
 
 /// `--robust huber:0.1` or `cauchy:0.1`.

@@ -22,8 +22,10 @@ Examples:
 
   runs the paper's conditions (Tables 1-10, Figure 9) over seeded trials in parallel
   and prints each table, psdcal's mean (std) next to the paper's numbers; writes
-  study.md, study.csv and study.json into --out. The same seed gives the same
-  tables whatever the number of threads. Tables: table1 ... table10, fig9, all.";
+  study.md, study.csv and study.json into --out (and, with --report DIR, the
+  page DIR/study.html: tables, Figure 9 heat maps, histograms). The same seed
+  gives the same tables whatever the number of threads. Tables: table1 ...
+  table10, fig9, all.";
 
 pub const DEMO_EXAMPLES: &str = "\
 Example:
@@ -80,6 +82,9 @@ pub struct StudyArgs {
     /// Output folder for study.md, study.csv, study.json (created if missing)
     #[arg(long, value_name = "DIR", default_value = "study")]
     pub out: PathBuf,
+    /// Also write the tables, Figure 9 maps and histograms as DIR/study.html
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
 }
 
 /// Arguments of `psdcal demo`.
@@ -99,6 +104,8 @@ pub struct StudyConfig {
     pub threads: Option<usize>,
     pub seed: u64,
     pub out: PathBuf,
+    /// Folder of study.html, if asked for.
+    pub report: Option<PathBuf>,
 }
 
 impl StudyArgs {
@@ -127,6 +134,7 @@ impl StudyArgs {
             threads: self.threads,
             seed: self.seed,
             out: self.out,
+            report: self.report,
         }
     }
 }

@@ -21,10 +21,22 @@ use crate::report::print_warnings;
 /// Runs `calibrate`.
 pub fn run(config: &CalibrateConfig, output: Output) -> anyhow::Result<()> {
     let template = Template::read(&config.template)?;
+    let known_gains = config
+        .gains_file
+        .as_ref()
+        .map(psdcal_io::read_gains)
+        .transpose()?;
+    let start_gains = known_gains
+        .as_ref()
+        .map_or(ChannelGains::UNIT, |g| g.gains());
+    let mut signals = None;
     let observations = match &config.points {
         PointSource::Observations(path) => Observations::read(path)?,
         PointSource::Signals(path) => {
-            Signals::read(path)?.to_observations(&config.geometry, &ChannelGains::UNIT)?
+            let s = Signals::read(path)?;
+            let o = s.to_observations(&config.geometry, &start_gains)?;
+            signals = Some(s);
+            o
         }
     };
     let options = ValidationOptions {
@@ -33,9 +45,35 @@ pub fn run(config: &CalibrateConfig, output: Output) -> anyhow::Result<()> {
     };
     let set = validate_data_set(&template, &observations, &options)?;
     print_warnings(&set.warnings);
-    let data = calibration_data(&template, &set, config);
+    let mut data = calibration_data(&template, &set, config);
+    if let (Some(signals), true) = (&signals, config.fit_gains) {
+        // The amplitudes behind every validated point, for the gains.
+        let by_key: std::collections::HashMap<(&str, &str), psdcal_model::Amplitudes> = signals
+            .rows
+            .iter()
+            .map(|r| ((r.image.as_str(), r.led.as_str()), r.amplitudes()))
+            .collect();
+        let amplitudes: Option<Vec<Vec<psdcal_model::Amplitudes>>> = set
+            .images
+            .iter()
+            .map(|im| {
+                im.points
+                    .iter()
+                    .map(|(led, _)| {
+                        by_key
+                            .get(&(im.id.as_str(), template.leds[*led].id.as_str()))
+                            .copied()
+                    })
+                    .collect()
+            })
+            .collect();
+        data.amplitudes = amplitudes;
+    }
     let result = calibrate(&data, &calibrate_options(config)).context("calibration failed")?;
-    let file = calibration_file(&result, &data, config);
+    let mut file = calibration_file(&result, &data, config);
+    if let Some(g) = &known_gains {
+        file.gains = Some(psdcal_io::GainsRecord::new(&g.gains(), false));
+    }
     write_calibration(&config.out, &file)?;
     if let Some(path) = &config.residuals {
         write_residuals(path, &template, &data, &result)?;
@@ -58,6 +96,7 @@ fn calibration_data(
     config: &CalibrateConfig,
 ) -> CalibrationData {
     CalibrationData {
+        amplitudes: None,
         template: template
             .leds
             .iter()
@@ -100,6 +139,7 @@ fn calibrate_options(config: &CalibrateConfig) -> CalibrateOptions {
         refine: RefineOptions {
             cost: config.cost,
             free: config.free.clone(),
+            fit_gains: config.fit_gains,
             robust: config.robust,
             ..RefineOptions::default()
         },
@@ -116,21 +156,21 @@ fn calibration_file(
 ) -> Calibration {
     let mut file = Calibration::from_model(&result.model, &config.geometry);
     file.set_estimated(&result.free);
+    if let Some(g) = &result.gains {
+        file.gains = Some(psdcal_io::GainsRecord::new(g, true));
+    }
+    let m = &result.covariance.matrix;
     file.std = psdcal_io::StdDevs(
         result
-            .free
+            .covariance
+            .names
             .iter()
-            .map(|p| {
-                (
-                    p.name().to_string(),
-                    result.covariance.std(*p).unwrap_or(0.0),
-                )
-            })
+            .enumerate()
+            .map(|(k, name)| (name.clone(), m[(k, k)].max(0.0).sqrt()))
             .collect(),
     );
-    let m = &result.covariance.matrix;
     file.covariance = psdcal_io::Covariance {
-        parameters: result.free.iter().map(|p| p.name().to_string()).collect(),
+        parameters: result.covariance.names.clone(),
         matrix: (0..m.nrows())
             .map(|i| {
                 (0..m.ncols())
@@ -262,17 +302,25 @@ fn write_summary(
             None => {}
         }
     }
+    if let (Some(g), Some(sd)) = (&r.gains, r.covariance.gain_std()) {
+        for ((name, value), s) in psdcal_calib::GAIN_NAMES.iter().zip(g.to_array()).zip(sd) {
+            writeln!(out, "{name:<9} {value:>15.8e} ± {s:<11.3e} (relative gain)")?;
+        }
+        if let Some(start) = &r.gain_start {
+            writeln!(out, "gain start: {start}")?;
+        }
+    }
     writeln!(out)?;
     let corr = r.covariance.correlation();
     if r.free.len() > 1 {
         write!(out, "correlation")?;
-        for p in &r.free {
-            write!(out, " {:>6}", p.name())?;
+        for name in &r.covariance.names {
+            write!(out, " {name:>6}")?;
         }
         writeln!(out)?;
-        for (i, p) in r.free.iter().enumerate() {
-            write!(out, "{:<11}", p.name())?;
-            for j in 0..r.free.len() {
+        for (i, name) in r.covariance.names.iter().enumerate() {
+            write!(out, "{name:<11}")?;
+            for j in 0..r.covariance.names.len() {
                 if j <= i {
                     write!(out, " {:>+6.3}", corr[(i, j)])?;
                 }

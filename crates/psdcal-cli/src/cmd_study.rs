@@ -44,6 +44,9 @@ pub fn run(config: &StudyConfig, output: Output) -> anyhow::Result<()> {
         .map(|id| table_spec(id).ok_or_else(|| anyhow!("unknown table '{id}'")))
         .collect::<anyhow::Result<_>>()?;
     check_output_folder(&config.out)?;
+    if let Some(dir) = &config.report {
+        check_output_folder(dir)?;
+    }
     let options = StudyOptions {
         trials: config.trials,
         seed: config.seed,
@@ -121,6 +124,24 @@ pub fn run(config: &StudyConfig, output: Output) -> anyhow::Result<()> {
             },
         )?;
     }
+    let page = match &config.report {
+        Some(dir) => {
+            let intro = format!(
+                "{} trials per condition, seed {} ({:.1} s). Reproduce with: psdcal study {} --trials {} --seed {}",
+                config.trials,
+                config.seed,
+                elapsed,
+                config.tables.join(" "),
+                config.trials,
+                config.seed
+            );
+            let page = psdcal_report::study_page("psdcal study", &intro, &tables, &maps)?;
+            let path = dir.join("study.html");
+            write_atomic_bytes(&path, page.render().as_bytes())?;
+            Some(path)
+        }
+        None => None,
+    };
     match output {
         Output::Quiet => {}
         Output::Json => println!("{}", serde_json::to_string_pretty(&json)?),
@@ -130,6 +151,9 @@ pub fn run(config: &StudyConfig, output: Output) -> anyhow::Result<()> {
                 "wrote {0}/study.md, {0}/study.csv, {0}/study.json",
                 config.out.display()
             );
+            if let Some(path) = &page {
+                println!("wrote {}", path.display());
+            }
         }
     }
     Ok(())

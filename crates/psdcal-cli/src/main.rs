@@ -5,15 +5,19 @@
 //! 2 usage error (clap).
 
 mod cli;
+mod cli_gains;
 mod cli_locate;
+mod cli_report;
 mod cli_sim;
 mod cmd_aoa;
 mod cmd_calibrate;
 mod cmd_check;
 mod cmd_correct;
 mod cmd_demo;
+mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
+mod cmd_report;
 mod cmd_simulate;
 mod cmd_study;
 mod locate_output;
@@ -33,6 +37,7 @@ fn main() -> ExitCode {
     let result = match &job {
         Job::Check(config) => cmd_check::run(config, output),
         Job::Calibrate(config) => cmd_calibrate::run(config, output),
+        Job::Gains(args) => cmd_gains::run(args, output),
         Job::Simulate(args) => cmd_simulate::run(args, output),
         Job::Study(config) => cmd_study::run(config, output),
         Job::Demo(args) => cmd_demo::run(args, output),
@@ -40,6 +45,7 @@ fn main() -> ExitCode {
         Job::Aoa(config) => cmd_aoa::run(config, output),
         Job::Locate(config) => cmd_locate::run(config, output),
         Job::Map(config) => cmd_map::run(config, output),
+        Job::Report(config) => cmd_report::run(config, output),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

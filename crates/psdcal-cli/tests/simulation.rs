@@ -142,8 +142,9 @@ fn study_is_identical_whatever_the_thread_count() {
     }
     assert_eq!(csv[0], csv[1]);
     assert!(csv[0].starts_with("table,condition,quantity"));
-    // Two tables: 4 first-stage columns × 3 rows + 3 columns × 8 rows.
-    assert_eq!(csv[0].lines().count(), 1 + 4 * 3 + 3 * 8);
+    // Two tables: 4 first-stage columns × 3 rows + 5 columns (3 of the paper,
+    // 2 with self-calibrated gains) × 8 rows.
+    assert_eq!(csv[0].lines().count(), 1 + 4 * 3 + 5 * 8);
 }
 
 #[test]

@@ -33,6 +33,7 @@ mod csv_fields;
 mod csv_table;
 mod error;
 mod export;
+mod gains_file;
 mod observations;
 mod points;
 mod rig;
@@ -56,6 +57,7 @@ pub use error::{ColumnRef, IoError, Location};
 pub use export::{
     write_observations, write_signals, write_template, ObservationRow, SignalRowOut, TemplateLed,
 };
+pub use gains_file::{read_gains, write_gains, GainStd, GainsFile, GAINS_FORMAT};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, Points};
 pub use rig::{read_rig, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION};

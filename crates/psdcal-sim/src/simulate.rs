@@ -195,9 +195,16 @@ fn scale(a: &Amplitudes, k: f64) -> Amplitudes {
 }
 
 impl Simulation {
-    /// The calibration's input: the measured points of every image.
+    /// The calibration's input: the measured points of every image, with the
+    /// demodulated amplitudes behind them (for estimating the gains).
     pub fn calibration_data(&self) -> CalibrationData {
         CalibrationData {
+            amplitudes: Some(
+                self.images
+                    .iter()
+                    .map(|im| im.points.iter().map(|p| p.amplitudes).collect())
+                    .collect(),
+            ),
             template: self.template.leds.clone(),
             lines: self.template.lines.clone(),
             images: self

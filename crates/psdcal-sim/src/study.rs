@@ -98,6 +98,8 @@ pub enum Method {
         /// form (`true`, Tables 3–4, which compare iterations), or with
         /// psdcal's checked and refined start (`false`).
         paper_start: bool,
+        /// Self-calibrate the amplifier gains from the amplitudes (issue 7).
+        fit_gains: bool,
     },
     /// Only the closed form (first stage), for Tables 1–2.
     FirstStage {
@@ -206,6 +208,12 @@ pub fn table_spec(id: &str) -> Option<TableSpec> {
     let full = Method::Calibrate {
         corrections: true,
         paper_start: false,
+        fit_gains: false,
+    };
+    let self_calibrated = Method::Calibrate {
+        corrections: true,
+        paper_start: false,
+        fit_gains: true,
     };
     let c = |label: &str, snr: Option<f64>, imb: bool, psd: bool| {
         Condition::new(label, lens, snr, imb, psd, full)
@@ -256,6 +264,7 @@ pub fn table_spec(id: &str) -> Option<TableSpec> {
                         let method = Method::Calibrate {
                             corrections,
                             paper_start: true,
+                            fit_gains: false,
                         };
                         Condition::new(&label, lens, Some(snr), false, false, method)
                     })
@@ -263,11 +272,13 @@ pub fn table_spec(id: &str) -> Option<TableSpec> {
                 .collect(),
         ),
         5 | 6 => (
-            "Calibration with amplifier gain imbalance",
+            "Calibration with amplifier gain imbalance (and psdcal's self-calibration of the gains)",
             vec![
                 c("imbalance, 40 dB", Some(40.0), true, false),
                 c("imbalance, 50 dB", Some(50.0), true, false),
                 c("imbalance, no noise", None, true, false),
+                Condition::new("imbalance + self-calibration, 40 dB", lens, Some(40.0), true, false, self_calibrated),
+                Condition::new("imbalance + self-calibration, 50 dB", lens, Some(50.0), true, false, self_calibrated),
             ],
         ),
         7 | 8 => (
@@ -380,6 +391,10 @@ pub struct ColumnResult {
     pub failures: usize,
     /// The first few failure reasons.
     pub failure_reasons: Vec<String>,
+    /// Per row: the value of every successful trial (for histograms; not
+    /// serialised, so study.json stays small).
+    #[serde(skip)]
+    pub values: Vec<Vec<f64>>,
 }
 
 /// One table's results.
@@ -463,6 +478,7 @@ pub fn run_trial(condition: &Condition, options: &StudyOptions, trial: u64) -> T
                 Method::Calibrate {
                     corrections,
                     paper_start,
+                    fit_gains,
                 } => {
                     let options = CalibrateOptions {
                         init: InitOptions {
@@ -475,11 +491,16 @@ pub fn run_trial(condition: &Condition, options: &StudyOptions, trial: u64) -> T
                             refine_start: !paper_start,
                             ..InitOptions::default()
                         },
+                        refine: psdcal_calib::RefineOptions {
+                            fit_gains,
+                            ..psdcal_calib::RefineOptions::default()
+                        },
                         ..CalibrateOptions::default()
                     };
                     let r = calibrate(&data, &options).map_err(|e| e.to_string())?;
                     let m = &r.model;
-                    let aoa = sim.aoa_rms_error(m, &ChannelGains::UNIT).to_degrees();
+                    let gains = r.gains.unwrap_or(ChannelGains::UNIT);
+                    let aoa = sim.aoa_rms_error(m, &gains).to_degrees();
                     Ok(vec![
                         m.intrinsics.cx,
                         m.intrinsics.cy,
@@ -589,15 +610,17 @@ pub fn run_tables(
                         .filter_map(|t| t.values.as_ref().err().cloned())
                         .take(3)
                         .collect();
-                    let stats = (0..rows.len())
-                        .map(|r| Stats::of(&ok.iter().map(|v| v[r]).collect::<Vec<_>>()))
+                    let values: Vec<Vec<f64>> = (0..rows.len())
+                        .map(|r| ok.iter().map(|v| v[r]).collect())
                         .collect();
+                    let stats = values.iter().map(|v| Stats::of(v.as_slice())).collect();
                     ColumnResult {
                         condition: condition.clone(),
                         stats,
                         trials: trials.len(),
                         failures: trials.len() - ok.len(),
                         failure_reasons,
+                        values,
                     }
                 })
                 .collect();

@@ -71,6 +71,7 @@ fn condition(lens: Lens, snr: Option<f64>, imbalance: bool, psd: bool) -> Condit
         method: Method::Calibrate {
             corrections: true,
             paper_start: false,
+            fit_gains: false,
         },
     }
 }

@@ -167,6 +167,7 @@ pub fn observe(
         })
         .collect();
     CalibrationData {
+        amplitudes: None,
         template: template.to_vec(),
         lines: lines.to_vec(),
         images,

@@ -170,6 +170,7 @@ pub fn observe_with(
         })
         .collect();
     CalibrationData {
+        amplitudes: None,
         template,
         lines: Vec::new(),
         images,

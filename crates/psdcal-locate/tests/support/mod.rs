@@ -194,6 +194,7 @@ pub fn observe(
         })
         .collect();
     CalibrationData {
+        amplitudes: None,
         template,
         lines: Vec::new(),
         images,

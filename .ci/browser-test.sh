@@ -1,0 +1,93 @@
+#!/usr/bin/env bash
+# Browser test of `psdcal report`: the page renders in headless Chromium
+# without console errors and its screenshot is not blank.
+#
+# Installs Debian's `chromium` when it is missing (CI runs as root).
+# Usage: .ci/browser-test.sh [SCREENSHOT.png]   (default: a temporary file)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+started=$(date +%s)
+
+if ! command -v chromium >/dev/null 2>&1; then
+    echo "browser-test: installing chromium"
+    apt-get update -qq && apt-get install -y -qq chromium >/dev/null
+fi
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+shot=${1:-$work/shot.png}
+
+cargo build --release --quiet --bin psdcal
+psdcal=target/release/psdcal
+"$psdcal" -q simulate --lens 2 --snr 40 --out "$work/sim"
+"$psdcal" -q calibrate -t "$work/sim/template.csv" -o "$work/sim/observations.csv" \
+    --out "$work/sim/calibration.json"
+"$psdcal" -q report -c "$work/sim/calibration.json" -t "$work/sim/template.csv" \
+    -o "$work/sim/observations.csv" --out "$work/report"
+
+page="$work/report/report.html"
+if grep -qi '<script' "$page"; then
+    echo "browser-test: FAIL: report.html holds a <script> element" >&2
+    exit 1
+fi
+
+# Headless Chromium, nothing on the network: console messages are logged on
+# standard error as CONSOLE(...) lines.
+timeout 120 chromium --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
+    --disable-background-networking --disable-component-update --disable-sync \
+    --user-data-dir="$work/profile" --enable-logging=stderr --v=0 \
+    --hide-scrollbars --window-size="${BROWSER_TEST_WINDOW:-1000,1400}" \
+    --screenshot="$shot" "file://$page" >"$work/chromium.out" 2>"$work/chromium.err" || {
+    echo "browser-test: FAIL: chromium exited with an error:" >&2
+    tail -20 "$work/chromium.err" >&2
+    exit 1
+}
+if grep -E 'CONSOLE|Refused to|Uncaught' "$work/chromium.err" >&2; then
+    echo "browser-test: FAIL: the page logged console errors (above)" >&2
+    exit 1
+fi
+if [ ! -s "$shot" ]; then
+    echo "browser-test: FAIL: no screenshot was written" >&2
+    tail -20 "$work/chromium.err" >&2
+    exit 1
+fi
+
+# Not blank: decode the PNG (standard library only) and count the colours.
+python3 - "$shot" <<'PY'
+import struct, sys, zlib
+data = open(sys.argv[1], "rb").read()
+assert data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
+pos, idat, width, height, ctype, depth = 8, b"", 0, 0, 0, 0
+while pos < len(data):
+    n, kind = struct.unpack(">I4s", data[pos:pos + 8])
+    body = data[pos + 8:pos + 8 + n]
+    if kind == b"IHDR":
+        width, height, depth, ctype = struct.unpack(">IIBB", body[:10])
+    elif kind == b"IDAT":
+        idat += body
+    pos += 12 + n
+raw = zlib.decompress(idat)
+bpp = {2: 3, 6: 4, 0: 1, 4: 2}[ctype] * depth // 8
+stride = width * bpp
+colours, prev, k = set(), bytearray(stride), 0
+for _ in range(height):
+    f, line = raw[k], bytearray(raw[k + 1:k + 1 + stride])
+    k += 1 + stride
+    for i in range(stride):
+        a = line[i - bpp] if i >= bpp else 0
+        b, c = prev[i], (prev[i - bpp] if i >= bpp else 0)
+        if f == 1: line[i] = (line[i] + a) & 255
+        elif f == 2: line[i] = (line[i] + b) & 255
+        elif f == 3: line[i] = (line[i] + (a + b) // 2) & 255
+        elif f == 4:
+            p = a + b - c
+            pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+            line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+    for i in range(0, stride, bpp * 7):
+        colours.add(bytes(line[i:i + bpp]))
+    prev = line
+print(f"browser-test: screenshot {width}x{height}, {len(colours)} distinct sampled colours")
+if len(colours) < 50:
+    sys.exit("browser-test: FAIL: the screenshot is (nearly) blank")
+PY
+echo "browser-test: OK: report.html renders without console errors ($(( $(date +%s) - started )) s)"

@@ -1,0 +1,55 @@
+//! Arguments and validated configuration of `psdcal report`.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+pub const REPORT_EXAMPLES: &str = "\
+Examples:
+  psdcal report --calibration calibration.json --out report
+  psdcal report -c calibration.json -t template.csv -o observations.csv --out report
+
+  writes report/report.html: one self-contained page (inline SVG, no script,
+  nothing loaded from the network, printable) with the parameters and their
+  standard deviations, the fit summary, the per-image table and the plots:
+  distortion field and corrected spiral, AoA sensitivity, AoA and position
+  error maps at 2 sigma of the covariance, and, with the data, the coverage of
+  the sensor and the residual vectors per image. Each plot is also written as
+  report/NAME.svg and report/NAME.png.";
+
+/// Arguments of `psdcal report`.
+#[derive(Debug, Args)]
+pub struct ReportArgs {
+    /// Calibration written by psdcal (calibration.json)
+    #[arg(long, short = 'c', value_name = "FILE")]
+    pub calibration: PathBuf,
+    /// Template of the calibration data (with --observations: coverage and residual plots)
+    #[arg(long, short = 't', value_name = "FILE", requires = "observations")]
+    pub template: Option<PathBuf>,
+    /// Measured impact points of the calibration data: image, led, x_mm, y_mm
+    #[arg(long, short = 'o', value_name = "FILE", requires = "template")]
+    pub observations: Option<PathBuf>,
+    /// Output folder (created if missing) for report.html and the plots
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+/// Validated configuration of `psdcal report`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReportConfig {
+    pub calibration: PathBuf,
+    /// `(template, observations)`.
+    pub data: Option<(PathBuf, PathBuf)>,
+    pub out: PathBuf,
+}
+
+impl ReportArgs {
+    /// The configuration.
+    pub fn into_config(self) -> ReportConfig {
+        ReportConfig {
+            calibration: self.calibration,
+            data: self.template.zip(self.observations),
+            out: self.out,
+        }
+    }
+}

@@ -1,0 +1,109 @@
+//! gains.json: relative channel gains from an electrical calibration
+//! (`psdcal gains`), to be held fixed by `psdcal calibrate --gains`. A JSON
+//! object: `format` = `"psdcal-gains"`, `version` = 1, `method`, the gains
+//! of channels x2, y1, y2 relative to x1 (`x2`, `y1`, `y2`), their standard
+//! deviations (`std`: `g_x2`, `g_y1`, `g_y2`) and the number of `records`.
+
+use std::path::Path;
+
+use psdcal_model::ChannelGains;
+use serde::{Deserialize, Serialize};
+
+use crate::atomic::write_atomic_bytes;
+use crate::{IoError, Location};
+
+/// The format name of gains.json.
+pub const GAINS_FORMAT: &str = "psdcal-gains";
+
+/// Standard deviations of the three relative gains.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GainStd {
+    /// σ of `g_x2`.
+    pub g_x2: f64,
+    /// σ of `g_y1`.
+    pub g_y1: f64,
+    /// σ of `g_y2`.
+    pub g_y2: f64,
+}
+
+/// gains.json.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GainsFile {
+    /// `"psdcal-gains"`.
+    pub format: String,
+    /// 1.
+    pub version: u32,
+    /// How the gains were estimated (`equal-current`).
+    pub method: String,
+    /// Gain of x2 relative to x1.
+    pub x2: f64,
+    /// Gain of y1 relative to x1.
+    pub y1: f64,
+    /// Gain of y2 relative to x1.
+    pub y2: f64,
+    /// Their standard deviations.
+    pub std: GainStd,
+    /// Records used.
+    pub records: usize,
+}
+
+impl GainsFile {
+    /// The gains.
+    pub fn gains(&self) -> ChannelGains {
+        ChannelGains {
+            x2: self.x2,
+            y1: self.y1,
+            y2: self.y2,
+        }
+    }
+}
+
+/// Writes gains.json atomically.
+pub fn write_gains(path: impl AsRef<Path>, file: &GainsFile) -> Result<(), IoError> {
+    let path = path.as_ref();
+    let mut text = serde_json::to_string_pretty(file).map_err(|e| IoError::Invalid {
+        at: Location::file(&path.display().to_string()),
+        message: format!("cannot encode the gains as JSON: {e}"),
+    })?;
+    text.push('\n');
+    write_atomic_bytes(path, text.as_bytes())
+}
+
+/// Reads and checks gains.json.
+pub fn read_gains(path: impl AsRef<Path>) -> Result<GainsFile, IoError> {
+    let path = path.as_ref();
+    let source = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| IoError::Read {
+        file: source.clone(),
+        source: e,
+    })?;
+    let file: GainsFile = serde_json::from_str(&text).map_err(|e| IoError::Json {
+        file: source.clone(),
+        line: e.line().max(1),
+        column: e.column(),
+        message: e.to_string(),
+    })?;
+    if file.format != GAINS_FORMAT {
+        return Err(IoError::Invalid {
+            at: Location::file(&source),
+            message: format!(
+                "expected format \"{GAINS_FORMAT}\", found \"{}\"",
+                file.format
+            ),
+        });
+    }
+    if file.version > 1 {
+        return Err(IoError::Invalid {
+            at: Location::file(&source),
+            message: format!(
+                "gains file version {} was written by a newer psdcal; upgrade psdcal",
+                file.version
+            ),
+        });
+    }
+    file.gains().validate().map_err(|e| IoError::Invalid {
+        at: Location::file(&source),
+        message: e.to_string(),
+    })?;
+    Ok(file)
+}

@@ -1,0 +1,209 @@
+//! Self-contained HTML pages: one file, inline SVG, a small inline style
+//! sheet, no script, nothing loaded from the network.
+//!
+//! Every text given to a [`Block`] is escaped with [`escape_html`]; SVG
+//! figures must come from this crate's plot functions (their text is
+//! escaped by the SVG backend), and a figure holding a `<script` or a
+//! `<foreignObject` is replaced by a note.
+
+use crate::escape::escape_html;
+
+/// The style sheet: responsive tables and figures, printable.
+const STYLE: &str = "\
+body{font-family:system-ui,-apple-system,'Segoe UI',Roboto,'DejaVu Sans',sans-serif;\
+margin:0 auto;padding:1rem;max-width:72rem;color:#1a1a1a;background:#fff;line-height:1.45}\
+h1{font-size:1.6rem}h2{font-size:1.3rem;margin-top:2rem;border-bottom:1px solid #ccc}\
+.table-wrap{max-width:100%;overflow-x:auto;margin:0.5rem 0 1rem}\
+table{border-collapse:collapse;font-size:0.9rem;font-variant-numeric:tabular-nums}\
+caption{text-align:left;font-weight:600;padding:0.3rem 0}\
+th,td{border:1px solid #ccc;padding:0.25rem 0.5rem;text-align:right;white-space:nowrap}\
+th:first-child,td:first-child{text-align:left}thead th{background:#f2f2f2}\
+figure{margin:1rem 0;max-width:100%}figure svg{max-width:100%;height:auto;display:block}\
+figcaption{font-size:0.9rem;color:#444}\
+.figures{display:flex;flex-wrap:wrap;gap:1rem}.figures figure{flex:1 1 20rem;margin:0}\
+@media print{body{max-width:none;padding:0}.table-wrap{overflow:visible}\
+figure,table{break-inside:avoid}h2{break-after:avoid}}";
+
+/// A table of text cells (escaped when rendered).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Table {
+    /// Caption above the table.
+    pub caption: String,
+    /// Column headings.
+    pub headers: Vec<String>,
+    /// Rows of cells.
+    pub rows: Vec<Vec<String>>,
+}
+
+/// A part of a page.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Block {
+    /// A section heading.
+    Heading(String),
+    /// A paragraph.
+    Paragraph(String),
+    /// A bulleted list.
+    List(Vec<String>),
+    /// A table.
+    Table(Table),
+    /// Figures side by side (wrapping on narrow screens): `(svg, caption)`.
+    Figures(Vec<(String, String)>),
+}
+
+/// An HTML page.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Page {
+    /// Title (also the top heading).
+    pub title: String,
+    /// Its blocks, in order.
+    pub blocks: Vec<Block>,
+}
+
+impl Page {
+    /// An empty page.
+    pub fn new(title: &str) -> Self {
+        Self {
+            title: title.to_string(),
+            blocks: Vec::new(),
+        }
+    }
+
+    /// Appends a block.
+    pub fn push(&mut self, block: Block) -> &mut Self {
+        self.blocks.push(block);
+        self
+    }
+
+    /// The page as one HTML document.
+    pub fn render(&self) -> String {
+        let mut out = String::new();
+        out.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
+        out.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
+        out.push_str(
+            "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; \
+             style-src 'unsafe-inline'; img-src data:\">\n",
+        );
+        out.push_str(&format!("<title>{}</title>\n", escape_html(&self.title)));
+        out.push_str(&format!("<style>{STYLE}</style>\n</head>\n<body>\n"));
+        out.push_str(&format!("<h1>{}</h1>\n", escape_html(&self.title)));
+        for block in &self.blocks {
+            render_block(&mut out, block);
+        }
+        out.push_str("</body>\n</html>\n");
+        out
+    }
+}
+
+fn render_block(out: &mut String, block: &Block) {
+    match block {
+        Block::Heading(text) => out.push_str(&format!("<h2>{}</h2>\n", escape_html(text))),
+        Block::Paragraph(text) => out.push_str(&format!("<p>{}</p>\n", escape_html(text))),
+        Block::List(items) => {
+            out.push_str("<ul>\n");
+            for item in items {
+                out.push_str(&format!("<li>{}</li>\n", escape_html(item)));
+            }
+            out.push_str("</ul>\n");
+        }
+        Block::Table(table) => render_table(out, table),
+        Block::Figures(figures) => {
+            out.push_str("<div class=\"figures\">\n");
+            for (svg, caption) in figures {
+                out.push_str("<figure>\n");
+                out.push_str(&inline_svg(svg));
+                out.push_str(&format!(
+                    "<figcaption>{}</figcaption>\n</figure>\n",
+                    escape_html(caption)
+                ));
+            }
+            out.push_str("</div>\n");
+        }
+    }
+}
+
+fn render_table(out: &mut String, table: &Table) {
+    out.push_str("<div class=\"table-wrap\"><table>\n");
+    if !table.caption.is_empty() {
+        out.push_str(&format!(
+            "<caption>{}</caption>\n",
+            escape_html(&table.caption)
+        ));
+    }
+    out.push_str("<thead><tr>");
+    for h in &table.headers {
+        out.push_str(&format!("<th scope=\"col\">{}</th>", escape_html(h)));
+    }
+    out.push_str("</tr></thead>\n<tbody>\n");
+    for row in &table.rows {
+        out.push_str("<tr>");
+        for cell in row {
+            out.push_str(&format!("<td>{}</td>", escape_html(cell)));
+        }
+        out.push_str("</tr>\n");
+    }
+    out.push_str("</tbody></table></div>\n");
+}
+
+/// An SVG document ready to inline: the XML declaration dropped; a figure
+/// that holds a script or foreign content becomes an escaped note.
+pub fn inline_svg(svg: &str) -> String {
+    let lower = svg.to_ascii_lowercase();
+    if lower.contains("<script") || lower.contains("<foreignobject") || lower.contains("<!entity") {
+        return "<p>(figure left out: it held active content)</p>\n".to_string();
+    }
+    let mut body = svg.trim_start();
+    if body.starts_with("<?xml") {
+        body = body
+            .find("?>")
+            .map_or("", |end| &body[end + 2..])
+            .trim_start();
+    }
+    format!("{}\n", body.trim_end())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn user_text_is_escaped_everywhere() {
+        let evil = "<script>alert('x')</script>&\"";
+        let mut page = Page::new(evil);
+        page.push(Block::Heading(evil.into()))
+            .push(Block::Paragraph(evil.into()))
+            .push(Block::List(vec![evil.into()]))
+            .push(Block::Table(Table {
+                caption: evil.into(),
+                headers: vec![evil.into()],
+                rows: vec![vec![evil.into()]],
+            }))
+            .push(Block::Figures(vec![("<svg></svg>".into(), evil.into())]));
+        let html = page.render();
+        assert!(!html.contains("<script"));
+        assert!(!html.contains("alert('x')"));
+        assert_eq!(html.matches("&lt;script&gt;alert(&#39;x&#39;)").count(), 9);
+    }
+
+    #[test]
+    fn svg_is_inlined_without_declaration_and_scripts_are_refused() {
+        assert_eq!(
+            inline_svg("<?xml version=\"1.0\"?>\n<svg a=\"1\"></svg>"),
+            "<svg a=\"1\"></svg>\n"
+        );
+        assert!(!inline_svg("<svg><script>x</script></svg>").contains("<script"));
+        assert!(!inline_svg("<svg><foreignObject/></svg>").contains("foreignObject"));
+    }
+
+    #[test]
+    fn page_loads_nothing_and_runs_nothing() {
+        let html = Page::new("t").render();
+        assert!(html.contains("Content-Security-Policy"));
+        assert!(html.contains("@media print"));
+        assert!(html.contains("max-width:100%"));
+        for bad in [
+            "<script", "<link", "<img", "http://", "https://", "@import", "url(",
+        ] {
+            assert!(!html.contains(bad), "{bad}");
+        }
+    }
+}

@@ -1,0 +1,47 @@
+//! Plots and self-contained HTML reports of psdcal calibrations and studies.
+//!
+//! The core crates keep no plotting dependency: this crate draws from plain
+//! data (points, arrows, values, titles). Every plot function returns SVG
+//! text and has a `…_png` variant writing a PNG file; text is drawn with the
+//! bundled DejaVu Sans, never a system font.
+//!
+//! | figure | functions |
+//! | --- | --- |
+//! | image coverage on the sensor (paper Fig. 8) | [`coverage_svg`] |
+//! | residual vectors per image (Fig. 13) | [`residuals_svg`] |
+//! | distortion field, corrected spiral (Fig. 16) | [`distortion_field_svg`], [`spiral_svg`] |
+//! | AoA / position error maps (Fig. 9) | [`heat_map_svg`] |
+//! | AoA sensitivity to Δx and Δf (Fig. 6) | [`aoa_sensitivity_svg`], [`line_plot_svg`] |
+//! | Monte Carlo histograms | [`histogram_svg`] |
+//!
+//! Pages ([`Page`]) are one HTML file with inline SVG, an inline style
+//! sheet, no script and nothing loaded from the network; every text is
+//! escaped with [`escape_html`].
+
+#![warn(missing_docs)]
+
+pub mod coverage;
+pub mod distortion;
+pub mod error;
+pub mod error_map;
+pub mod escape;
+pub mod histogram;
+pub mod html;
+mod plot;
+pub mod residuals;
+pub mod sensitivity;
+pub mod study;
+
+pub use coverage::{coverage_png, coverage_svg};
+pub use distortion::{distortion_field_png, distortion_field_svg, spiral_png, spiral_svg};
+pub use error::ReportError;
+pub use error_map::{grid_step, heat_map_png, heat_map_svg, HeatCell, COLORBAR_STEPS};
+pub use escape::escape_html;
+pub use histogram::{bin_counts, histogram_png, histogram_svg};
+pub use html::{inline_svg, Block, Page, Table};
+pub use plot::{Arrow, ArrowSet, Frame, PointSet};
+pub use residuals::{residuals_png, residuals_svg};
+pub use sensitivity::{
+    aoa_sensitivity_svg, line_plot_png, line_plot_svg, paper_sensitivity_curves,
+};
+pub use study::{fig9_cells, study_page, study_table};

@@ -1,0 +1,104 @@
+//! Residual vectors per image, on the template and on the sensor (the
+//! paper's Figure 13).
+
+use std::path::Path;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use crate::error::{draw_err, ReportError};
+use crate::plot::{
+    arrow_parts, chart, color, finite, legend, to_png, to_svg, ArrowSet, Figure, Frame, MAX_LEGEND,
+};
+
+pub(crate) struct Arrows<'a> {
+    pub(crate) sets: &'a [ArrowSet],
+    pub(crate) scale: f64,
+    pub(crate) frame: &'a Frame,
+    pub(crate) what: &'static str,
+}
+
+impl Figure for Arrows<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), ReportError> {
+        self.frame.check(self.what)?;
+        if !(self.scale.is_finite() && self.scale > 0.0) {
+            return Err(ReportError::InvalidData {
+                what: self.what,
+                reason: format!("the arrow scale {} is not positive", self.scale),
+            });
+        }
+        finite(
+            self.what,
+            self.sets.iter().flat_map(|s| {
+                s.arrows
+                    .iter()
+                    .flat_map(|a| [a.at.0, a.at.1, a.delta.0, a.delta.1])
+            }),
+        )?;
+        let mut chart = chart(root, self.frame)?;
+        let span = (self.frame.x_range.1 - self.frame.x_range.0)
+            .max(self.frame.y_range.1 - self.frame.y_range.0);
+        let head = 0.018 * span;
+        let labelled = self.sets.len() > 1 && self.sets.len() <= MAX_LEGEND;
+        for (k, set) in self.sets.iter().enumerate() {
+            let c = color(k);
+            let ends: Vec<((f64, f64), (f64, f64))> = set
+                .arrows
+                .iter()
+                .map(|a| {
+                    let b = (
+                        a.at.0 + self.scale * a.delta.0,
+                        a.at.1 + self.scale * a.delta.1,
+                    );
+                    (a.at, b)
+                })
+                .collect();
+            let style = c.stroke_width(1);
+            chart
+                .draw_series(ends.iter().map(|&(a, b)| arrow_parts(a, b, head, style).0))
+                .map_err(draw_err)?;
+            let series = chart
+                .draw_series(ends.iter().map(|&(a, b)| arrow_parts(a, b, head, style).1))
+                .map_err(draw_err)?;
+            if labelled {
+                series.label(set.label.as_str()).legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 4), (x + 10, y + 4)], c.filled())
+                });
+            }
+        }
+        if labelled {
+            legend(&mut chart)?;
+        }
+        Ok(())
+    }
+}
+
+/// Residual vectors: for each image (one colour, legend up to 12 images) an
+/// arrow per point from the point along its residual × `scale` (state the
+/// scale in the title). One `<polygon>` arrow head per residual.
+pub fn residuals_svg(sets: &[ArrowSet], scale: f64, frame: &Frame) -> Result<String, ReportError> {
+    to_svg(&Arrows {
+        sets,
+        scale,
+        frame,
+        what: "residuals",
+    })
+}
+
+/// [`residuals_svg`] as a PNG file.
+pub fn residuals_png(
+    sets: &[ArrowSet],
+    scale: f64,
+    frame: &Frame,
+    path: &Path,
+) -> Result<(), ReportError> {
+    to_png(
+        &Arrows {
+            sets,
+            scale,
+            frame,
+            what: "residuals",
+        },
+        path,
+    )
+}
