@@ -310,16 +310,7 @@ impl Cli {
         };
         let job = match self.command {
             Command::Check(args) => {
-                let points = match (args.observations, args.signals) {
-                    (Some(path), None) => PointSource::Observations(path),
-                    (None, Some(path)) => PointSource::Signals(path),
-                    _ => {
-                        return Err(Cli::command().error(
-                            clap::error::ErrorKind::ArgumentConflict,
-                            "give exactly one of --observations and --signals",
-                        ))
-                    }
-                };
+                let points = point_source(args.observations, args.signals)?;
                 Job::Check(CheckConfig {
                     template: args.template,
                     points,
@@ -339,16 +330,7 @@ impl Cli {
             Command::Map(args) => Job::Map(args.into_config(output)?),
             Command::Report(args) => Job::Report(args.into_config()),
             Command::Calibrate(args) => {
-                let points = match (args.observations, args.signals) {
-                    (Some(path), None) => PointSource::Observations(path),
-                    (None, Some(path)) => PointSource::Signals(path),
-                    _ => {
-                        return Err(Cli::command().error(
-                            clap::error::ErrorKind::ArgumentConflict,
-                            "give exactly one of --observations and --signals",
-                        ))
-                    }
-                };
+                let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;
                 if args.gains.is_some() && (fit_gains || !matches!(points, PointSource::Signals(_)))
                 {
@@ -477,8 +459,24 @@ fn parse_assignment(text: &str) -> Result<(Param, f64), String> {
     }
 }
 
+/// Where a data set's points come from: exactly one of `--observations`
+/// and `--signals` (clap's group makes one required; this refuses both).
+fn point_source(
+    observations: Option<PathBuf>,
+    signals: Option<PathBuf>,
+) -> Result<PointSource, clap::Error> {
+    match (observations, signals) {
+        (Some(path), None) => Ok(PointSource::Observations(path)),
+        (None, Some(path)) => Ok(PointSource::Signals(path)),
+        _ => Err(Cli::command().error(
+            clap::error::ErrorKind::ArgumentConflict,
+            "give exactly one of --observations and --signals",
+        )),
+    }
+}
+
 /// A positive, finite length in mm.
-fn positive_mm(text: &str) -> Result<f64, String> {
+pub(crate) fn positive_mm(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         _ => Err(format!("expected a positive length in mm, found '{text}'")),

@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use psdcal_locate::{LocateOptions, Plane, MAX_GRID};
 use psdcal_model::Param;
 
-use crate::cli::{Cli, Output};
+use crate::cli::{positive_mm, Cli, Output};
 
 pub const AOA_EXAMPLES: &str = "\
 Example:
@@ -351,14 +351,6 @@ impl MapArgs {
 
 fn number(text: &str) -> Option<f64> {
     text.trim().parse::<f64>().ok().filter(|v| v.is_finite())
-}
-
-/// A positive, finite length in mm.
-fn positive_mm(text: &str) -> Result<f64, String> {
-    match number(text) {
-        Some(v) if v > 0.0 => Ok(v),
-        _ => Err(format!("expected a positive length in mm, found '{text}'")),
-    }
 }
 
 /// A non-negative, finite length in mm.

@@ -530,13 +530,29 @@ fn same_trials(a: &Condition, b: &Condition) -> bool {
 /// The number of trials [`run_tables`] runs for `specs` (conditions repeated
 /// across tables run once): what a progress bar counts to.
 pub fn trial_count(specs: &[TableSpec], trials: usize) -> usize {
+    distinct_conditions(specs).0.len() * trials
+}
+
+/// The distinct conditions of `specs` (those differing only in their label
+/// count once) and, per table and column, the index of its condition.
+fn distinct_conditions(specs: &[TableSpec]) -> (Vec<&Condition>, Vec<Vec<usize>>) {
     let mut unique: Vec<&Condition> = Vec::new();
-    for c in specs.iter().flat_map(|s| &s.columns) {
-        if !unique.iter().any(|u| same_trials(u, c)) {
-            unique.push(c);
-        }
-    }
-    unique.len() * trials
+    let column_of = specs
+        .iter()
+        .map(|spec| {
+            spec.columns
+                .iter()
+                .map(|c| match unique.iter().position(|u| same_trials(u, c)) {
+                    Some(k) => k,
+                    None => {
+                        unique.push(c);
+                        unique.len() - 1
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    (unique, column_of)
 }
 
 /// Runs tables: every distinct condition's trials in parallel on rayon's
@@ -555,22 +571,7 @@ pub fn run_tables(
     }
     // Conditions that differ only in their label (Tables 9–10 repeat columns
     // of Tables 3–8) run once.
-    let mut unique: Vec<&Condition> = Vec::new();
-    let column_of: Vec<Vec<usize>> = specs
-        .iter()
-        .map(|spec| {
-            spec.columns
-                .iter()
-                .map(|c| match unique.iter().position(|u| same_trials(u, c)) {
-                    Some(k) => k,
-                    None => {
-                        unique.push(c);
-                        unique.len() - 1
-                    }
-                })
-                .collect()
-        })
-        .collect();
+    let (unique, column_of) = distinct_conditions(specs);
     let jobs: Vec<(usize, u64)> = (0..unique.len())
         .flat_map(|u| (0..options.trials as u64).map(move |k| (u, k)))
         .collect();
