@@ -160,6 +160,7 @@ pub fn calibrate(
         fitted_gains.as_ref(),
         &refined.poses,
         refined.cost,
+        refined.weights.as_ref(),
     )?;
     if let Some(sd) = covariance.std(Param::F) {
         let f = refined.model.intrinsics.f;

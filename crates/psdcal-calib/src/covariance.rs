@@ -1,7 +1,10 @@
 //! Uncertainty of a calibration (MODEL.md §4.6): the covariance
 //! `σ² (JᵀJ)⁻¹` of the estimated parameters at the solution, with
 //! `σ² = cost / (2·points − parameters)` (`parameters` counts the freed
-//! sensor parameters and 6 per pose).
+//! sensor parameters and 6 per pose). For a noise-weighted fit
+//! ([`crate::weighting`]) `J` and `cost` are the whitened ones, so `σ²` is
+//! the variance of a unit-weight coordinate and `σ² (JᵀJ)⁻¹` the
+//! generalised-least-squares covariance.
 //!
 //! `(JᵀJ)⁻¹` is never formed whole: the sensor-parameter block is the inverse
 //! of the Schur complement `S⁻¹`, and each pose's 6 × 6 block is
@@ -17,6 +20,7 @@ use psdcal_model::{ChannelGains, Param, Pose, SensorModel};
 
 use crate::data::CalibrationData;
 use crate::refine::{free_columns, normal_equations, CostKind, RobustLoss};
+use crate::weighting::PointWeights;
 
 /// Names of the relative gains in covariance rows and files.
 pub const GAIN_NAMES: [&str; 3] = ["g_x2", "g_y1", "g_y2"];
@@ -88,12 +92,16 @@ pub fn covariance(
     poses: &[Pose],
     cost: f64,
 ) -> Result<Covariance, CalibError> {
-    covariance_with_gains(data, cost_kind, free, robust, model, None, poses, cost)
+    covariance_with_gains(
+        data, cost_kind, free, robust, model, None, poses, cost, None,
+    )
 }
 
 /// [`covariance`] of a fit that also estimated the channel gains (`gains`
 /// = their estimate): the matrix then has three more trailing rows and
-/// columns, `g_x2, g_y1, g_y2`.
+/// columns, `g_x2, g_y1, g_y2`. `weights`: the point weights of a
+/// noise-weighted fit ([`crate::Refined::weights`]), whose `cost` is then
+/// the weighted cost.
 #[allow(clippy::too_many_arguments)]
 pub fn covariance_with_gains(
     data: &CalibrationData,
@@ -104,9 +112,12 @@ pub fn covariance_with_gains(
     gains: Option<&ChannelGains>,
     poses: &[Pose],
     cost: f64,
+    weights: Option<&PointWeights>,
 ) -> Result<Covariance, CalibError> {
     let columns = free_columns(free, gains.is_some());
-    let ne = normal_equations(data, cost_kind, &columns, robust, model, gains, poses)?;
+    let ne = normal_equations(
+        data, cost_kind, &columns, robust, model, gains, poses, weights,
+    )?;
     let names: Vec<String> = free
         .iter()
         .map(|p| p.name().to_string())

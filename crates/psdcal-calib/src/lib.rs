@@ -27,6 +27,7 @@ pub mod global;
 pub mod normal_equations;
 pub mod refine;
 pub mod report;
+pub mod weighting;
 
 pub use covariance::{covariance, covariance_with_gains, Covariance, GAIN_NAMES};
 pub use electrical::{equal_current_gains, GainEstimate};
@@ -38,6 +39,7 @@ pub use refine::{
 pub use report::{
     fit_statistics, fit_statistics_with_gains, FitStatistics, ImageStats, PointError,
 };
+pub use weighting::{point_covariance, NoiseModel, PointWeights};
 pub mod calibrate;
 pub use calibrate::{
     calibrate, CalibrateOptions, CalibrationResult, CalibrationSummary, ParameterSummary,

@@ -38,6 +38,7 @@ use serde::Serialize;
 
 use crate::data::CalibrationData;
 use crate::normal_equations::{FullNormalEquations, NormalEquations, N_GLOBAL};
+use crate::weighting::{NoiseModel, PointWeights};
 use crate::CalibError;
 
 /// Mean squared residual per point below which the fit is exact (RMS 1e-10).
@@ -110,6 +111,9 @@ pub struct RefineOptions {
     /// needs the data's amplitudes; every impact point is then recomputed
     /// from its amplitudes divided by the current gains (MODEL.md §1).
     pub fit_gains: bool,
+    /// How the points' noise is weighted ([`crate::weighting`]; uniform,
+    /// the paper's unweighted cost, by default).
+    pub noise: NoiseModel,
     /// Optional robust loss (off by default).
     pub robust: Option<RobustLoss>,
     /// Iteration budget (accepted and rejected steps both count).
@@ -128,6 +132,7 @@ impl Default for RefineOptions {
         Self {
             cost: CostKind::Template,
             free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2],
+            noise: NoiseModel::Uniform,
             robust: None,
             fit_gains: false,
             max_iterations: 500,
@@ -186,8 +191,11 @@ pub struct Refined {
     pub gains: ChannelGains,
     /// One `sensor_from_template` pose per image.
     pub poses: Vec<Pose>,
-    /// Final cost (robust cost when a loss is set).
+    /// Final cost (robust cost when a loss is set; weighted by `weights`
+    /// under a noise model).
     pub cost: f64,
+    /// The point weights of the final cost (`None`: unweighted).
+    pub weights: Option<PointWeights>,
     /// The solver's report.
     pub report: RefineReport,
 }
@@ -302,11 +310,28 @@ pub fn total_cost_with_gains(
     gains: Option<&ChannelGains>,
     poses: &[Pose],
 ) -> Result<f64, (usize, usize, psdcal_model::ModelError)> {
+    weighted_cost(data, cost, robust, model, gains, poses, None)
+}
+
+/// [`total_cost_with_gains`] with every residual whitened by `weights`.
+pub(crate) fn weighted_cost(
+    data: &CalibrationData,
+    cost: CostKind,
+    robust: Option<RobustLoss>,
+    model: &SensorModel,
+    gains: Option<&ChannelGains>,
+    poses: &[Pose],
+    weights: Option<&PointWeights>,
+) -> Result<f64, (usize, usize, psdcal_model::ModelError)> {
     let mut total = 0.0;
     for (i, image) in data.images.iter().enumerate() {
         for (k, obs) in image.points.iter().enumerate() {
             let (m, _) = measured_point(data, i, k, gains).map_err(|e| (i, k, e))?;
-            let r = residual(data, cost, model, &poses[i], obs.led, &m).map_err(|e| (i, k, e))?;
+            let mut r =
+                residual(data, cost, model, &poses[i], obs.led, &m).map_err(|e| (i, k, e))?;
+            if let Some(w) = weights {
+                r = w.get(i, k) * r;
+            }
             let s = r.norm_squared();
             total += robust.map_or(s, |l| l.rho(s));
         }
@@ -315,6 +340,9 @@ pub fn total_cost_with_gains(
 }
 
 /// Accumulates the normal equations at the current parameters.
+// The cost's definition (kind, loss, weights) and the evaluation point
+// (model, gains, poses), as in `weighted_cost`, plus the freed columns.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn normal_equations(
     data: &CalibrationData,
     cost: CostKind,
@@ -323,6 +351,7 @@ pub(crate) fn normal_equations(
     model: &SensorModel,
     gains: Option<&ChannelGains>,
     poses: &[Pose],
+    weights: Option<&PointWeights>,
 ) -> Result<NormalEquations, CalibError> {
     let mut ne = FullNormalEquations::zeros(data.images.len());
     for (i, image) in data.images.iter().enumerate() {
@@ -330,7 +359,7 @@ pub(crate) fn normal_equations(
         for (k, obs) in image.points.iter().enumerate() {
             let (m, dm_dg) =
                 measured_point(data, i, k, gains).map_err(|e| point_error(data, i, obs.led, e))?;
-            let (r, a, b) = residual_with_jacobians(
+            let (mut r, mut a, mut b) = residual_with_jacobians(
                 data,
                 cost,
                 model,
@@ -341,6 +370,12 @@ pub(crate) fn normal_equations(
                 dm_dg.as_ref(),
             )
             .map_err(|e| point_error(data, i, obs.led, e))?;
+            if let Some(w) = weights {
+                let w = w.get(i, k);
+                r = w * r;
+                a = w * a;
+                b = w * b;
+            }
             let weight = robust.map_or(1.0, |l| l.weight(r.norm_squared()));
             ne.add(i, weight, &r, &a, &b);
         }
@@ -399,8 +434,22 @@ pub fn refine(
     refine_with_gains(data, model, &ChannelGains::UNIT, poses, options)
 }
 
+/// Most reweighting passes of a noise-weighted template-plane refinement.
+const MAX_REWEIGHTINGS: usize = 5;
+/// The weights have settled when recomputing them changes the weighted cost
+/// by less than this fraction.
+const REWEIGHT_TOLERANCE: f64 = 1e-6;
+
 /// [`refine`] from given channel gains; with `options.fit_gains` they are
 /// estimated too (the data must carry amplitudes).
+///
+/// With a noise model other than uniform, the points are whitened
+/// ([`crate::weighting`]) with weights computed at the start; when the
+/// weights depend on the parameters (template-plane cost, or fitted gains)
+/// they are recomputed at the solution and the refinement repeated until
+/// the weighted cost changes by less than 1e-6 of itself (at most five
+/// passes). Iterations add up over the passes; the cost history restarts
+/// its descent at each pass.
 pub fn refine_with_gains(
     data: &CalibrationData,
     model: &SensorModel,
@@ -415,18 +464,85 @@ pub fn refine_with_gains(
         });
     }
     gains.validate()?;
+    let gains_in_cost = |g: &ChannelGains| if options.fit_gains { Some(*g) } else { None };
+    let weights_at = |m: &SensorModel, g: &ChannelGains, p: &[Pose]| {
+        PointWeights::compute(
+            data,
+            options.noise,
+            options.cost,
+            m,
+            gains_in_cost(g).as_ref(),
+            p,
+        )
+    };
+    let mut weights = weights_at(model, gains, poses)?;
+    let mut result = levenberg_marquardt(data, model, gains, poses, options, weights.as_ref())?;
+    let parameter_dependent = options.cost == CostKind::Template || options.fit_gains;
+    if weights.is_some() && parameter_dependent {
+        for _ in 1..MAX_REWEIGHTINGS {
+            if !result.report.termination.converged() {
+                break;
+            }
+            let next = weights_at(&result.model, &result.gains, &result.poses)?;
+            let reweighted = weighted_cost(
+                data,
+                options.cost,
+                options.robust,
+                &result.model,
+                gains_in_cost(&result.gains).as_ref(),
+                &result.poses,
+                next.as_ref(),
+            )
+            .map_err(|(i, k, e)| point_error(data, i, data.images[i].points[k].led, e))?;
+            weights = next;
+            let settled = (reweighted - result.cost).abs() <= REWEIGHT_TOLERANCE * result.cost;
+            if settled {
+                result.cost = reweighted;
+                break;
+            }
+            let pass = levenberg_marquardt(
+                data,
+                &result.model,
+                &result.gains,
+                &result.poses,
+                options,
+                weights.as_ref(),
+            )?;
+            let mut report = pass.report.clone();
+            report.iterations += result.report.iterations;
+            report.accepted += result.report.accepted;
+            let mut history = std::mem::take(&mut result.report.cost_history);
+            history.extend(report.cost_history);
+            report.cost_history = history;
+            result = Refined { report, ..pass };
+        }
+    }
+    result.weights = weights;
+    Ok(result)
+}
+
+/// One Levenberg–Marquardt run with fixed point weights.
+fn levenberg_marquardt(
+    data: &CalibrationData,
+    model: &SensorModel,
+    gains: &ChannelGains,
+    poses: &[Pose],
+    options: &RefineOptions,
+    weights: Option<&PointWeights>,
+) -> Result<Refined, CalibError> {
     let columns = free_columns(&options.free, options.fit_gains);
     let mut model = *model;
     let mut gains = *gains;
     let gains_in_cost = |g: &ChannelGains| if options.fit_gains { Some(*g) } else { None };
     let mut poses = poses.to_vec();
-    let mut cost = total_cost_with_gains(
+    let mut cost = weighted_cost(
         data,
         options.cost,
         options.robust,
         &model,
         gains_in_cost(&gains).as_ref(),
         &poses,
+        weights,
     )
     .map_err(|(i, k, e)| point_error(data, i, data.images[i].points[k].led, e))?;
     let mut history = vec![cost];
@@ -442,6 +558,7 @@ pub fn refine_with_gains(
         &model,
         gains_in_cost(&gains).as_ref(),
         &poses,
+        weights,
     )?;
     let termination = loop {
         if cost <= EXACT_FIT_MS * data.point_count() as f64 {
@@ -479,13 +596,14 @@ pub fn refine_with_gains(
             })
             .collect();
         let trial_cost = if trial_model.validate().is_ok() && trial_gains.validate().is_ok() {
-            total_cost_with_gains(
+            weighted_cost(
                 data,
                 options.cost,
                 options.robust,
                 &trial_model,
                 gains_in_cost(&trial_gains).as_ref(),
                 &trial_poses,
+                weights,
             )
             .unwrap_or(f64::INFINITY)
         } else {
@@ -517,6 +635,7 @@ pub fn refine_with_gains(
                 &model,
                 gains_in_cost(&gains).as_ref(),
                 &poses,
+                weights,
             )?;
         } else {
             lambda *= nu;
@@ -528,6 +647,7 @@ pub fn refine_with_gains(
         gains,
         poses,
         cost,
+        weights: None,
         report: RefineReport {
             termination,
             iterations,

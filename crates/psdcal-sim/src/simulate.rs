@@ -114,7 +114,7 @@ pub struct Simulation {
 }
 
 /// Simulates a data set (module documentation); every random draw comes from
-/// `rng`: poses, then gains, then noise.
+/// `rng`: poses, then gains (drawn even without imbalance), then noise.
 pub fn simulate(options: &SimulationOptions, rng: &mut ChaCha8Rng) -> Result<Simulation, SimError> {
     if options.images < 3 {
         return Err(SimError::Options(format!(
@@ -139,8 +139,12 @@ pub fn simulate(options: &SimulationOptions, rng: &mut ChaCha8Rng) -> Result<Sim
                     .into(),
             )
         })?;
+    // The imbalance is drawn whether or not it is used, so that the noise
+    // that follows is the same with and without it (common random numbers:
+    // a seed's balanced and unbalanced data differ by the gains alone).
+    let drawn = draw_imbalance(rng);
     let gains = if options.imbalance {
-        draw_imbalance(rng)
+        drawn
     } else {
         ChannelGains::UNIT
     };
