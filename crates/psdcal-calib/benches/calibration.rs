@@ -1,4 +1,5 @@
-//! Refinement speed: the paper's size (9 images × 14 LEDs), with l1 freed
+//! Refinement speed: the paper's size (9 images × 14 LEDs), noise-weighted,
+//! with l1 freed
 //! (global search), and a large set (10 to 1000 images × 20 LEDs) to show the
 //! cost per image stays flat (Schur complement on the pose blocks); and the
 //! whole calibration from automatic initialisation.
@@ -8,7 +9,7 @@ mod support;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use psdcal_calib::{
-    calibrate, refine, refine_global, CalibrateOptions, GlobalOptions, RefineOptions,
+    calibrate, refine, refine_global, CalibrateOptions, GlobalOptions, NoiseModel, RefineOptions,
 };
 use psdcal_model::{Param, SensorModel};
 use std::hint::black_box;
@@ -20,6 +21,14 @@ fn paper_size(c: &mut Criterion) {
     let options = RefineOptions::default();
     c.bench_function("refine 9x14 lens2 f,cx,cy,k1,k2", |b| {
         b.iter(|| refine(black_box(&s.data), &m0, &p0, &options).unwrap())
+    });
+    // Noise-weighted (per-channel SNR): whitening plus reweighting passes.
+    let weighted = RefineOptions {
+        noise: NoiseModel::ChannelSnr,
+        ..RefineOptions::default()
+    };
+    c.bench_function("refine 9x14 lens2 channel-snr weighted", |b| {
+        b.iter(|| refine(black_box(&s.data), &m0, &p0, &weighted).unwrap())
     });
     let mut truth_psd = truth;
     truth_psd.distortion.l1 = SensorModel::PAPER_L1;

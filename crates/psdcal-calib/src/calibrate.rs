@@ -22,9 +22,10 @@ use crate::data::CalibrationData;
 use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
 use crate::refine::{
-    refine_with_gains, CostKind, RefineOptions, RefineReport, RobustLoss, Termination,
+    refine_with_gains, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
 };
 use crate::report::{fit_statistics_with_gains, FitStatistics};
+use crate::weighting::NoiseModel;
 use crate::CalibError;
 
 /// Largest relative standard deviation of a freed `f` accepted as a
@@ -73,9 +74,11 @@ pub struct CalibrationResult {
     pub free: Vec<Param>,
     /// The cost minimised.
     pub cost_kind: CostKind,
+    /// The noise model that weighted it.
+    pub noise: NoiseModel,
     /// The robust loss, if any.
     pub robust: Option<RobustLoss>,
-    /// Final cost.
+    /// Final cost (weighted under a noise model other than uniform).
     pub cost: f64,
     /// How the start was found.
     pub init: InitReport,
@@ -98,21 +101,27 @@ pub fn calibrate(
 ) -> Result<CalibrationResult, CalibError> {
     let free = &options.refine.free;
     let init = initialize(data, &options.init)?;
-    let mut start = options.base;
-    for p in [Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2] {
-        if free.contains(&p) {
-            start.set(p, init.model.get(p));
-        }
-    }
-    // A fixed f, cx or cy must have been given; the poses come from the start.
-    start.validate()?;
+    let start = start_model(options, &init.model)?;
     let (refined, global, gain_start) = if options.refine.fit_gains {
-        // Several starts, the lowest cost wins: (a) the start with the gains
-        // freed from unit at once; (b) the fit with the gains held at unit
-        // first, then freed. A wrong minimum stands out by a residual orders
-        // of magnitude larger.
+        // Several starts, the lowest cost among the converged ones wins: (a)
+        // the start with the gains freed from unit at once; (b) the fit with
+        // the gains held at unit first, then freed; (c) when a nominal focal
+        // length is given and the closed form supplied the start, the
+        // focal-length search around the nominal value, gains freed. A wrong
+        // minimum stands out by a residual orders of magnitude larger.
         let (a, global) =
             refine_global(data, &start, &init.poses, &options.refine, &options.global)?;
+        let mut best = (a, global, "gains freed from the start");
+        let mut consider = |candidate: Result<Refined, CalibError>, name: &'static str| {
+            if let Ok(c) = candidate {
+                let incumbent = &best.0;
+                if c.report.termination.converged()
+                    && (c.cost < incumbent.cost || !incumbent.report.termination.converged())
+                {
+                    best = (c, None, name);
+                }
+            }
+        };
         let fixed = RefineOptions {
             fit_gains: false,
             ..options.refine.clone()
@@ -128,15 +137,20 @@ pub fn calibrate(
                 )
             },
         );
-        match b {
-            Ok(b)
-                if b.report.termination.converged()
-                    && (b.cost < a.cost || !a.report.termination.converged()) =>
-            {
-                (b, None, Some("gains fixed first, then freed".to_string()))
-            }
-            _ => (a, global, Some("gains freed from the start".to_string())),
+        consider(b, "gains fixed first, then freed");
+        if options.init.focal_guess.is_some() && init.report.route == InitRoute::ClosedForm {
+            let searched = InitOptions {
+                use_closed_form: false,
+                ..options.init
+            };
+            let c = initialize(data, &searched).and_then(|i| {
+                let m = start_model(options, &i.model)?;
+                refine_global(data, &m, &i.poses, &options.refine, &options.global).map(|(r, _)| r)
+            });
+            consider(c, "search around the nominal focal length, gains freed");
         }
+        let (r, g, name) = best;
+        (r, g, Some(name.to_string()))
     } else {
         let (r, g) = refine_global(data, &start, &init.poses, &options.refine, &options.global)?;
         (r, g, None)
@@ -220,6 +234,7 @@ pub fn calibrate(
         poses: refined.poses,
         free: free.clone(),
         cost_kind: options.refine.cost,
+        noise: options.refine.noise,
         robust: options.refine.robust,
         cost: refined.cost,
         init: init.report,
@@ -229,6 +244,23 @@ pub fn calibrate(
         statistics,
         warnings,
     })
+}
+
+/// The refinement's start: `options.base` with the freed parameters the
+/// initialisation estimates (`f, cx, cy, k1, k2`) taken from `init_model`.
+fn start_model(
+    options: &CalibrateOptions,
+    init_model: &SensorModel,
+) -> Result<SensorModel, CalibError> {
+    let mut start = options.base;
+    for p in [Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2] {
+        if options.refine.free.contains(&p) {
+            start.set(p, init_model.get(p));
+        }
+    }
+    // A fixed f, cx or cy must have been given; the poses come from the start.
+    start.validate()?;
+    Ok(start)
 }
 
 /// One parameter of a summary.
@@ -257,6 +289,8 @@ pub struct CalibrationSummary {
     pub gain_start: Option<String>,
     /// The cost minimised.
     pub cost: CostKind,
+    /// The noise model that weighted it.
+    pub noise: NoiseModel,
     /// The robust loss, if any.
     pub robust: Option<RobustLoss>,
     /// How the start was found (`closed_form`, `focal_search`, `focal_guess`).
@@ -323,6 +357,7 @@ impl CalibrationResult {
             },
             gain_start: self.gain_start.clone(),
             cost: self.cost_kind,
+            noise: self.noise,
             robust: self.robust,
             start: match self.init.route {
                 InitRoute::ClosedForm => "closed_form",

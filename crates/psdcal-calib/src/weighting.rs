@@ -64,7 +64,7 @@ pub const COVARIANCE_FLOOR: f64 = 1e-4;
 
 /// How the electrode noise is distributed (module documentation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
-#[serde(rename_all = "snake_case")]
+#[serde(rename_all = "kebab-case")]
 pub enum NoiseModel {
     /// Unweighted least squares (the paper's cost).
     #[default]

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use clap::{ArgGroup, Args, CommandFactory, Parser, Subcommand};
-use psdcal_calib::{CostKind, Preliminary, RobustLoss};
+use psdcal_calib::{CostKind, NoiseModel, Preliminary, RobustLoss};
 use psdcal_model::{Param, PsdGeometry};
 
 const MAIN_EXAMPLES: &str = "\
@@ -171,6 +171,12 @@ pub struct CalibrateArgs {
     /// Cost to minimise: template (the paper's template-plane error) or image
     #[arg(long, value_name = "KIND", default_value = "template", value_parser = ["template", "image"])]
     pub cost: String,
+    /// Noise weighting of the cost: uniform (unweighted, the paper's),
+    /// channel-snr (the same SNR on every electrode channel: points near the
+    /// electrodes weigh more) or channel-floor (the same absolute noise on
+    /// every channel: brighter spots weigh more)
+    #[arg(long, value_name = "MODEL", default_value = "uniform", value_parser = ["uniform", "channel-snr", "channel-floor"])]
+    pub noise: String,
     /// Preliminary distortion correction before the linear stage: auto (line
     /// straightness when the template declares lines, else homography
     /// consistency), straightness, homography, or off
@@ -276,6 +282,7 @@ pub struct CalibrateConfig {
     pub fixed_values: Vec<(Param, f64)>,
     pub focal_guess: Option<f64>,
     pub cost: CostKind,
+    pub noise: NoiseModel,
     pub preliminary: Preliminary,
     pub normalize: bool,
     pub robust: Option<RobustLoss>,
@@ -372,6 +379,11 @@ impl Cli {
                         CostKind::Image
                     } else {
                         CostKind::Template
+                    },
+                    noise: match args.noise.as_str() {
+                        "channel-snr" => NoiseModel::ChannelSnr,
+                        "channel-floor" => NoiseModel::ChannelFloor,
+                        _ => NoiseModel::Uniform,
                     },
                     preliminary: if args.no_preliminary {
                         Preliminary::Off

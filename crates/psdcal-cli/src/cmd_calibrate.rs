@@ -7,7 +7,7 @@ use std::io::Write as _;
 use anyhow::Context as _;
 use psdcal_calib::{
     calibrate, CalibrateOptions, CalibrationData, CalibrationResult, CostKind, ImageObservations,
-    InitOptions, Observation, RefineOptions,
+    InitOptions, NoiseModel, Observation, RefineOptions,
 };
 use psdcal_io::{
     validate_data_set, write_atomic, write_calibration, Calibration, Observations, Signals,
@@ -138,6 +138,7 @@ fn calibrate_options(config: &CalibrateConfig) -> CalibrateOptions {
         },
         refine: RefineOptions {
             cost: config.cost,
+            noise: config.noise,
             free: config.free.clone(),
             fit_gains: config.fit_gains,
             robust: config.robust,
@@ -185,6 +186,7 @@ fn calibration_file(
             CostKind::Template => psdcal_io::CostKind::Template,
             CostKind::Image => psdcal_io::CostKind::Image,
         },
+        noise: config.noise.name().to_string(),
         residual_mm2: stats.residual_mm2,
         rms_template_mm: stats.rms_template_mm,
         rms_image_mm: stats.rms_image_mm,
@@ -335,8 +337,12 @@ fn write_summary(
     };
     writeln!(
         out,
-        "cost minimised:   {cost}{}",
-        if r.robust.is_some() { " (robust)" } else { "" }
+        "cost minimised:   {cost}{}{}",
+        if r.robust.is_some() { " (robust)" } else { "" },
+        match r.noise {
+            NoiseModel::Uniform => String::new(),
+            noise => format!(", weighted by the {} noise model", noise.name()),
+        }
     )?;
     writeln!(
         out,

@@ -139,3 +139,72 @@ fn both_routes_recover_the_gains() {
         assert_eq!(psdcal(&args).status.code(), Some(2), "{args:?}");
     }
 }
+
+#[test]
+fn noise_weighted_self_calibration_is_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim");
+    let p = |f: &str| sim.join(f).display().to_string();
+    assert!(psdcal([
+        "-q",
+        "simulate",
+        "--snr",
+        "40",
+        "--imbalance",
+        "--seed",
+        "9",
+        "--out",
+        sim.to_str().unwrap()
+    ])
+    .status
+    .success());
+    let truth = read_truth(sim.join("truth.json")).unwrap();
+    let cal = p("weighted.json");
+    let run = psdcal([
+        "calibrate",
+        "-t",
+        &p("template.csv"),
+        "-s",
+        &p("signals.csv"),
+        "--fit",
+        "f,cx,cy,k1,k2,gains",
+        "--noise",
+        "channel-snr",
+        "--out",
+        &cal,
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(
+        stdout(&run).contains("weighted by the channel-snr noise model"),
+        "{}",
+        stdout(&run)
+    );
+    let c = read_calibration(&cal).unwrap();
+    assert_eq!(c.fit.noise, "channel-snr");
+    let g = c.gains.as_ref().unwrap();
+    for (name, (est, t)) in ["g_x2", "g_y1", "g_y2"]
+        .iter()
+        .zip(
+            [g.x2, g.y1, g.y2]
+                .iter()
+                .zip([truth.gains.x2, truth.gains.y1, truth.gains.y2]),
+        )
+    {
+        let sd = c.std.get(name).unwrap();
+        assert!((est - t).abs() < 5.0 * sd, "{name}: {est} ± {sd} vs {t}");
+    }
+    // A model the CLI does not know is refused by the argument parser.
+    let run = psdcal([
+        "calibrate",
+        "-t",
+        &p("template.csv"),
+        "-s",
+        &p("signals.csv"),
+        "--noise",
+        "gaussian",
+        "--out",
+        &p("x.json"),
+    ]);
+    assert!(!run.status.success());
+    assert!(stderr(&run).contains("channel-snr"), "{}", stderr(&run));
+}

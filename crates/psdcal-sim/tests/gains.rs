@@ -2,8 +2,8 @@
 //! estimated with the optics from the same template images' electrode
 //! amplitudes.
 
-use psdcal_calib::{calibrate, CalibrateOptions, RefineOptions};
-use psdcal_model::ChannelGains;
+use psdcal_calib::{calibrate, CalibrateOptions, NoiseModel, RefineOptions};
+use psdcal_model::{ChannelGains, Param};
 use psdcal_sim::{simulate, Lens, SimulationOptions};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -150,11 +150,13 @@ fn self_calibration_removes_the_imbalance_at_40_db() {
     );
 }
 
-#[test]
-fn reported_gain_sigma_matches_the_monte_carlo_spread() {
-    use psdcal_calib::{ImageObservations, Observation};
+/// One scenario (poses, gains) measured again and again with fresh noise
+/// through the signal chain and calibrated with the gains freed under
+/// `noise`: per estimated quantity (f, cx, cy, then the three gains), the
+/// Monte Carlo spread and the mean reported σ.
+fn monte_carlo_spread(noise: NoiseModel, trials: u64) -> Vec<(String, f64, f64)> {
+    use psdcal_calib::Observation;
     use psdcal_model::sensor::{electrode_currents, impact_point};
-    // One scenario (poses, gains) measured again and again with fresh noise.
     let options = SimulationOptions {
         lens: Lens::Two,
         snr_db: Some(40.0),
@@ -162,57 +164,106 @@ fn reported_gain_sigma_matches_the_monte_carlo_spread() {
         ..SimulationOptions::default()
     };
     let sim = simulate(&options, &mut ChaCha8Rng::seed_from_u64(77)).unwrap();
-    let trials = 60;
-    let (mut estimates, mut sigmas): (Vec<[f64; 3]>, Vec<[f64; 3]>) = (Vec::new(), Vec::new());
-    for t in 0..trials {
-        let mut rng = ChaCha8Rng::seed_from_u64(5000 + t);
-        let mut data = sim.calibration_data();
-        let mut amplitudes = Vec::new();
-        for (im, image) in data.images.iter_mut().zip(&sim.images) {
-            let mut row = Vec::new();
-            im.points = image
-                .points
+    let calibrate_options = CalibrateOptions {
+        refine: RefineOptions {
+            noise,
+            ..with_gains().refine
+        },
+        ..with_gains()
+    };
+    let runs: Vec<(Vec<f64>, Vec<f64>, Vec<String>)> = (0..trials)
+        .into_par_iter()
+        .map(|t| {
+            let mut rng = ChaCha8Rng::seed_from_u64(5000 + t);
+            let mut data = sim.calibration_data();
+            let mut amplitudes = Vec::new();
+            for (im, image) in data.images.iter_mut().zip(&sim.images) {
+                let mut row = Vec::new();
+                im.points = image
+                    .points
+                    .iter()
+                    .map(|p| {
+                        let clean = electrode_currents(
+                            &options.geometry,
+                            &p.true_measured,
+                            options.photocurrent_a * sim.gain_x1,
+                        )
+                        .apply_gains(&sim.gains);
+                        let a = options
+                            .chain
+                            .measure(&clean, options.snr_db, &mut rng)
+                            .unwrap();
+                        row.push(a);
+                        Observation {
+                            led: p.led,
+                            measured: impact_point(&options.geometry, &a).unwrap(),
+                        }
+                    })
+                    .collect();
+                amplitudes.push(row);
+            }
+            data.amplitudes = Some(amplitudes);
+            let r = calibrate(&data, &calibrate_options).unwrap();
+            let m = &r.model.intrinsics;
+            let mut values = vec![m.f, m.cx, m.cy];
+            values.extend(r.gains.unwrap().to_array());
+            let cov = &r.covariance;
+            let mut sigmas: Vec<f64> = [Param::F, Param::Cx, Param::Cy]
                 .iter()
-                .map(|p| {
-                    let clean = electrode_currents(
-                        &options.geometry,
-                        &p.true_measured,
-                        options.photocurrent_a * sim.gain_x1,
-                    )
-                    .apply_gains(&sim.gains);
-                    let a = options
-                        .chain
-                        .measure(&clean, options.snr_db, &mut rng)
-                        .unwrap();
-                    row.push(a);
-                    Observation {
-                        led: p.led,
-                        measured: impact_point(&options.geometry, &a).unwrap(),
-                    }
-                })
+                .map(|p| cov.std(*p).unwrap())
                 .collect();
-            amplitudes.push(row);
-            let _: &ImageObservations = im;
-        }
-        data.amplitudes = Some(amplitudes);
-        let r = calibrate(&data, &with_gains()).unwrap();
-        estimates.push(r.gains.unwrap().to_array());
-        sigmas.push(r.covariance.gain_std().unwrap());
-    }
-    for k in 0..3 {
-        let n = trials as f64;
-        let mean = estimates.iter().map(|e| e[k]).sum::<f64>() / n;
-        let spread =
-            (estimates.iter().map(|e| (e[k] - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        let sigma = sigmas.iter().map(|s| s[k]).sum::<f64>() / n;
+            sigmas.extend(cov.gain_std().unwrap());
+            let names = ["f", "cx", "cy", "g_x2", "g_y1", "g_y2"]
+                .map(String::from)
+                .to_vec();
+            (values, sigmas, names)
+        })
+        .collect();
+    let n = trials as f64;
+    (0..6)
+        .map(|k| {
+            let mean = runs.iter().map(|r| r.0[k]).sum::<f64>() / n;
+            let spread =
+                (runs.iter().map(|r| (r.0[k] - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+            let sigma = runs.iter().map(|r| r.1[k]).sum::<f64>() / n;
+            (runs[0].2[k].clone(), spread, sigma)
+        })
+        .collect()
+}
+
+#[test]
+fn reported_gain_sigma_matches_the_monte_carlo_spread() {
+    // 60 trials: a sample standard deviation scatters by about 1/√(2·59) ≈
+    // 9 %; 25 % is nearly three of those. The unweighted fit's σ² (JᵀJ)⁻¹
+    // assumes equal noise on every point, which the per-channel SNR breaks
+    // (points near the electrodes are quieter), so only the gains, which
+    // the issue asks about, are held to it.
+    for (name, spread, sigma) in monte_carlo_spread(NoiseModel::Uniform, 60).iter().skip(3) {
         println!(
-            "gain {k}: spread {spread:.3e}, reported σ {sigma:.3e}, ratio {:.3}",
+            "uniform {name}: spread {spread:.3e}, reported σ {sigma:.3e}, ratio {:.3}",
             spread / sigma
         );
-        // 60 trials: a sample std scatters by about 9 %; 25 % is nearly three of those.
         assert!(
             (spread / sigma - 1.0).abs() < 0.25,
-            "gain {k}: spread {spread:e} vs σ {sigma:e}"
+            "{name}: spread {spread:e} vs σ {sigma:e}"
+        );
+    }
+}
+
+#[test]
+fn weighted_fit_sigma_matches_the_monte_carlo_spread() {
+    // Under the noise model that generated the data the weighted fit's
+    // covariance is the generalised-least-squares one, right for every
+    // parameter. 300 trials: a sample standard deviation scatters by
+    // 1/√(2·299) ≈ 4.1 %; 15 % is about 3.5 of those (measured: within 4 %).
+    for (name, spread, sigma) in monte_carlo_spread(NoiseModel::ChannelSnr, 300) {
+        println!(
+            "channel-snr {name}: spread {spread:.3e}, reported σ {sigma:.3e}, ratio {:.3}",
+            spread / sigma
+        );
+        assert!(
+            (spread / sigma - 1.0).abs() < 0.15,
+            "{name}: spread {spread:e} vs σ {sigma:e}"
         );
     }
 }

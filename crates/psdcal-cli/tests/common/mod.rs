@@ -172,6 +172,7 @@ fn calibration() -> Calibration {
         points,
         images: poses().len(),
         termination: "fixture written from the true model".to_string(),
+        ..FitSummary::default()
     };
     cal.images = poses()
         .iter()

@@ -280,6 +280,11 @@ pub enum CostKind {
 pub struct FitSummary {
     /// The minimised cost.
     pub cost: CostKind,
+    /// The noise model that weighted the cost (`uniform`: unweighted, the
+    /// paper's; `channel-snr`; `channel-floor`). Files written before it
+    /// existed read as `uniform`.
+    #[serde(default = "uniform_noise")]
+    pub noise: String,
     /// Sum of squared template-plane errors, mm².
     pub residual_mm2: f64,
     /// RMS template-plane error, mm.
@@ -300,6 +305,7 @@ impl Default for FitSummary {
     fn default() -> Self {
         Self {
             cost: CostKind::Template,
+            noise: uniform_noise(),
             residual_mm2: 0.0,
             rms_template_mm: 0.0,
             rms_image_mm: 0.0,
@@ -309,6 +315,10 @@ impl Default for FitSummary {
             termination: "not fitted".to_string(),
         }
     }
+}
+
+fn uniform_noise() -> String {
+    "uniform".to_string()
 }
 
 /// One image's pose and error.

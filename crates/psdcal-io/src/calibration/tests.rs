@@ -48,6 +48,7 @@ fn sample() -> Calibration {
     };
     cal.fit = FitSummary {
         cost: CostKind::Image,
+        noise: "channel-snr".into(),
         residual_mm2: 1.234e-2,
         rms_template_mm: 0.0123,
         rms_image_mm: 4.5e-4,
@@ -373,4 +374,20 @@ fn integer_image_ids_are_read_as_text() {
     let text = json(&sample()).replace("\"id\": \"1\"", "\"id\": 1");
     let cal = Calibration::from_json_str("c.json", &text).unwrap();
     assert_eq!(cal.images[0].id, "1");
+}
+
+#[test]
+fn files_written_before_the_noise_model_read_as_uniform() {
+    let text = json(&sample());
+    let before = text.replace("    \"noise\": \"channel-snr\",\n", "");
+    assert_ne!(before, text, "the sample writes its noise model");
+    let read = Calibration::from_json_str("c.json", &before).unwrap();
+    assert_eq!(read.fit.noise, "uniform");
+    assert_eq!(
+        Calibration::from_json_str("c.json", &text)
+            .unwrap()
+            .fit
+            .noise,
+        "channel-snr"
+    );
 }
