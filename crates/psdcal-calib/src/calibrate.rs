@@ -200,11 +200,6 @@ pub fn calibrate(
     if let Some(note) = &init.report.preliminary_note {
         warnings.push(note.clone());
     }
-    if let Some(reason) = &init.report.closed_form_rejection {
-        warnings.push(format!(
-            "closed form rejected ({reason}); started from a focal-length search"
-        ));
-    }
     if statistics.unprojectable > 0 {
         warnings.push(format!(
             "{} point(s) cannot be reprojected onto the sensor with the fitted model (outside its valid region)",
@@ -297,6 +292,9 @@ pub struct CalibrationSummary {
     pub start: String,
     /// The closed form's focal length, when it had one (mm).
     pub closed_form_f: Option<f64>,
+    /// Why the closed form was not used as the start, when it was not
+    /// (information about the start, not a problem with the result).
+    pub closed_form_rejection: Option<String>,
     /// Why the refinement stopped.
     pub termination: Termination,
     /// Iterations of the final refinement.
@@ -370,6 +368,7 @@ impl CalibrationResult {
                 .closed_form
                 .as_ref()
                 .and_then(|c| c.focal_length().ok()),
+            closed_form_rejection: self.init.closed_form_rejection.clone(),
             termination: self.refine.termination,
             iterations: self.refine.iterations,
             cost_history: self.refine.cost_history.clone(),

@@ -281,6 +281,9 @@ fn write_summary(
         "calibrated {} images, {} points; start: {start}",
         s.images, s.points
     )?;
+    if let Some(reason) = &r.init.closed_form_rejection {
+        writeln!(out, "  closed form not used: {reason}")?;
+    }
     writeln!(out)?;
     writeln!(out, "parameter          value           std    unit")?;
     for p in Param::ALL {
