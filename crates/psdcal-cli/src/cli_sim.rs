@@ -56,6 +56,12 @@ pub struct SimulateArgs {
     /// Template: scatter14 (14 unaligned LEDs) or grid (5 x 5 with lines)
     #[arg(long, value_name = "NAME", default_value = "scatter14", value_parser = parse_template)]
     pub template: TemplateKind,
+    /// Length of each LED's record in modulation cycles (the first 25 are
+    /// the filter's transient; the rest are demodulated). Longer records
+    /// average more samples: residuals fall in proportion (the paper's
+    /// residual levels correspond to 545 cycles)
+    #[arg(long, value_name = "CYCLES", default_value = "65", value_parser = parse_record_cycles)]
+    pub record_cycles: usize,
     /// Seed of every random draw
     #[arg(long, value_name = "S", default_value = "1")]
     pub seed: u64,
@@ -76,6 +82,12 @@ pub struct StudyArgs {
     /// Worker threads (default: every core)
     #[arg(long, value_name = "N", value_parser = parse_threads)]
     pub threads: Option<usize>,
+    /// Length of each LED's record in modulation cycles (the first 25 are
+    /// the filter's transient; the rest are demodulated). Longer records
+    /// average more samples: residuals fall in proportion (the paper's
+    /// residual levels correspond to 545 cycles)
+    #[arg(long, value_name = "CYCLES", default_value = "65", value_parser = parse_record_cycles)]
+    pub record_cycles: usize,
     /// Seed of the study
     #[arg(long, value_name = "S", default_value = "1")]
     pub seed: u64,
@@ -103,6 +115,8 @@ pub struct StudyConfig {
     pub trials: usize,
     pub threads: Option<usize>,
     pub seed: u64,
+    /// Record length of the signal chain, cycles.
+    pub record_cycles: usize,
     pub out: PathBuf,
     /// Folder of study.html, if asked for.
     pub report: Option<PathBuf>,
@@ -133,6 +147,7 @@ impl StudyArgs {
             trials: self.trials,
             threads: self.threads,
             seed: self.seed,
+            record_cycles: self.record_cycles,
             out: self.out,
             report: self.report,
         }
@@ -190,6 +205,43 @@ fn parse_trials(text: &str) -> Result<usize, String> {
         _ => Err(format!(
             "expected a number of trials from 1 to 1000000, found '{text}'"
         )),
+    }
+}
+
+/// Default record length, cycles ([`psdcal_sim::ChainConfig`]).
+pub const DEFAULT_RECORD_CYCLES: usize = 65;
+
+/// Longest record accepted, cycles (10 s per LED at 1 kHz).
+const MAX_RECORD_CYCLES: usize = 10_000;
+
+fn parse_record_cycles(text: &str) -> Result<usize, String> {
+    let transient = psdcal_sim::ChainConfig::default().transient_cycles;
+    match text.trim().parse::<usize>() {
+        Ok(n) if n > transient && n <= MAX_RECORD_CYCLES => Ok(n),
+        _ => Err(format!(
+            "expected a record length from {} to {MAX_RECORD_CYCLES} cycles (more than the \
+             {transient}-cycle filter transient), found '{text}'",
+            transient + 1
+        )),
+    }
+}
+
+/// The default signal chain with records of `record_cycles` cycles.
+pub fn chain_with_record(record_cycles: usize) -> anyhow::Result<psdcal_sim::SignalChain> {
+    let config = psdcal_sim::ChainConfig {
+        record_cycles,
+        ..psdcal_sim::ChainConfig::default()
+    };
+    psdcal_sim::SignalChain::new(config)
+        .map_err(|e| anyhow::anyhow!("--record-cycles {record_cycles}: {e}"))
+}
+
+/// ` --record-cycles N` when `n` is not the default, for reproduce lines.
+pub fn record_cycles_flag(n: usize) -> String {
+    if n == DEFAULT_RECORD_CYCLES {
+        String::new()
+    } else {
+        format!(" --record-cycles {n}")
     }
 }
 

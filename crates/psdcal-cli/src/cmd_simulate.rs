@@ -28,6 +28,7 @@ pub fn run(args: &SimulateArgs, output: Output) -> anyhow::Result<()> {
         psd_distortion: args.psd_distortion,
         images: args.images,
         template: args.template,
+        chain: crate::cli_sim::chain_with_record(args.record_cycles)?,
         ..SimulationOptions::default()
     };
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
@@ -119,7 +120,11 @@ fn describe(args: &SimulateArgs) -> String {
         },
         args.images,
         args.seed
-    )
+    ) + &if args.record_cycles == crate::cli_sim::DEFAULT_RECORD_CYCLES {
+        String::new()
+    } else {
+        format!(" Records of {} cycles.", args.record_cycles)
+    }
 }
 
 fn template_leds(sim: &Simulation) -> Vec<TemplateLed> {

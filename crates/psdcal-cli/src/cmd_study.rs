@@ -50,6 +50,7 @@ pub fn run(config: &StudyConfig, output: Output) -> anyhow::Result<()> {
     let options = StudyOptions {
         trials: config.trials,
         seed: config.seed,
+        chain: crate::cli_sim::chain_with_record(config.record_cycles)?,
         ..StudyOptions::default()
     };
     let total = psdcal_sim::study::trial_count(&specs, config.trials) as u64;
@@ -127,13 +128,14 @@ pub fn run(config: &StudyConfig, output: Output) -> anyhow::Result<()> {
     let page = match &config.report {
         Some(dir) => {
             let intro = format!(
-                "{} trials per condition, seed {} ({:.1} s). Reproduce with: psdcal study {} --trials {} --seed {}",
+                "{} trials per condition, seed {} ({:.1} s). Reproduce with: psdcal study {} --trials {} --seed {}{}",
                 config.trials,
                 config.seed,
                 elapsed,
                 config.tables.join(" "),
                 config.trials,
-                config.seed
+                config.seed,
+                crate::cli_sim::record_cycles_flag(config.record_cycles)
             );
             let page = psdcal_report::study_page("psdcal study", &intro, &tables, &maps)?;
             let path = dir.join("study.html");
@@ -197,10 +199,11 @@ fn render_report(
     );
     let _ = writeln!(
         out,
-        "Reproduce with `psdcal study {} --trials {} --seed {}`.\n",
+        "Reproduce with `psdcal study {} --trials {} --seed {}{}`.\n",
         config.tables.join(" "),
         config.trials,
-        config.seed
+        config.seed,
+        crate::cli_sim::record_cycles_flag(config.record_cycles)
     );
     for t in tables {
         out.push_str(&markdown(t));

@@ -225,3 +225,58 @@ fn an_interrupted_study_writes_nothing() {
         .collect();
     assert!(left.is_empty(), "files left behind: {left:?}");
 }
+
+/// RMS image-plane error of a calibration of `simulate --record-cycles
+/// cycles` (lens 2, 40 dB, seed 4).
+fn rms_sensor_error(dir: &std::path::Path, cycles: &str) -> f64 {
+    let sim = dir.join(format!("sim{cycles}"));
+    let run = psdcal([
+        "-q",
+        "simulate",
+        "--snr",
+        "40",
+        "--seed",
+        "4",
+        "--record-cycles",
+        cycles,
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let run = psdcal([
+        "--json",
+        "calibrate",
+        "-t",
+        sim.join("template.csv").to_str().unwrap(),
+        "-o",
+        sim.join("observations.csv").to_str().unwrap(),
+        "--out",
+        sim.join("c.json").to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&run)).unwrap();
+    v["statistics"]["rms_image_mm"].as_f64().unwrap()
+}
+
+#[test]
+fn longer_records_average_the_noise_down() {
+    // The demodulated amplitude's variance falls as 1/M with the M samples
+    // averaged: 625 − 25 cycles against 65 − 25 is 15× the samples, so the
+    // point noise (and the RMS error) falls by √15 ≈ 3.9. One data set's RMS
+    // over 126 points scatters by ~7 %: [3.0, 5.0] holds it with room.
+    let dir = tempfile::tempdir().unwrap();
+    let short = rms_sensor_error(dir.path(), "65");
+    let long = rms_sensor_error(dir.path(), "625");
+    let ratio = short / long;
+    assert!(
+        (3.0..=5.0).contains(&ratio),
+        "RMS {short:e} vs {long:e}: ratio {ratio}"
+    );
+    let run = psdcal(["simulate", "--record-cycles", "25", "--out", "x"]);
+    assert!(!run.status.success());
+    assert!(
+        stderr(&run).contains("more than the 25-cycle filter transient"),
+        "{}",
+        stderr(&run)
+    );
+}

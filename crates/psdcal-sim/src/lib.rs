@@ -19,7 +19,7 @@ pub mod study;
 
 pub use error::SimError;
 pub use scenario::{Lens, TemplateKind};
-pub use signal::SignalChain;
+pub use signal::{ChainConfig, SignalChain};
 pub use simulate::{simulate, Simulation, SimulationOptions};
 pub use study::{
     run_tables, table_spec, Condition, Method, Quantity, StudyOptions, TableResult, TableSpec,
