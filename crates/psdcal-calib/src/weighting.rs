@@ -156,6 +156,7 @@ impl PointWeights {
         let mut trace_sum = 0.0;
         for (i, image) in data.images.iter().enumerate() {
             let mut row = Vec::with_capacity(image.points.len());
+            let rotation = poses[i].rotation_jacobian();
             for (k, obs) in image.points.iter().enumerate() {
                 let numerical = |e: psdcal_model::ModelError| CalibError::Numerical {
                     stage: "noise weighting",
@@ -170,7 +171,6 @@ impl PointWeights {
                 let c = match cost {
                     CostKind::Image => c_m,
                     CostKind::Template => {
-                        let rotation = poses[i].rotation_jacobian();
                         let (_, j) = model
                             .back_project_with_jacobians_using(&poses[i], &rotation, &m)
                             .map_err(numerical)?;
