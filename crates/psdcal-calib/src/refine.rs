@@ -464,14 +464,13 @@ pub fn refine_with_gains(
         });
     }
     gains.validate()?;
-    let gains_in_cost = |g: &ChannelGains| if options.fit_gains { Some(*g) } else { None };
     let weights_at = |m: &SensorModel, g: &ChannelGains, p: &[Pose]| {
         PointWeights::compute(
             data,
             options.noise,
             options.cost,
             m,
-            gains_in_cost(g).as_ref(),
+            gains_in_cost(options, g).as_ref(),
             p,
         )
     };
@@ -489,7 +488,7 @@ pub fn refine_with_gains(
                 options.cost,
                 options.robust,
                 &result.model,
-                gains_in_cost(&result.gains).as_ref(),
+                gains_in_cost(options, &result.gains).as_ref(),
                 &result.poses,
                 next.as_ref(),
             )
@@ -521,6 +520,12 @@ pub fn refine_with_gains(
     Ok(result)
 }
 
+/// The gains the cost recomputes the points with: the current ones when they
+/// are estimated, none (the stored points) otherwise.
+fn gains_in_cost(options: &RefineOptions, gains: &ChannelGains) -> Option<ChannelGains> {
+    options.fit_gains.then_some(*gains)
+}
+
 /// One Levenberg–Marquardt run with fixed point weights.
 fn levenberg_marquardt(
     data: &CalibrationData,
@@ -533,14 +538,13 @@ fn levenberg_marquardt(
     let columns = free_columns(&options.free, options.fit_gains);
     let mut model = *model;
     let mut gains = *gains;
-    let gains_in_cost = |g: &ChannelGains| if options.fit_gains { Some(*g) } else { None };
     let mut poses = poses.to_vec();
     let mut cost = weighted_cost(
         data,
         options.cost,
         options.robust,
         &model,
-        gains_in_cost(&gains).as_ref(),
+        gains_in_cost(options, &gains).as_ref(),
         &poses,
         weights,
     )
@@ -556,7 +560,7 @@ fn levenberg_marquardt(
         &columns,
         options.robust,
         &model,
-        gains_in_cost(&gains).as_ref(),
+        gains_in_cost(options, &gains).as_ref(),
         &poses,
         weights,
     )?;
@@ -601,7 +605,7 @@ fn levenberg_marquardt(
                 options.cost,
                 options.robust,
                 &trial_model,
-                gains_in_cost(&trial_gains).as_ref(),
+                gains_in_cost(options, &trial_gains).as_ref(),
                 &trial_poses,
                 weights,
             )
@@ -633,7 +637,7 @@ fn levenberg_marquardt(
                 &columns,
                 options.robust,
                 &model,
-                gains_in_cost(&gains).as_ref(),
+                gains_in_cost(options, &gains).as_ref(),
                 &poses,
                 weights,
             )?;

@@ -26,8 +26,8 @@
 //! - `ChannelSnr`: the same SNR on every channel, `σ_k ∝ w_k` (the paper's
 //!   simulated noise, MODEL.md §6): `C_m ∝ Σ_k q_k² d_k d_kᵀ` with the
 //!   channel fractions `q_k = w_k / S` — from the amplitudes when the data
-//!   carry them, else from the forward model at the point,
-//!   `q = (1±u)(1±v)/4`. Points near the electrodes are far less noisy
+//!   carry them, else from the forward model at the point
+//!   (`psdcal_model::sensor::electrode_currents`, `q = (1±u)(1±v)/4`). Points near the electrodes are far less noisy
 //!   than points at the centre (at `u = v = 0.9`, a quarter of the centre's
 //!   standard deviation);
 //! - `ChannelFloor`: the same absolute noise on every channel (an amplifier
@@ -51,6 +51,7 @@
 //! ([`crate::refine`]).
 
 use nalgebra::{Matrix2, Vector2};
+use psdcal_model::sensor::{electrode_currents, impact_point_amplitude_jacobian};
 use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel};
 use serde::Serialize;
 
@@ -87,46 +88,49 @@ impl NoiseModel {
     }
 }
 
-/// Electrode corners `(sx, sy)` in the order x1, x2, y1, y2.
-const CORNERS: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, 1.0), (1.0, -1.0), (-1.0, 1.0)];
-
-/// The covariance shape `Σ_k (σ_k/S)² d_k d_kᵀ` (mm², up to the common noise
-/// scale) of an impact point `point` on `geometry`, under `noise`, with the
-/// gain-corrected amplitudes behind it when known. Includes the floor.
+/// The covariance shape `Σ_k σ_k² (∂m/∂V_k)(∂m/∂V_k)ᵀ` (mm², up to the
+/// common noise scale) of an impact point `point` on `geometry`, under
+/// `noise`, with the gain-corrected amplitudes behind it when known (else
+/// the forward model's, of unit total). Includes the floor.
 pub fn point_covariance(
     noise: NoiseModel,
     geometry: &PsdGeometry,
     point: &Vector2<f64>,
     corrected_amplitudes: Option<&Amplitudes>,
 ) -> Matrix2<f64> {
-    let (hx, hy) = (0.5 * geometry.lx, 0.5 * geometry.ly);
-    let (u, v) = (point.x / hx, point.y / hy);
-    // σ_k / S per channel, x1, x2, y1, y2.
-    let scale: [f64; 4] = match (noise, corrected_amplitudes) {
-        (NoiseModel::Uniform, _) => return Matrix2::identity(),
-        (NoiseModel::ChannelSnr, Some(a)) => {
-            let s = a.total();
-            [a.vx1 / s, a.vx2 / s, a.vy1 / s, a.vy2 / s]
-        }
-        (NoiseModel::ChannelSnr, None) => {
-            CORNERS.map(|(sx, sy)| 0.25 * (1.0 + sx * u) * (1.0 + sy * v))
-        }
-        (NoiseModel::ChannelFloor, Some(a)) => [1.0 / a.total(); 4],
-        (NoiseModel::ChannelFloor, None) => [1.0; 4],
+    if noise == NoiseModel::Uniform {
+        return Matrix2::identity();
+    }
+    let amps = corrected_amplitudes
+        .copied()
+        .unwrap_or_else(|| electrode_currents(geometry, point, 1.0));
+    // The floor's reference: a spot of the same total at the centre.
+    let centre = electrode_currents(geometry, &Vector2::zeros(), amps.total());
+    let floor = 0.5 * channel_noise_covariance(noise, geometry, &centre).trace();
+    channel_noise_covariance(noise, geometry, &amps)
+        + Matrix2::identity() * (COVARIANCE_FLOOR * floor)
+}
+
+/// `Σ_k σ_k² (∂m/∂V_k)(∂m/∂V_k)ᵀ` with `σ_k = V_k` (channel SNR) or 1
+/// (channel floor); zero where the amplitudes give no point.
+fn channel_noise_covariance(
+    noise: NoiseModel,
+    geometry: &PsdGeometry,
+    amps: &Amplitudes,
+) -> Matrix2<f64> {
+    let Ok((_, jac)) = impact_point_amplitude_jacobian(geometry, amps) else {
+        return Matrix2::zeros();
+    };
+    let sigma = match noise {
+        NoiseModel::ChannelSnr => [amps.vx1, amps.vx2, amps.vy1, amps.vy2],
+        _ => [1.0; 4],
     };
     let mut c = Matrix2::zeros();
-    for ((sx, sy), q) in CORNERS.iter().zip(scale) {
-        let d = Vector2::new(hx * (sx - u), hy * (sy - v));
-        c += d * d.transpose() * (q * q);
+    for (k, sigma_k) in sigma.iter().enumerate() {
+        let d = jac.column(k);
+        c += d * d.transpose() * (sigma_k * sigma_k);
     }
-    // Centre variance per coordinate under the same model: Σ_k q_k² h² with
-    // q_k = 1/4 (SNR) or the point's own 1/S (floor).
-    let centre = match noise {
-        NoiseModel::ChannelSnr => 0.25,
-        _ => scale[0] * scale[0] * 4.0,
-    } * 0.5
-        * (hx * hx + hy * hy);
-    c + Matrix2::identity() * (COVARIANCE_FLOOR * centre)
+    c
 }
 
 /// The whitening matrix of every point (`[image][point]`, same order as the

@@ -23,7 +23,7 @@
 //! ratio), so [`ChannelGains`] stores them with `g_x1 = 1` as the reference.
 //! The transimpedance gain of (P43) is `K = R / (2π f R C + 1)`.
 
-use nalgebra::{Matrix2x3, Vector2};
+use nalgebra::{Matrix2x3, Matrix2x4, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::ModelError;
@@ -181,6 +181,28 @@ pub fn impact_point_with_gains(
     impact_point(geometry, &amps.divide_gains(gains))
 }
 
+/// Jacobian of the balanced impact point with respect to the four
+/// amplitudes, columns in the order `vx1, vx2, vy1, vy2`:
+/// `∂(x, y)/∂V_k = ((Lx/2)(sx_k − u), (Ly/2)(sy_k − v)) / S` with the
+/// electrode signs `(sx_k, sy_k)`, `u = 2x/Lx`, `v = 2y/Ly`, `S = Σ V_k`.
+pub fn impact_point_amplitude_jacobian(
+    geometry: &PsdGeometry,
+    amps: &Amplitudes,
+) -> Result<(Vector2<f64>, Matrix2x4<f64>), ModelError> {
+    let point = impact_point(geometry, amps)?;
+    let s = amps.total();
+    let u = 2.0 * point.x / geometry.lx;
+    let v = 2.0 * point.y / geometry.ly;
+    // Electrode signs (sx, sy) of x1, x2, y1, y2.
+    let signs = [(-1.0, -1.0), (1.0, 1.0), (1.0, -1.0), (-1.0, 1.0)];
+    let mut jac = Matrix2x4::zeros();
+    for (col, (sx, sy)) in signs.into_iter().enumerate() {
+        jac[(0, col)] = 0.5 * geometry.lx * (sx - u) / s;
+        jac[(1, col)] = 0.5 * geometry.ly * (sy - v) / s;
+    }
+    Ok((point, jac))
+}
+
 /// Impact point and its Jacobian with respect to the relative gains
 /// `(g_x2, g_y1, g_y2)`, for amplitudes measured through those gains.
 pub fn impact_point_gain_jacobian(
@@ -188,23 +210,19 @@ pub fn impact_point_gain_jacobian(
     amps: &Amplitudes,
     gains: &ChannelGains,
 ) -> Result<(Vector2<f64>, Matrix2x3<f64>), ModelError> {
-    let point = impact_point_with_gains(geometry, amps, gains)?;
+    gains.validate()?;
     let w = amps.divide_gains(gains);
-    let s = w.total();
-    // x = (Lx/2) Nx / S with Nx = Σ sx_k w_k; dx/dw_k = (Lx/2)(sx_k − x·2/Lx)/S.
-    let u = 2.0 * point.x / geometry.lx;
-    let v = 2.0 * point.y / geometry.ly;
-    // Channels x2, y1, y2 with their x and y signs, current w_k and gain g_k.
+    let (point, dp_dw) = impact_point_amplitude_jacobian(geometry, &w)?;
+    // w_k = V_k / g_k, so ∂w_k/∂g_k = −w_k / g_k (channels x2, y1, y2 are
+    // columns 1, 2, 3 of the amplitude Jacobian).
     let channels = [
-        (1.0, 1.0, w.vx2, gains.x2),
-        (1.0, -1.0, w.vy1, gains.y1),
-        (-1.0, 1.0, w.vy2, gains.y2),
+        (1, w.vx2, gains.x2),
+        (2, w.vy1, gains.y1),
+        (3, w.vy2, gains.y2),
     ];
     let mut jac = Matrix2x3::zeros();
-    for (col, (sx, sy, wk, gk)) in channels.into_iter().enumerate() {
-        let dw_dg = -wk / gk;
-        jac[(0, col)] = 0.5 * geometry.lx * (sx - u) / s * dw_dg;
-        jac[(1, col)] = 0.5 * geometry.ly * (sy - v) / s * dw_dg;
+    for (col, (k, wk, gk)) in channels.into_iter().enumerate() {
+        jac.set_column(col, &(dp_dw.column(k) * (-wk / gk)));
     }
     Ok((point, jac))
 }

@@ -10,7 +10,8 @@ use common::{
 };
 use nalgebra::{DMatrix, DVector, Vector2, Vector3};
 use psdcal_model::sensor::{
-    electrode_currents, impact_point_gain_jacobian, impact_point_with_gains,
+    electrode_currents, impact_point, impact_point_amplitude_jacobian, impact_point_gain_jacobian,
+    impact_point_with_gains,
 };
 use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel, N_PARAMS};
 
@@ -311,6 +312,36 @@ fn back_projection_jacobians() {
                 );
             }
         }
+    }
+}
+
+#[test]
+fn impact_point_amplitude_jacobian_matches_finite_differences() {
+    let geometry = PsdGeometry { lx: 9.0, ly: 7.0 };
+    for point in [
+        Vector2::new(0.0, 0.0),
+        Vector2::new(3.1, -2.2),
+        Vector2::new(-4.4, 3.4),
+    ] {
+        let amps = electrode_currents(&geometry, &point, 2.5);
+        let (p, jac) = impact_point_amplitude_jacobian(&geometry, &amps).unwrap();
+        assert!((p - point).norm() < 1e-13);
+        check_jacobian(
+            &format!("impact point wrt amplitudes at {point:?}"),
+            &DVector::from_row_slice(&[amps.vx1, amps.vx2, amps.vy1, amps.vy2]),
+            &[1.0; 4],
+            &|x| {
+                let a = Amplitudes {
+                    vx1: x[0],
+                    vx2: x[1],
+                    vy1: x[2],
+                    vy2: x[3],
+                };
+                v2(impact_point(&geometry, &a).unwrap())
+            },
+            &dyn_mat(&jac),
+            REL,
+        );
     }
 }
 
