@@ -4,21 +4,7 @@ mod support;
 
 use psdcal_calib::{calibrate, CalibError, CalibrateOptions, RefineOptions};
 use psdcal_model::{Param, SensorModel};
-use support::scenario;
-
-fn check_close(name: &str, got: &SensorModel, truth: &SensorModel, free: &[Param]) {
-    for p in free {
-        let (g, t) = (got.get(*p), truth.get(*p));
-        let scale = match p {
-            Param::F | Param::Cx | Param::Cy => t.abs().max(1.0),
-            _ => t.abs().max(1e-8),
-        };
-        assert!(
-            (g - t).abs() <= 1e-6 * scale,
-            "{name}: {p} = {g:e}, truth {t:e}"
-        );
-    }
-}
+use support::{assert_recovered, scenario};
 
 #[test]
 fn noise_free_end_to_end_both_lenses() {
@@ -34,7 +20,7 @@ fn noise_free_end_to_end_both_lenses() {
                 "{name}: residual {:e}",
                 r.statistics.residual_mm2
             );
-            check_close(name, &r.model, &truth, &r.free);
+            assert_recovered(name, &r.model, &truth, &r.free);
         }
     }
 }
@@ -71,7 +57,7 @@ fn noise_free_end_to_end_with_every_lens_term_freed() {
             "residual {:e}",
             r.statistics.residual_mm2
         );
-        check_close("all lens terms", &r.model, &truth, &r.free);
+        assert_recovered("all lens terms", &r.model, &truth, &r.free);
     }
 }
 
@@ -104,7 +90,7 @@ fn noise_free_end_to_end_with_l1_freed() {
             "{name}: residual {:e}",
             r.statistics.residual_mm2
         );
-        check_close(name, &r.model, &truth, &r.free);
+        assert_recovered(name, &r.model, &truth, &r.free);
         let g = r.global.as_ref().expect("global search ran");
         assert!(g.minima[0].cost < 1e-12);
     }

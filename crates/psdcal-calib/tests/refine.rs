@@ -5,23 +5,7 @@ mod support;
 
 use psdcal_calib::{covariance, refine, CostKind, RefineOptions};
 use psdcal_model::{Param, SensorModel};
-use support::{perturbed, scenario};
-
-fn assert_recovered(name: &str, got: &SensorModel, truth: &SensorModel, free: &[Param]) {
-    for p in free {
-        let (g, t) = (got.get(*p), truth.get(*p));
-        // Relative 1e-6 where the value is not zero; absolute otherwise, in the
-        // parameter's own scale.
-        let scale = match p {
-            Param::F | Param::Cx | Param::Cy => t.abs().max(1.0),
-            _ => t.abs().max(1e-8),
-        };
-        assert!(
-            (g - t).abs() <= 1e-6 * scale,
-            "{name}: {p} = {g:e}, truth {t:e}"
-        );
-    }
-}
+use support::{assert_recovered, perturbed, scenario};
 
 #[test]
 fn noise_free_recovery_both_lenses_both_costs() {

@@ -7,10 +7,27 @@ pub mod robustness;
 
 use nalgebra::{Vector2, Vector3};
 use psdcal_calib::{CalibrationData, ImageObservations, Observation};
-use psdcal_model::{Pose, PsdGeometry, SensorModel};
+use psdcal_model::{Param, Pose, PsdGeometry, SensorModel};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
+
+/// Asserts that every `free` parameter of `got` matches `truth`: relative
+/// 1e-6 where the value is not zero, absolute otherwise in the parameter's
+/// own scale (1 mm for f, cx, cy; 1e-8 for the distortion coefficients).
+pub fn assert_recovered(name: &str, got: &SensorModel, truth: &SensorModel, free: &[Param]) {
+    for p in free {
+        let (g, t) = (got.get(*p), truth.get(*p));
+        let scale = match p {
+            Param::F | Param::Cx | Param::Cy => t.abs().max(1.0),
+            _ => t.abs().max(1e-8),
+        };
+        assert!(
+            (g - t).abs() <= 1e-6 * scale,
+            "{name}: {p} = {g:e}, truth {t:e}"
+        );
+    }
+}
 
 /// 14 LEDs (mm), no three collinear.
 pub const TEMPLATE_MM: [(f64, f64); 14] = [
