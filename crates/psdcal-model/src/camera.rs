@@ -16,6 +16,8 @@
 use nalgebra::{Matrix2, Matrix2x3, SMatrix, Unit, Vector2, Vector3};
 
 use crate::params::{Param, SensorModel, N_PARAMS};
+use crate::stages::pinhole::PinholeIntrinsics;
+use crate::stages::Pinhole;
 use crate::ModelError;
 
 /// An ideal point with its Jacobians with respect to the sensor-frame point
@@ -57,11 +59,20 @@ impl SensorModel {
         Ok((ideal, dxy_dab * dab, wrt_model))
     }
 
-    /// Normalised ray coordinates `(a, b)` of an ideal point (ray `(a, b, 1)`).
-    pub fn normalize(&self, ideal: &Vector2<f64>) -> Vector2<f64> {
+    /// The pinhole stage's intrinsics of this model.
+    pub fn pinhole_intrinsics(&self) -> PinholeIntrinsics {
         let k = &self.intrinsics;
-        let b = (ideal.y - k.cy) / k.f;
-        Vector2::new((ideal.x - k.cx - k.skew * b) / k.f, b)
+        PinholeIntrinsics {
+            f: k.f,
+            c: Vector2::new(k.cx, k.cy),
+            skew: k.skew,
+        }
+    }
+
+    /// Normalised ray coordinates `(a, b)` of an ideal point (ray `(a, b, 1)`):
+    /// the pinhole stage ([`crate::stages::Pinhole`]).
+    pub fn normalize(&self, ideal: &Vector2<f64>) -> Vector2<f64> {
+        Pinhole::eval(&self.pinhole_intrinsics(), ideal, None)
     }
 
     /// Normalised ray coordinates with their Jacobians with respect to the
@@ -71,24 +82,19 @@ impl SensorModel {
         &self,
         ideal: &Vector2<f64>,
     ) -> (Vector2<f64>, Matrix2<f64>, SMatrix<f64, 2, N_PARAMS>) {
-        let k = &self.intrinsics;
-        let inv_f = 1.0 / k.f;
-        let ab = self.normalize(ideal);
-        let (a, b) = (ab.x, ab.y);
-        let wrt_point = Matrix2::new(inv_f, -k.skew * inv_f * inv_f, 0.0, inv_f);
+        let (mut wrt_point, mut block) = (Matrix2::zeros(), [0.0; 8]);
+        let ab = Pinhole::eval(
+            &self.pinhole_intrinsics(),
+            ideal,
+            Some((&mut wrt_point, &mut block)),
+        );
         let mut wrt_model = SMatrix::<f64, 2, N_PARAMS>::zeros();
-        // b = (y − cy)/f ; a = (x − cx − γ b)/f
-        let db_df = -b * inv_f;
-        wrt_model.set_column(
-            Param::F.index(),
-            &Vector2::new(-a * inv_f - k.skew * inv_f * db_df, db_df),
-        );
-        wrt_model.set_column(Param::Cx.index(), &Vector2::new(-inv_f, 0.0));
-        wrt_model.set_column(
-            Param::Cy.index(),
-            &Vector2::new(k.skew * inv_f * inv_f, -inv_f),
-        );
-        wrt_model.set_column(Param::Skew.index(), &Vector2::new(-b * inv_f, 0.0));
+        for (k, p) in [Param::F, Param::Cx, Param::Cy, Param::Skew]
+            .iter()
+            .enumerate()
+        {
+            wrt_model.set_column(p.index(), &Vector2::new(block[2 * k], block[2 * k + 1]));
+        }
         (ab, wrt_point, wrt_model)
     }
 

@@ -26,6 +26,8 @@
 use nalgebra::{Matrix2, SMatrix, Vector2};
 
 use crate::params::{Param, SensorModel, N_PARAMS};
+use crate::stages::lens::LensCoefficients;
+use crate::stages::{Lens, PsdRadial};
 use crate::ModelError;
 
 /// Target accuracy of the inverse distortion, mm.
@@ -46,20 +48,22 @@ pub struct CorrectionJacobian {
 }
 
 impl SensorModel {
-    /// Corrects a measured impact point to the ideal pinhole point (mm).
+    /// The lens stage's coefficients of this model.
+    pub fn lens_coefficients(&self) -> LensCoefficients {
+        let d = &self.distortion;
+        LensCoefficients {
+            c: Vector2::new(self.intrinsics.cx, self.intrinsics.cy),
+            k: [d.k1, d.k2, d.k3],
+            p: [d.p1, d.p2],
+        }
+    }
+
+    /// Corrects a measured impact point to the ideal pinhole point (mm): the
+    /// PSD stage, then the lens stage ([`crate::stages`]).
     pub fn undistort(&self, measured: &Vector2<f64>) -> Vector2<f64> {
         let d = &self.distortion;
-        let (xd, yd) = (measured.x, measured.y);
-        let h2 = xd * xd + yd * yd;
-        let s = 1.0 + h2 * (d.l1 + h2 * d.l2);
-        let (xu, yu) = (xd * s, yd * s);
-        let dx = xu - self.intrinsics.cx;
-        let dy = yu - self.intrinsics.cy;
-        let r2 = dx * dx + dy * dy;
-        let rho = r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
-        let tx = d.p1 * (r2 + 2.0 * dx * dx) + 2.0 * d.p2 * dx * dy;
-        let ty = d.p2 * (r2 + 2.0 * dy * dy) + 2.0 * d.p1 * dx * dy;
-        Vector2::new(xu + dx * rho + tx, yu + dy * rho + ty)
+        let u = PsdRadial::eval(d.l1, d.l2, measured, None);
+        Lens::eval(&self.lens_coefficients(), &u, None)
     }
 
     /// `∂ideal/∂measured` only (cheaper than [`Self::undistort_with_jacobians`]).
@@ -68,57 +72,33 @@ impl SensorModel {
     }
 
     /// Corrects a measured point and returns the Jacobians with respect to the
-    /// point and to every model parameter.
+    /// point and to every model parameter (the stages' Jacobians chained).
     pub fn undistort_with_jacobians(&self, measured: &Vector2<f64>) -> CorrectionJacobian {
         let d = &self.distortion;
-        let (xd, yd) = (measured.x, measured.y);
-        // Step 1: PSD radial.
-        let h2 = xd * xd + yd * yd;
-        let s = 1.0 + h2 * (d.l1 + h2 * d.l2);
-        let s_prime = d.l1 + 2.0 * d.l2 * h2;
-        let (xu, yu) = (xd * s, yd * s);
-        let du_dm = Matrix2::new(
-            s + 2.0 * s_prime * xd * xd,
-            2.0 * s_prime * xd * yd,
-            2.0 * s_prime * xd * yd,
-            s + 2.0 * s_prime * yd * yd,
-        );
-        // Steps 2–4: lens radial and tangential about (cx, cy).
-        let dx = xu - self.intrinsics.cx;
-        let dy = yu - self.intrinsics.cy;
-        let r2 = dx * dx + dy * dy;
-        let rho = r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
-        let rho_prime = d.k1 + r2 * (2.0 * d.k2 + 3.0 * d.k3 * r2);
-        let tx = d.p1 * (r2 + 2.0 * dx * dx) + 2.0 * d.p2 * dx * dy;
-        let ty = d.p2 * (r2 + 2.0 * dy * dy) + 2.0 * d.p1 * dx * dy;
-        let dmat = Matrix2::new(
-            1.0 + rho + 2.0 * dx * dx * rho_prime + 6.0 * d.p1 * dx + 2.0 * d.p2 * dy,
-            2.0 * dx * dy * rho_prime + 2.0 * d.p1 * dy + 2.0 * d.p2 * dx,
-            2.0 * dx * dy * rho_prime + 2.0 * d.p2 * dx + 2.0 * d.p1 * dy,
-            1.0 + rho + 2.0 * dy * dy * rho_prime + 6.0 * d.p2 * dy + 2.0 * d.p1 * dx,
-        );
+        let (mut du_dm, mut dx_du) = (Matrix2::zeros(), Matrix2::zeros());
+        let (mut psd, mut lens) = ([0.0; 4], [0.0; 14]);
+        let u = PsdRadial::eval(d.l1, d.l2, measured, Some((&mut du_dm, &mut psd)));
+        let ideal = Lens::eval(&self.lens_coefficients(), &u, Some((&mut dx_du, &mut lens)));
         let mut wrt_model = SMatrix::<f64, 2, N_PARAMS>::zeros();
-        let dc = Matrix2::identity() - dmat;
-        wrt_model.set_column(Param::Cx.index(), &dc.column(0));
-        wrt_model.set_column(Param::Cy.index(), &dc.column(1));
-        let radial = Vector2::new(dx, dy);
-        wrt_model.set_column(Param::K1.index(), &(radial * r2));
-        wrt_model.set_column(Param::K2.index(), &(radial * (r2 * r2)));
-        wrt_model.set_column(Param::K3.index(), &(radial * (r2 * r2 * r2)));
-        wrt_model.set_column(
-            Param::P1.index(),
-            &Vector2::new(r2 + 2.0 * dx * dx, 2.0 * dx * dy),
-        );
-        wrt_model.set_column(
-            Param::P2.index(),
-            &Vector2::new(2.0 * dx * dy, r2 + 2.0 * dy * dy),
-        );
-        let psd = Vector2::new(xd, yd);
-        wrt_model.set_column(Param::L1.index(), &(dmat * psd * h2));
-        wrt_model.set_column(Param::L2.index(), &(dmat * psd * (h2 * h2)));
+        let lens_params = [
+            Param::Cx,
+            Param::Cy,
+            Param::K1,
+            Param::K2,
+            Param::K3,
+            Param::P1,
+            Param::P2,
+        ];
+        for (k, p) in lens_params.iter().enumerate() {
+            wrt_model.set_column(p.index(), &Vector2::new(lens[2 * k], lens[2 * k + 1]));
+        }
+        for (k, p) in [Param::L1, Param::L2].iter().enumerate() {
+            let column = dx_du * Vector2::new(psd[2 * k], psd[2 * k + 1]);
+            wrt_model.set_column(p.index(), &column);
+        }
         CorrectionJacobian {
-            ideal: Vector2::new(xu + dx * rho + tx, yu + dy * rho + ty),
-            wrt_point: dmat * du_dm,
+            ideal,
+            wrt_point: dx_du * du_dm,
             wrt_model,
         }
     }

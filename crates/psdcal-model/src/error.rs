@@ -72,4 +72,21 @@ pub enum ModelError {
         /// Ray parameter of the intersection (≤ 0 or non-finite when missed).
         s: f64,
     },
+    /// A stage parameter is outside its valid domain.
+    #[error("invalid model parameter {name} = {value}: {reason}")]
+    InvalidStageParameter {
+        /// Parameter name.
+        name: String,
+        /// Its value.
+        value: f64,
+        /// Why it is rejected.
+        reason: &'static str,
+    },
+    /// The stages do not form a valid model (a parameter named twice with
+    /// different units, an unknown name, a wrong block length).
+    #[error("invalid model: {reason}")]
+    InvalidModel {
+        /// What is wrong.
+        reason: String,
+    },
 }

@@ -9,7 +9,10 @@
 //! - [`camera`]: the pinhole with one focal length and optional skew (P4);
 //! - [`pose`]: Rodrigues poses and their derivatives (P3);
 //! - [`projection`]: template plane ↔ measured point, the maps calibration
-//!   minimises over (P5, P29), with analytic Jacobians.
+//!   minimises over (P5, P29), with analytic Jacobians;
+//! - [`stage`], [`stages`], [`model`], [`model_projection`]: the model as a
+//!   chain of stages with runtime-sized, named parameter blocks (MODEL.md §8):
+//!   what calibration estimates.
 //!
 //! Millimetres everywhere, radians inside. See `CONVENTIONS.md` at the root of
 //! the repository for symbols and frames.
@@ -18,14 +21,21 @@
 pub mod camera;
 pub mod distortion;
 mod error;
+pub mod model;
+pub mod model_projection;
 pub mod params;
 pub mod pose;
 pub mod projection;
 pub mod sensor;
+pub mod stage;
+pub mod stages;
 
 pub use distortion::CorrectionJacobian;
 pub use error::ModelError;
+pub use model::{ChainJacobian, Model};
+pub use model_projection::PoseJacobians;
 pub use params::{Distortion, Intrinsics, Param, SensorModel, UnknownParam, N_PARAMS};
 pub use pose::{Pose, RotationJacobian, N_POSE};
 pub use projection::{BackProjectionJacobians, ProjectionJacobians};
 pub use sensor::{Amplitudes, ChannelGains, PsdGeometry};
+pub use stage::{ParameterInfo, Stage, StageJacobian};

@@ -184,27 +184,8 @@ impl SensorModel {
     ) -> Result<(Vector2<f64>, BackProjectionJacobians), ModelError> {
         let ju = self.undistort_with_jacobians(measured);
         let (ab, dn_dideal, dn_dmodel_direct) = self.normalize_with_jacobians(&ju.ideal);
-        let (rot, drot) = (rotation.r, rotation.dr);
-        let t = &sensor_from_template.t;
-        let (xy, s, q) = intersect_template_plane(&rot, t, &ab)?;
-        let n = Vector3::new(ab.x, ab.y, 1.0);
-        let r3 = rot.column(2).into_owned();
-        let rt = rot.transpose();
-        let w = n * s - t;
-        // ∂P_t/∂n restricted to (a, b), and rows X, Y.
-        let dp_dn: Matrix3<f64> = rt * (Matrix3::identity() * s - n * r3.transpose() * (s / q));
-        let dxy_dab: Matrix2<f64> = dp_dn.fixed_view::<2, 2>(0, 0).into_owned();
-        let dp_dt: Matrix3<f64> = rt * (n * r3.transpose() / q - Matrix3::identity());
-        let mut wrt_pose = SMatrix::<f64, 2, N_POSE>::zeros();
-        for (i, dri) in drot.iter().enumerate() {
-            let drt_w = dri.transpose() * w;
-            let ds = -drt_w.z / q;
-            let dp = drt_w + rt * n * ds;
-            wrt_pose.set_column(i, &dp.fixed_rows::<2>(0));
-        }
-        wrt_pose
-            .fixed_view_mut::<2, 3>(0, 3)
-            .copy_from(&dp_dt.fixed_view::<2, 3>(0, 0));
+        let (xy, dxy_dab, wrt_pose) =
+            plane_intersection_with_jacobians(rotation, &sensor_from_template.t, &ab)?;
         let dn_dmodel = dn_dideal * ju.wrt_model + dn_dmodel_direct;
         Ok((
             xy,
@@ -215,6 +196,38 @@ impl SensorModel {
             },
         ))
     }
+}
+
+/// The template-plane point `(X, Y)` hit by the normalised ray `(a, b, 1)`
+/// for the pose `(R, t)` (its rotation Jacobian precomputed), with
+/// `∂(X, Y)/∂(a, b)` (2×2) and `∂(X, Y)/∂(rvec, t)` (2×6) (module
+/// documentation).
+pub fn plane_intersection_with_jacobians(
+    rotation: &RotationJacobian,
+    t: &Vector3<f64>,
+    ab: &Vector2<f64>,
+) -> Result<(Vector2<f64>, Matrix2<f64>, SMatrix<f64, 2, N_POSE>), ModelError> {
+    let (rot, drot) = (rotation.r, rotation.dr);
+    let (xy, s, q) = intersect_template_plane(&rot, t, ab)?;
+    let n = Vector3::new(ab.x, ab.y, 1.0);
+    let r3 = rot.column(2).into_owned();
+    let rt = rot.transpose();
+    let w = n * s - t;
+    // ∂P_t/∂n restricted to (a, b), and rows X, Y.
+    let dp_dn: Matrix3<f64> = rt * (Matrix3::identity() * s - n * r3.transpose() * (s / q));
+    let dxy_dab: Matrix2<f64> = dp_dn.fixed_view::<2, 2>(0, 0).into_owned();
+    let dp_dt: Matrix3<f64> = rt * (n * r3.transpose() / q - Matrix3::identity());
+    let mut wrt_pose = SMatrix::<f64, 2, N_POSE>::zeros();
+    for (i, dri) in drot.iter().enumerate() {
+        let drt_w = dri.transpose() * w;
+        let ds = -drt_w.z / q;
+        let dp = drt_w + rt * n * ds;
+        wrt_pose.set_column(i, &dp.fixed_rows::<2>(0));
+    }
+    wrt_pose
+        .fixed_view_mut::<2, 3>(0, 3)
+        .copy_from(&dp_dt.fixed_view::<2, 3>(0, 0));
+    Ok((xy, dxy_dab, wrt_pose))
 }
 
 /// Intersects the ray `s (a, b, 1)` (sensor frame) with the template plane

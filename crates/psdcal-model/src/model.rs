@@ -1,0 +1,623 @@
+//! [`Model`]: the sensor model as a chain of stages with one flat, named
+//! parameter vector (MODEL.md §8).
+//!
+//! ```text
+//! amplitudes ─[gains]─► measured m ─[s₁]─► … ─[s_K]─► ideal x ─[pinhole]─► ray (a, b)
+//! ```
+//!
+//! The gains stage is optional (present when the model owns the channel
+//! gains); the distortion stages `s₁ … s_K` are any [`Stage`]s (PSD radial,
+//! lens, a PSD map, …); the pinhole closes every chain. Parameters are named:
+//! the flat vector holds each name once, in the canonical order `f, cx, cy,
+//! skew, k1, k2, k3, p1, p2, l1, l2`, then the other stages' names in chain
+//! order, then `g_x2, g_y1, g_y2`. A stage's block is gathered from the flat
+//! vector, so stages that name the same parameter share it.
+//!
+//! Jacobians follow the chain rule: with `D_k = ∂p_k/∂p_{k−1}` and
+//! `P_k = ∂p_k/∂θ_k`, `∂x/∂θ_k = D_K ⋯ D_{k+1} P_k` (accumulated backwards, added
+//! into the flat columns of `θ_k`), `∂x/∂m = D_K ⋯ D_1`.
+//!
+//! The inverse (ideal → measured) is Newton's method on the 2×2 Jacobian with
+//! step halving, to 1e-12 mm, as for [`crate::SensorModel::distort`]; it fails
+//! with a typed error where the map folds (`det ≤ 0`) or does not converge.
+
+use nalgebra::{Matrix2, Vector2};
+
+use crate::distortion::{INVERSE_MAX_ITERATIONS, INVERSE_TOLERANCE_MM};
+use crate::params::{Param, SensorModel};
+use crate::stage::{ParameterInfo, Stage, StageJacobian};
+use crate::stages::gains::GAIN_NAMES;
+use crate::stages::{Gains, Lens, Pinhole, PsdRadial};
+use crate::{ModelError, PsdGeometry};
+
+/// The chain of stages and its parameter values.
+#[derive(Debug, Clone)]
+pub struct Model {
+    gains: Option<Gains>,
+    stages: Vec<Box<dyn Stage>>,
+    pinhole: Pinhole,
+    info: Vec<ParameterInfo>,
+    values: Vec<f64>,
+    /// Per distortion stage, the flat index of each of its parameters.
+    columns: Vec<Vec<usize>>,
+    pinhole_columns: [usize; 4],
+    gain_columns: Option<[usize; 3]>,
+    /// Per distortion stage, its block gathered from `values`.
+    blocks: Vec<Vec<f64>>,
+}
+
+impl PartialEq for Model {
+    fn eq(&self, other: &Self) -> bool {
+        self.gains == other.gains
+            && self.info == other.info
+            && self.values == other.values
+            && self.stage_kinds() == other.stage_kinds()
+    }
+}
+
+/// Jacobians of one evaluation of the chain, with the scratch space the
+/// evaluation needs (allocate once with [`Model::jacobian_buffer`], reuse per
+/// point).
+#[derive(Debug, Clone)]
+pub struct ChainJacobian {
+    /// `∂output/∂measured` (2×2).
+    pub wrt_point: Matrix2<f64>,
+    /// `∂output/∂θ` over the flat parameter vector (2×P, column-major).
+    pub wrt_params: Vec<f64>,
+    stage_input: Vec<Matrix2<f64>>,
+    stage_params: Vec<Vec<f64>>,
+    pinhole_params: [f64; 8],
+}
+
+impl ChainJacobian {
+    /// Column `k` of `∂output/∂θ`.
+    pub fn column(&self, k: usize) -> Vector2<f64> {
+        Vector2::new(self.wrt_params[2 * k], self.wrt_params[2 * k + 1])
+    }
+}
+
+/// Canonical position of the standard parameter names.
+fn canonical_rank(name: &str) -> Option<usize> {
+    Param::ALL.iter().position(|p| p.name() == name)
+}
+
+impl Model {
+    /// A model from its distortion stages (measured → ideal order) and
+    /// parameter values by name (missing names take their neutral value);
+    /// with `gains`, the model also owns the channel gains.
+    pub fn new(
+        stages: Vec<Box<dyn Stage>>,
+        gains: Option<Gains>,
+        values: &[(&str, f64)],
+    ) -> Result<Self, ModelError> {
+        let pinhole = Pinhole::new();
+        let mut info: Vec<ParameterInfo> = Vec::new();
+        let mut add = |p: &ParameterInfo| -> Result<(), ModelError> {
+            match info.iter().find(|q| q.name == p.name) {
+                Some(q) if q.unit != p.unit => Err(ModelError::InvalidModel {
+                    reason: format!(
+                        "parameter '{}' is named by two stages with different units ({} and {})",
+                        p.name, q.unit, p.unit
+                    ),
+                }),
+                Some(_) => Ok(()),
+                None => {
+                    info.push(p.clone());
+                    Ok(())
+                }
+            }
+        };
+        for stage in &stages {
+            if stage.kind() == "pinhole" {
+                return Err(ModelError::InvalidModel {
+                    reason: "the pinhole closes every chain; it is not a distortion stage".into(),
+                });
+            }
+            stage.parameters().iter().try_for_each(&mut add)?;
+        }
+        pinhole.parameters().iter().try_for_each(&mut add)?;
+        if gains.is_some() {
+            Gains::parameters().iter().try_for_each(&mut add)?;
+        }
+        // Canonical names first, then the others in chain order, gains last.
+        let chain_order: Vec<String> = info.iter().map(|p| p.name.clone()).collect();
+        info.sort_by_key(|p| {
+            let gain = GAIN_NAMES.contains(&p.name.as_str());
+            let chain = chain_order.iter().position(|n| *n == p.name).unwrap_or(0);
+            match (canonical_rank(&p.name), gain) {
+                (Some(r), _) => (0, r),
+                (None, false) => (1, chain),
+                (None, true) => (2, chain),
+            }
+        });
+        let index = |name: &str| info.iter().position(|p| p.name == name).unwrap_or(0);
+        let columns: Vec<Vec<usize>> = stages
+            .iter()
+            .map(|s| s.parameters().iter().map(|p| index(&p.name)).collect())
+            .collect();
+        let pinhole_columns = [index("f"), index("cx"), index("cy"), index("skew")];
+        let gain_columns = gains.as_ref().map(|_| {
+            [
+                index(GAIN_NAMES[0]),
+                index(GAIN_NAMES[1]),
+                index(GAIN_NAMES[2]),
+            ]
+        });
+        let mut model = Self {
+            values: info.iter().map(|p| p.neutral).collect(),
+            blocks: stages
+                .iter()
+                .map(|s| vec![0.0; s.parameters().len()])
+                .collect(),
+            gains,
+            stages,
+            pinhole,
+            info,
+            columns,
+            pinhole_columns,
+            gain_columns,
+        };
+        for (name, value) in values {
+            model.set(name, *value)?;
+        }
+        model.gather();
+        Ok(model)
+    }
+
+    /// The standard chain (PSD radial → lens → pinhole) with the values of
+    /// `sensor`.
+    pub fn standard(sensor: &SensorModel) -> Self {
+        let values: Vec<(&str, f64)> = Param::ALL
+            .iter()
+            .map(|p| (p.name(), sensor.get(*p)))
+            .collect();
+        let stages: Vec<Box<dyn Stage>> = vec![Box::new(PsdRadial::new()), Box::new(Lens::new())];
+        // The standard names always exist: this cannot fail.
+        Self::new(stages, None, &values).unwrap_or_else(|_| unreachable!())
+    }
+
+    /// The standard chain with the channel gains as its first stage.
+    pub fn standard_with_gains(
+        sensor: &SensorModel,
+        geometry: PsdGeometry,
+        gains: &crate::ChannelGains,
+    ) -> Self {
+        let mut model = Self::standard(sensor).with_stages_and_gains(Some(Gains::new(geometry)));
+        for (name, value) in GAIN_NAMES.iter().zip(gains.to_array()) {
+            let k = model.index(name).unwrap_or(0);
+            model.values[k] = value;
+        }
+        model
+    }
+
+    /// The same chain with (or without) the gains stage, values kept.
+    pub fn with_stages_and_gains(&self, gains: Option<Gains>) -> Self {
+        let values: Vec<(&str, f64)> = self
+            .info
+            .iter()
+            .zip(&self.values)
+            .filter(|(p, _)| gains.is_some() || !GAIN_NAMES.contains(&p.name.as_str()))
+            .map(|(p, v)| (p.name.as_str(), *v))
+            .collect();
+        Self::new(self.stages.clone(), gains, &values).unwrap_or_else(|_| unreachable!())
+    }
+
+    /// A copy with `stage` inserted before the distortion stage at `position`
+    /// (0: first, acting on the measured point); its parameters keep their
+    /// neutral values unless set later.
+    pub fn with_stage(&self, position: usize, stage: Box<dyn Stage>) -> Result<Self, ModelError> {
+        let mut stages = self.stages.clone();
+        stages.insert(position.min(stages.len()), stage);
+        let values: Vec<(&str, f64)> = self
+            .info
+            .iter()
+            .zip(&self.values)
+            .map(|(p, v)| (p.name.as_str(), *v))
+            .collect();
+        Self::new(stages, self.gains.clone(), &values)
+    }
+
+    /// The standard values, when every standard name is present (the values
+    /// of a chain that has other stages too).
+    pub fn sensor_model(&self) -> SensorModel {
+        let mut sensor = SensorModel::pinhole(1.0, 0.0, 0.0);
+        for p in Param::ALL {
+            sensor.set(p, self.get(p.name()).unwrap_or(0.0));
+        }
+        sensor
+    }
+
+    /// Whether the chain is exactly the standard one (PSD radial → lens).
+    pub fn is_standard(&self) -> bool {
+        self.stage_kinds() == ["psd_radial", "lens"]
+    }
+
+    /// The channel gains of the model, when it owns them.
+    pub fn gains(&self) -> Option<crate::ChannelGains> {
+        self.gain_columns.map(|c| crate::ChannelGains {
+            x2: self.values[c[0]],
+            y1: self.values[c[1]],
+            y2: self.values[c[2]],
+        })
+    }
+
+    /// The gains stage, when the model owns the gains.
+    pub fn gains_stage(&self) -> Option<&Gains> {
+        self.gains.as_ref()
+    }
+
+    /// Flat indices of `g_x2, g_y1, g_y2`, when the model owns the gains.
+    pub fn gain_columns(&self) -> Option<[usize; 3]> {
+        self.gain_columns
+    }
+
+    /// The distortion stages, measured → ideal.
+    pub fn stages(&self) -> &[Box<dyn Stage>] {
+        &self.stages
+    }
+
+    /// Kinds of the distortion stages, measured → ideal.
+    pub fn stage_kinds(&self) -> Vec<&str> {
+        self.stages.iter().map(|s| s.kind()).collect()
+    }
+
+    /// Flat indices of distortion stage `k`'s parameters.
+    pub fn stage_columns(&self, k: usize) -> &[usize] {
+        &self.columns[k]
+    }
+
+    /// Flat indices of the pinhole's `f, cx, cy, skew`.
+    pub fn pinhole_columns(&self) -> [usize; 4] {
+        self.pinhole_columns
+    }
+
+    /// Number of parameters.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Whether the model has no parameter (never: the pinhole has four).
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
+    /// Every parameter's description, in flat order.
+    pub fn parameters(&self) -> &[ParameterInfo] {
+        &self.info
+    }
+
+    /// Parameter names in flat order.
+    pub fn names(&self) -> Vec<&str> {
+        self.info.iter().map(|p| p.name.as_str()).collect()
+    }
+
+    /// The flat parameter vector.
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// Flat index of a parameter.
+    pub fn index(&self, name: &str) -> Option<usize> {
+        self.info.iter().position(|p| p.name == name)
+    }
+
+    /// A parameter's value.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.index(name).map(|k| self.values[k])
+    }
+
+    /// Sets a parameter by name.
+    pub fn set(&mut self, name: &str, value: f64) -> Result<(), ModelError> {
+        let k = self.index(name).ok_or_else(|| ModelError::InvalidModel {
+            reason: format!(
+                "the model has no parameter '{name}' (it has {})",
+                self.names().join(", ")
+            ),
+        })?;
+        self.values[k] = value;
+        self.gather();
+        Ok(())
+    }
+
+    /// Replaces the flat vector (same length).
+    pub fn set_values(&mut self, values: &[f64]) {
+        self.values.copy_from_slice(values);
+        self.gather();
+    }
+
+    /// A copy with the flat vector changed by `delta` at `columns`.
+    pub fn stepped(&self, columns: &[usize], delta: &[f64]) -> Self {
+        let mut next = self.clone();
+        for (c, d) in columns.iter().zip(delta) {
+            next.values[*c] += d;
+        }
+        next.gather();
+        next
+    }
+
+    fn gather(&mut self) {
+        for (block, cols) in self.blocks.iter_mut().zip(&self.columns) {
+            for (b, c) in block.iter_mut().zip(cols) {
+                *b = self.values[*c];
+            }
+        }
+    }
+
+    /// Checks every stage's block (finite values, `f > 0`, positive gains).
+    pub fn validate(&self) -> Result<(), ModelError> {
+        for (stage, block) in self.stages.iter().zip(&self.blocks) {
+            stage.validate(block)?;
+        }
+        self.pinhole.validate(&self.pinhole_block())?;
+        if let Some(g) = self.gains() {
+            g.validate()?;
+        }
+        Ok(())
+    }
+
+    fn pinhole_block(&self) -> [f64; 4] {
+        self.pinhole_columns.map(|c| self.values[c])
+    }
+
+    fn pinhole_intrinsics(&self) -> crate::stages::pinhole::PinholeIntrinsics {
+        let [f, cx, cy, skew] = self.pinhole_block();
+        crate::stages::pinhole::PinholeIntrinsics {
+            f,
+            c: Vector2::new(cx, cy),
+            skew,
+        }
+    }
+
+    /// A buffer for [`Self::ray_with_jacobians`] and
+    /// [`Self::ideal_with_jacobians`].
+    pub fn jacobian_buffer(&self) -> ChainJacobian {
+        ChainJacobian {
+            wrt_point: Matrix2::identity(),
+            wrt_params: vec![0.0; 2 * self.len()],
+            stage_input: vec![Matrix2::identity(); self.stages.len()],
+            stage_params: self.blocks.iter().map(|b| vec![0.0; 2 * b.len()]).collect(),
+            pinhole_params: [0.0; 8],
+        }
+    }
+
+    /// The measured point of electrode amplitudes through the gains stage
+    /// (the model must own the gains).
+    pub fn measured_from_amplitudes(
+        &self,
+        amplitudes: &crate::Amplitudes,
+    ) -> Result<Vector2<f64>, ModelError> {
+        let (stage, cols) = self.gain_stage()?;
+        stage.apply(&cols.map(|c| self.values[c]), amplitudes)
+    }
+
+    /// [`Self::measured_from_amplitudes`] with `∂m/∂(g_x2, g_y1, g_y2)`.
+    pub fn measured_from_amplitudes_with_jacobian(
+        &self,
+        amplitudes: &crate::Amplitudes,
+    ) -> Result<(Vector2<f64>, nalgebra::Matrix2x3<f64>), ModelError> {
+        let (stage, cols) = self.gain_stage()?;
+        stage.apply_with_jacobian(&cols.map(|c| self.values[c]), amplitudes)
+    }
+
+    fn gain_stage(&self) -> Result<(&Gains, [usize; 3]), ModelError> {
+        match (&self.gains, self.gain_columns) {
+            (Some(g), Some(c)) => Ok((g, c)),
+            _ => Err(ModelError::InvalidModel {
+                reason: "the model has no gains stage".into(),
+            }),
+        }
+    }
+
+    /// The ideal point of a measured point.
+    pub fn ideal(&self, measured: &Vector2<f64>) -> Vector2<f64> {
+        let mut p = *measured;
+        for (stage, block) in self.stages.iter().zip(&self.blocks) {
+            p = stage.apply(block, &p, None);
+        }
+        p
+    }
+
+    /// The normalised ray `(a, b)` of a measured point.
+    pub fn ray(&self, measured: &Vector2<f64>) -> Vector2<f64> {
+        Pinhole::eval(&self.pinhole_intrinsics(), &self.ideal(measured), None)
+    }
+
+    /// The normalised ray of an ideal point.
+    pub fn ray_of_ideal(&self, ideal: &Vector2<f64>) -> Vector2<f64> {
+        Pinhole::eval(&self.pinhole_intrinsics(), ideal, None)
+    }
+
+    /// The ideal point on the ray `(a, b, 1)`: `x = f a + γ b + cx`,
+    /// `y = f b + cy` (P4).
+    pub fn ideal_of_ray(&self, ab: &Vector2<f64>) -> Vector2<f64> {
+        let k = self.pinhole_intrinsics();
+        Vector2::new(k.f * ab.x + k.skew * ab.y + k.c.x, k.f * ab.y + k.c.y)
+    }
+
+    /// The ideal point with its Jacobians (written into `jac`).
+    pub fn ideal_with_jacobians(
+        &self,
+        measured: &Vector2<f64>,
+        jac: &mut ChainJacobian,
+    ) -> Vector2<f64> {
+        jac.wrt_params.iter_mut().for_each(|v| *v = 0.0);
+        let mut p = *measured;
+        for (k, (stage, block)) in self.stages.iter().zip(&self.blocks).enumerate() {
+            let stage_jacobian = StageJacobian {
+                wrt_input: &mut jac.stage_input[k],
+                wrt_params: &mut jac.stage_params[k],
+            };
+            p = stage.apply(block, &p, Some(stage_jacobian));
+        }
+        let mut m = Matrix2::identity();
+        for k in (0..self.stages.len()).rev() {
+            let stage_params = &jac.stage_params[k];
+            for (j, c) in self.columns[k].iter().enumerate() {
+                let column = m * Vector2::new(stage_params[2 * j], stage_params[2 * j + 1]);
+                jac.wrt_params[2 * c] += column.x;
+                jac.wrt_params[2 * c + 1] += column.y;
+            }
+            m *= jac.stage_input[k];
+        }
+        jac.wrt_point = m;
+        p
+    }
+
+    /// The normalised ray with its Jacobians (written into `jac`).
+    pub fn ray_with_jacobians(
+        &self,
+        measured: &Vector2<f64>,
+        jac: &mut ChainJacobian,
+    ) -> Vector2<f64> {
+        let ideal = self.ideal_with_jacobians(measured, jac);
+        let mut dp = Matrix2::zeros();
+        let ab = Pinhole::eval(
+            &self.pinhole_intrinsics(),
+            &ideal,
+            Some((&mut dp, &mut jac.pinhole_params)),
+        );
+        for k in 0..self.len() {
+            let column = dp * Vector2::new(jac.wrt_params[2 * k], jac.wrt_params[2 * k + 1]);
+            jac.wrt_params[2 * k] = column.x;
+            jac.wrt_params[2 * k + 1] = column.y;
+        }
+        for (j, c) in self.pinhole_columns.iter().enumerate() {
+            jac.wrt_params[2 * c] += jac.pinhole_params[2 * j];
+            jac.wrt_params[2 * c + 1] += jac.pinhole_params[2 * j + 1];
+        }
+        jac.wrt_point = dp * jac.wrt_point;
+        ab
+    }
+
+    /// `∂ideal/∂measured` at a point.
+    pub fn ideal_point_jacobian(&self, measured: &Vector2<f64>) -> Matrix2<f64> {
+        let mut m = Matrix2::identity();
+        let mut p = *measured;
+        let mut scratch = Vec::new();
+        for (stage, block) in self.stages.iter().zip(&self.blocks) {
+            let mut d = Matrix2::identity();
+            scratch.resize(2 * block.len(), 0.0);
+            p = stage.apply(
+                block,
+                &p,
+                Some(StageJacobian {
+                    wrt_input: &mut d,
+                    wrt_params: &mut scratch,
+                }),
+            );
+            m = d * m;
+        }
+        m
+    }
+
+    /// Whether every distortion coefficient is zero (the chain is the
+    /// identity up to the pinhole): checked through the stages' neutral
+    /// values.
+    fn distortion_is_identity(&self) -> bool {
+        self.stages.iter().zip(&self.blocks).all(|(stage, block)| {
+            stage
+                .parameters()
+                .iter()
+                .zip(block)
+                .all(|(p, v)| p.name == "cx" || p.name == "cy" || *v == p.neutral)
+        })
+    }
+
+    /// The measured point whose ideal point is `ideal` (Newton, 1e-12 mm).
+    pub fn measured_from_ideal(&self, ideal: &Vector2<f64>) -> Result<Vector2<f64>, ModelError> {
+        if !(ideal.x.is_finite() && ideal.y.is_finite()) {
+            return Err(ModelError::NonFinite {
+                what: "ideal point",
+            });
+        }
+        if self.distortion_is_identity() {
+            return Ok(*ideal);
+        }
+        let mut m = *ideal;
+        let mut residual = self.ideal(&m) - ideal;
+        let mut last_step = f64::INFINITY;
+        for iteration in 0..INVERSE_MAX_ITERATIONS {
+            if residual.norm() <= INVERSE_TOLERANCE_MM {
+                return self.check_valid(self.polish(m, ideal, residual));
+            }
+            let jac = self.ideal_point_jacobian(&m);
+            let det = jac.determinant();
+            if det.is_nan() || det <= 1e-12 {
+                return Err(ModelError::SingularDistortion {
+                    x: m.x,
+                    y: m.y,
+                    det,
+                });
+            }
+            let step =
+                Matrix2::new(jac[(1, 1)], -jac[(0, 1)], -jac[(1, 0)], jac[(0, 0)]) * residual / det;
+            // Step halving keeps the iteration on the branch it started on.
+            let mut alpha = 1.0;
+            loop {
+                let candidate = m - step * alpha;
+                let r = self.ideal(&candidate) - ideal;
+                if r.norm() < residual.norm() || alpha < 1e-6 {
+                    m = candidate;
+                    residual = r;
+                    last_step = step.norm() * alpha;
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            if !(m.x.is_finite() && m.y.is_finite()) {
+                return Err(ModelError::DistortionNotConverged {
+                    x: ideal.x,
+                    y: ideal.y,
+                    iterations: iteration + 1,
+                    last_step,
+                });
+            }
+        }
+        if residual.norm() <= INVERSE_TOLERANCE_MM {
+            return self.check_valid(m);
+        }
+        Err(ModelError::DistortionNotConverged {
+            x: ideal.x,
+            y: ideal.y,
+            iterations: INVERSE_MAX_ITERATIONS,
+            last_step,
+        })
+    }
+
+    /// One more Newton step from a converged `m`, kept when it lowers the
+    /// residual: the inverse is then exact to rounding, so that its
+    /// derivatives (implicit function theorem) match finite differences even
+    /// for distortions below the 1e-12 mm tolerance.
+    fn polish(
+        &self,
+        m: Vector2<f64>,
+        ideal: &Vector2<f64>,
+        residual: Vector2<f64>,
+    ) -> Vector2<f64> {
+        if residual == Vector2::zeros() {
+            return m;
+        }
+        let Some(inv) = self.ideal_point_jacobian(&m).try_inverse() else {
+            return m;
+        };
+        let candidate = m - inv * residual;
+        if (self.ideal(&candidate) - ideal).norm() < residual.norm() {
+            candidate
+        } else {
+            m
+        }
+    }
+
+    fn check_valid(&self, m: Vector2<f64>) -> Result<Vector2<f64>, ModelError> {
+        let det = self.ideal_point_jacobian(&m).determinant();
+        if det > 1e-12 {
+            Ok(m)
+        } else {
+            Err(ModelError::SingularDistortion {
+                x: m.x,
+                y: m.y,
+                det,
+            })
+        }
+    }
+}

@@ -1,0 +1,131 @@
+//! Template plane ↔ measured point through a [`Model`] chain (MODEL.md §3–4,
+//! the paper's (P5), (P15)–(P16) and the template-plane residual of (P29)),
+//! with Jacobians with respect to the flat parameter vector, the pose and the
+//! point.
+//!
+//! *Back-projection* (measured → template): the chain gives the ray `(a, b)`;
+//! the ray is cut with the template plane `Z_t = 0` of the pose
+//! ([`crate::projection::plane_intersection_with_jacobians`]):
+//! `∂XY/∂θ = ∂XY/∂(a,b) · ∂(a,b)/∂θ`.
+//!
+//! *Projection* (template → measured): `P_c = R P_t + t`, `(a, b) = (Xc, Yc)/Zc`,
+//! the ideal point `x = f a + γ b + cx`, `y = f b + cy` (P4), and the measured
+//! point `m` solving `ideal(m) = x` (Newton). By the implicit function theorem
+//! on `ray(m; θ) = n(pose, P_t)`: with `R_m = ∂ray/∂m`,
+//! `∂m/∂θ = −R_m⁻¹ ∂ray/∂θ`, `∂m/∂pose = R_m⁻¹ ∂n/∂pose`,
+//! `∂m/∂P_t = R_m⁻¹ ∂n/∂P_t`.
+
+use nalgebra::{Matrix2, Matrix2x3, SMatrix, Vector2, Vector3};
+
+use crate::camera::MIN_DEPTH_MM;
+use crate::model::{ChainJacobian, Model};
+use crate::pose::{Pose, RotationJacobian, N_POSE};
+use crate::projection::plane_intersection_with_jacobians;
+use crate::ModelError;
+
+/// Jacobians of a point computed through the chain with a pose. The flat
+/// parameter columns live in the [`ChainJacobian`] passed along.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseJacobians {
+    /// With respect to the pose `(rvec, t)` (2×6).
+    pub wrt_pose: SMatrix<f64, 2, N_POSE>,
+    /// With respect to the input point (measured point for a back-projection,
+    /// template `(X, Y)` for a projection) (2×2).
+    pub wrt_point: Matrix2<f64>,
+}
+
+impl Model {
+    /// The template-plane point whose ray passes through `measured`.
+    pub fn back_project(
+        &self,
+        sensor_from_template: &Pose,
+        measured: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
+        let ab = self.ray(measured);
+        let rotation = sensor_from_template.rotation_jacobian();
+        plane_intersection_with_jacobians(&rotation, &sensor_from_template.t, &ab).map(|r| r.0)
+    }
+
+    /// Back-projection with its Jacobians: `jac.wrt_params` becomes
+    /// `∂XY/∂θ` (2×P) and `jac.wrt_point` is left as `∂ray/∂m`.
+    pub fn back_project_with_jacobians(
+        &self,
+        sensor_from_template: &Pose,
+        rotation: &RotationJacobian,
+        measured: &Vector2<f64>,
+        jac: &mut ChainJacobian,
+    ) -> Result<(Vector2<f64>, PoseJacobians), ModelError> {
+        let ab = self.ray_with_jacobians(measured, jac);
+        let (xy, dxy_dab, wrt_pose) =
+            plane_intersection_with_jacobians(rotation, &sensor_from_template.t, &ab)?;
+        left_multiply(&dxy_dab, &mut jac.wrt_params);
+        Ok((
+            xy,
+            PoseJacobians {
+                wrt_pose,
+                wrt_point: dxy_dab * jac.wrt_point,
+            },
+        ))
+    }
+
+    /// The measured point of template point `(X, Y)` in pose
+    /// `sensor_from_template`.
+    pub fn project(
+        &self,
+        sensor_from_template: &Pose,
+        template_xy: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
+        let p_c = sensor_from_template.transform(&Vector3::new(template_xy.x, template_xy.y, 0.0));
+        let ab = normalised(&p_c)?;
+        self.measured_from_ideal(&self.ideal_of_ray(&ab))
+    }
+
+    /// Projection with its Jacobians: `jac.wrt_params` becomes `∂m/∂θ` (2×P).
+    pub fn project_with_jacobians(
+        &self,
+        sensor_from_template: &Pose,
+        rotation: &RotationJacobian,
+        template_xy: &Vector2<f64>,
+        jac: &mut ChainJacobian,
+    ) -> Result<(Vector2<f64>, PoseJacobians), ModelError> {
+        let p_t = Vector3::new(template_xy.x, template_xy.y, 0.0);
+        let (p_c, dpc_dpose, rot) =
+            sensor_from_template.transform_with_jacobians_using(rotation, &p_t);
+        let ab = normalised(&p_c)?;
+        let measured = self.measured_from_ideal(&self.ideal_of_ray(&ab))?;
+        self.ray_with_jacobians(&measured, jac);
+        let r_m = jac.wrt_point;
+        let inv = r_m.try_inverse().ok_or(ModelError::SingularDistortion {
+            x: measured.x,
+            y: measured.y,
+            det: r_m.determinant(),
+        })?;
+        left_multiply(&(-inv), &mut jac.wrt_params);
+        let inv_z = 1.0 / p_c.z;
+        let dn_dpc = Matrix2x3::new(inv_z, 0.0, -ab.x * inv_z, 0.0, inv_z, -ab.y * inv_z);
+        Ok((
+            measured,
+            PoseJacobians {
+                wrt_pose: inv * dn_dpc * dpc_dpose,
+                wrt_point: inv * dn_dpc * rot.fixed_view::<3, 2>(0, 0),
+            },
+        ))
+    }
+}
+
+/// `(Xc/Zc, Yc/Zc)` of a point in front of the sensor.
+fn normalised(p_c: &Vector3<f64>) -> Result<Vector2<f64>, ModelError> {
+    if p_c.z.is_nan() || p_c.z <= MIN_DEPTH_MM {
+        return Err(ModelError::BehindSensor { zc: p_c.z });
+    }
+    Ok(Vector2::new(p_c.x / p_c.z, p_c.y / p_c.z))
+}
+
+/// `J ← M J` for a 2×P column-major `J`.
+fn left_multiply(m: &Matrix2<f64>, jac: &mut [f64]) {
+    for column in jac.chunks_exact_mut(2) {
+        let v = m * Vector2::new(column[0], column[1]);
+        column[0] = v.x;
+        column[1] = v.y;
+    }
+}

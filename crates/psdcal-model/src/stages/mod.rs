@@ -1,0 +1,26 @@
+//! The stages of the standard model (MODEL.md §2–3, §8), one file each:
+//! [`PsdRadial`] (P14)–(P16), [`Lens`] (P7)–(P13), [`Pinhole`] (P4), and the
+//! channel gains on the amplitudes (P1)–(P2), (P43) in [`gains`].
+
+pub mod gains;
+pub mod lens;
+pub mod pinhole;
+pub mod psd_radial;
+
+pub use gains::Gains;
+pub use lens::Lens;
+pub use pinhole::Pinhole;
+pub use psd_radial::PsdRadial;
+
+use crate::stage::Stage;
+
+/// A stage of a standard kind by its identifier (`psd_radial`, `lens`,
+/// `pinhole`); `None` for any other kind.
+pub fn standard_stage(kind: &str) -> Option<Box<dyn Stage>> {
+    match kind {
+        "psd_radial" => Some(Box::new(PsdRadial::new())),
+        "lens" => Some(Box::new(Lens::new())),
+        "pinhole" => Some(Box::new(Pinhole::new())),
+        _ => None,
+    }
+}

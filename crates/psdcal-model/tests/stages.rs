@@ -1,0 +1,387 @@
+//! The shared stage suite (MODEL.md §8): every stage in [`all_stages`] is
+//! checked, over each of its example parameter blocks and points across the
+//! active area, for its Jacobians with respect to the input point and to its
+//! parameters against central finite differences; every chain built from
+//! the examples for its round trip (measured → ideal → measured) and for
+//! the Jacobians of the ray, the back-projection and the projection. Adding
+//! a stage to [`all_stages`] puts it under all of these tests.
+
+mod common;
+#[path = "common/poly_stage.rs"]
+mod poly_stage;
+
+use common::{
+    check_jacobian, check_jacobian_with_floor, example_poses, example_template_points, POSE_SCALES,
+};
+use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+use poly_stage::PolyField;
+use psdcal_model::stages::{Gains, Lens, Pinhole, PsdRadial};
+use psdcal_model::{
+    Amplitudes, ChannelGains, Model, Pose, PsdGeometry, SensorModel, Stage, StageJacobian,
+};
+
+const REL: f64 = 1e-6;
+
+/// Every stage under test: the standard ones and the test-only stage with a
+/// 200-coefficient block.
+fn all_stages() -> Vec<Box<dyn Stage>> {
+    vec![
+        Box::new(PsdRadial::new()),
+        Box::new(Lens::new()),
+        Box::new(Pinhole::new()),
+        Box::new(PolyField::new(10, 4.5)),
+    ]
+}
+
+fn points() -> Vec<Vector2<f64>> {
+    let mut p = vec![Vector2::new(0.0, 0.0), Vector2::new(1e-7, -2e-7)];
+    for i in -2..=2 {
+        for j in -2..=2 {
+            p.push(Vector2::new(2.1 * i as f64 + 0.13, 2.05 * j as f64 - 0.07));
+        }
+    }
+    p
+}
+
+fn dv(v: Vector2<f64>) -> DVector<f64> {
+    DVector::from_row_slice(v.as_slice())
+}
+
+#[test]
+fn every_stage_has_a_consistent_block_and_examples() {
+    for stage in all_stages() {
+        let n = stage.parameters().len();
+        assert!(n > 0, "{}", stage.kind());
+        let examples = stage.example_parameters();
+        assert!(
+            examples.len() >= 2,
+            "{}: at least two examples",
+            stage.kind()
+        );
+        for block in &examples {
+            assert_eq!(block.len(), n, "{}: example length", stage.kind());
+            stage.validate(block).unwrap();
+        }
+        let mut bad = examples[0].clone();
+        bad[n - 1] = f64::NAN;
+        assert!(
+            stage.validate(&bad).is_err(),
+            "{}: NaN refused",
+            stage.kind()
+        );
+    }
+}
+
+#[test]
+fn stage_jacobians_match_finite_differences() {
+    for stage in all_stages() {
+        let n = stage.parameters().len();
+        let scales: Vec<f64> = stage.parameters().iter().map(|p| p.scale).collect();
+        for (e, block) in stage.example_parameters().iter().enumerate() {
+            for p in points() {
+                let name = format!("{} example {e} at {p:?}", stage.kind());
+                let mut d_in = Matrix2::zeros();
+                let mut d_par = vec![0.0; 2 * n];
+                let out = stage.apply(
+                    block,
+                    &p,
+                    Some(StageJacobian {
+                        wrt_input: &mut d_in,
+                        wrt_params: &mut d_par,
+                    }),
+                );
+                assert_eq!(
+                    out,
+                    stage.apply(block, &p, None),
+                    "{name}: same value with Jacobians"
+                );
+                check_jacobian(
+                    &format!("{name} wrt input"),
+                    &dv(p),
+                    &[1.0, 1.0],
+                    &|x| dv(stage.apply(block, &Vector2::new(x[0], x[1]), None)),
+                    &DMatrix::from_column_slice(2, 2, d_in.as_slice()),
+                    REL,
+                );
+                // Floor: the rounding of a central difference with a scaled
+                // step of 1e-5 on an output of size |out| (≈ 2ε|out|/1e-5),
+                // for columns that vanish at the point.
+                check_jacobian_with_floor(
+                    &format!("{name} wrt parameters"),
+                    &DVector::from_row_slice(block),
+                    &scales,
+                    &|x| dv(stage.apply(x.as_slice(), &p, None)),
+                    &DMatrix::from_column_slice(2, n, &d_par),
+                    REL,
+                    1e-10 * out.norm().max(1.0),
+                );
+            }
+        }
+    }
+}
+
+/// Chains built from the distortion stages' examples (the pinhole's first
+/// example block: f = 8 mm, centre from the lens).
+fn example_chains() -> Vec<(String, Model)> {
+    let mut chains = Vec::new();
+    for stage in all_stages().into_iter().filter(|s| s.kind() != "pinhole") {
+        for (e, block) in stage.example_parameters().into_iter().enumerate() {
+            for extra in [false, true] {
+                // Alone, or after the paper's PSD and lens-2 distortion.
+                let mut stages: Vec<Box<dyn Stage>> = vec![stage.clone_box()];
+                let mut values: Vec<(String, f64)> = stage
+                    .parameters()
+                    .iter()
+                    .zip(&block)
+                    .map(|(p, v)| (p.name.clone(), *v))
+                    .collect();
+                if extra && stage.kind() != "lens" {
+                    stages.push(Box::new(Lens::new()));
+                    for (name, v) in [("cx", 0.5), ("cy", -0.7), ("k1", 1e-2), ("k2", 3e-5)] {
+                        if !values.iter().any(|(n, _)| n == name) {
+                            values.push((name.into(), v));
+                        }
+                    }
+                } else if extra {
+                    stages.insert(0, Box::new(PsdRadial::new()));
+                    values.push(("l1".into(), SensorModel::PAPER_L1));
+                }
+                values.push(("f".into(), 8.0));
+                let named: Vec<(&str, f64)> =
+                    values.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+                let model = Model::new(stages, None, &named).unwrap();
+                chains.push((format!("{} example {e} extra {extra}", stage.kind()), model));
+            }
+        }
+    }
+    chains
+}
+
+fn model_vector(model: &Model) -> DVector<f64> {
+    DVector::from_row_slice(model.values())
+}
+
+fn with_values(model: &Model, x: &DVector<f64>) -> Model {
+    let mut m = model.clone();
+    m.set_values(x.as_slice());
+    m
+}
+
+fn scales(model: &Model) -> Vec<f64> {
+    model.parameters().iter().map(|p| p.scale).collect()
+}
+
+#[test]
+fn chains_round_trip_measured_ideal_measured() {
+    for (name, model) in example_chains() {
+        for m in points() {
+            let ideal = model.ideal(&m);
+            let back = model.measured_from_ideal(&ideal).unwrap();
+            assert!((back - m).norm() < 1e-10, "{name} at {m:?}: {back:?}");
+            let ab = model.ray(&m);
+            assert!((model.ideal_of_ray(&ab) - ideal).norm() < 1e-12, "{name}");
+        }
+    }
+}
+
+#[test]
+fn chain_ray_jacobians_match_finite_differences() {
+    for (name, model) in example_chains() {
+        let mut jac = model.jacobian_buffer();
+        for m in points() {
+            let ab = model.ray_with_jacobians(&m, &mut jac);
+            assert_eq!(ab, model.ray(&m), "{name}");
+            check_jacobian(
+                &format!("ray wrt point [{name} {m:?}]"),
+                &dv(m),
+                &[1.0, 1.0],
+                &|x| dv(model.ray(&Vector2::new(x[0], x[1]))),
+                &DMatrix::from_column_slice(2, 2, jac.wrt_point.as_slice()),
+                REL,
+            );
+            check_jacobian(
+                &format!("ray wrt parameters [{name} {m:?}]"),
+                &model_vector(&model),
+                &scales(&model),
+                &|x| dv(with_values(&model, x).ray(&m)),
+                &DMatrix::from_column_slice(2, model.len(), &jac.wrt_params),
+                REL,
+            );
+        }
+    }
+}
+
+fn pose_vector(p: &Pose) -> DVector<f64> {
+    DVector::from_row_slice(&p.to_array())
+}
+
+fn pose_of(x: &DVector<f64>) -> Pose {
+    let mut a = [0.0; 6];
+    a.copy_from_slice(x.as_slice());
+    Pose::from_array(&a)
+}
+
+#[test]
+fn chain_projection_jacobians_match_finite_differences() {
+    for (name, model) in example_chains() {
+        let mut jac = model.jacobian_buffer();
+        for pose in example_poses() {
+            let rotation = pose.rotation_jacobian();
+            for xy in example_template_points() {
+                let Ok(m) = model.project(&pose, &xy) else {
+                    continue;
+                };
+                let (m2, j) = model
+                    .project_with_jacobians(&pose, &rotation, &xy, &mut jac)
+                    .unwrap();
+                assert!((m2 - m).norm() == 0.0);
+                let back = model.back_project(&pose, &m).unwrap();
+                assert!(
+                    (back - xy).norm() < 1e-8,
+                    "{name}: round trip {back:?} vs {xy:?}"
+                );
+                let label = format!("[{name} {xy:?} {:?}]", pose.t);
+                check_jacobian(
+                    &format!("project wrt parameters {label}"),
+                    &model_vector(&model),
+                    &scales(&model),
+                    &|x| dv(with_values(&model, x).project(&pose, &xy).unwrap()),
+                    &DMatrix::from_column_slice(2, model.len(), &jac.wrt_params),
+                    REL,
+                );
+                check_jacobian(
+                    &format!("project wrt pose {label}"),
+                    &pose_vector(&pose),
+                    &POSE_SCALES,
+                    &|x| dv(model.project(&pose_of(x), &xy).unwrap()),
+                    &DMatrix::from_column_slice(2, 6, j.wrt_pose.as_slice()),
+                    REL,
+                );
+                check_jacobian(
+                    &format!("project wrt template {label}"),
+                    &dv(xy),
+                    &[100.0, 100.0],
+                    &|x| dv(model.project(&pose, &Vector2::new(x[0], x[1])).unwrap()),
+                    &DMatrix::from_column_slice(2, 2, j.wrt_point.as_slice()),
+                    REL,
+                );
+                let (_, jb) = model
+                    .back_project_with_jacobians(&pose, &rotation, &m, &mut jac)
+                    .unwrap();
+                check_jacobian(
+                    &format!("back-project wrt parameters {label}"),
+                    &model_vector(&model),
+                    &scales(&model),
+                    &|x| dv(with_values(&model, x).back_project(&pose, &m).unwrap()),
+                    &DMatrix::from_column_slice(2, model.len(), &jac.wrt_params),
+                    REL,
+                );
+                check_jacobian(
+                    &format!("back-project wrt pose {label}"),
+                    &pose_vector(&pose),
+                    &POSE_SCALES,
+                    &|x| dv(model.back_project(&pose_of(x), &m).unwrap()),
+                    &DMatrix::from_column_slice(2, 6, jb.wrt_pose.as_slice()),
+                    REL,
+                );
+                check_jacobian(
+                    &format!("back-project wrt point {label}"),
+                    &dv(m),
+                    &[1.0, 1.0],
+                    &|x| {
+                        dv(model
+                            .back_project(&pose, &Vector2::new(x[0], x[1]))
+                            .unwrap())
+                    },
+                    &DMatrix::from_column_slice(2, 2, jb.wrt_point.as_slice()),
+                    REL,
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_standard_chain_agrees_with_the_sensor_model() {
+    for (name, sensor) in common::example_models() {
+        let model = Model::standard(&sensor);
+        assert_eq!(model.sensor_model(), sensor, "{name}");
+        for m in points() {
+            assert!(
+                (model.ideal(&m) - sensor.undistort(&m)).norm() == 0.0,
+                "{name}"
+            );
+            assert!((model.ray(&m) - sensor.normalize(&sensor.undistort(&m))).norm() == 0.0);
+        }
+        for pose in example_poses() {
+            for xy in example_template_points() {
+                if let (Ok(a), Ok(b)) = (model.project(&pose, &xy), sensor.project(&pose, &xy)) {
+                    assert!((a - b).norm() < 1e-12, "{name}: {a:?} vs {b:?}");
+                    let ba = model.back_project(&pose, &a).unwrap();
+                    let bb = sensor.back_project(&pose, &a).unwrap();
+                    assert!((ba - bb).norm() < 1e-9, "{name}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn gains_stage_jacobian_matches_finite_differences() {
+    let geometry = PsdGeometry::default();
+    let stage = Gains::new(geometry);
+    let amps = [
+        Amplitudes {
+            vx1: 1.0,
+            vx2: 1.2,
+            vy1: 0.9,
+            vy2: 1.1,
+        },
+        Amplitudes {
+            vx1: 0.2,
+            vx2: 2.0,
+            vy1: 0.7,
+            vy2: 0.4,
+        },
+    ];
+    for block in Gains::example_parameters() {
+        for a in &amps {
+            let (p, j) = stage.apply_with_jacobian(&block, a).unwrap();
+            assert_eq!(p, stage.apply(&block, a).unwrap());
+            check_jacobian(
+                "gains wrt parameters",
+                &DVector::from_row_slice(&block),
+                &[1e-2; 3],
+                &|x| dv(stage.apply(x.as_slice(), a).unwrap()),
+                &DMatrix::from_column_slice(2, 3, j.as_slice()),
+                REL,
+            );
+        }
+    }
+    let model = Model::standard_with_gains(
+        &SensorModel::paper_lens2(),
+        geometry,
+        &ChannelGains {
+            x2: 1.01,
+            y1: 0.99,
+            y2: 1.02,
+        },
+    );
+    assert_eq!(model.names()[11..], ["g_x2", "g_y1", "g_y2"]);
+    assert_eq!(model.gains().unwrap().y2, 1.02);
+}
+
+#[test]
+fn a_parameter_shared_by_two_stages_is_one_column() {
+    let model = Model::standard(&SensorModel::paper_lens2());
+    assert_eq!(
+        model.names(),
+        ["f", "cx", "cy", "skew", "k1", "k2", "k3", "p1", "p2", "l1", "l2"]
+    );
+    let big = model
+        .with_stage(0, Box::new(PolyField::new(10, 4.5)))
+        .unwrap();
+    assert_eq!(big.len(), 211);
+    assert_eq!(big.stage_kinds(), ["test_poly_field", "psd_radial", "lens"]);
+    assert!(Model::new(vec![Box::new(Pinhole::new())], None, &[]).is_err());
+}
