@@ -20,7 +20,7 @@ fn paper_size(c: &mut Criterion) {
     let (m0, p0) = support::perturbed(&truth, &s.poses);
     let options = RefineOptions::default();
     c.bench_function("refine 9x14 lens2 f,cx,cy,k1,k2", |b| {
-        b.iter(|| refine(black_box(&s.data), &m0, &p0, &options).unwrap())
+        b.iter(|| refine(black_box(&s.data), m0, &p0, &options).unwrap())
     });
     // Noise-weighted (per-channel SNR): whitening plus reweighting passes.
     let weighted = RefineOptions {
@@ -28,7 +28,7 @@ fn paper_size(c: &mut Criterion) {
         ..RefineOptions::default()
     };
     c.bench_function("refine 9x14 lens2 channel-snr weighted", |b| {
-        b.iter(|| refine(black_box(&s.data), &m0, &p0, &weighted).unwrap())
+        b.iter(|| refine(black_box(&s.data), m0, &p0, &weighted).unwrap())
     });
     let mut truth_psd = truth;
     truth_psd.distortion.l1 = SensorModel::PAPER_L1;
@@ -48,7 +48,7 @@ fn paper_size(c: &mut Criterion) {
     };
     let global = GlobalOptions::default();
     c.bench_function("refine_global 9x14 lens2 +l1", |b| {
-        b.iter(|| refine_global(black_box(&s.data), &m0, &p0, &options, &global).unwrap())
+        b.iter(|| refine_global(black_box(&s.data), m0, &p0, &options, &global).unwrap())
     });
 }
 
@@ -62,7 +62,7 @@ fn scaling(c: &mut Criterion) {
         let options = RefineOptions::default();
         group.throughput(Throughput::Elements(n as u64));
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
-            b.iter(|| refine(black_box(&s.data), &m0, &p0, &options).unwrap())
+            b.iter(|| refine(black_box(&s.data), m0, &p0, &options).unwrap())
         });
     }
     group.finish();

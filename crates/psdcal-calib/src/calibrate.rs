@@ -14,17 +14,18 @@
 //! so is a fit whose focal length has a standard deviation above
 //! [`MAX_RELATIVE_STD_F`] of its value (nearly parallel template poses).
 
-use psdcal_model::{ChannelGains, Param, Pose, SensorModel};
+use psdcal_model::stages::gains::GAIN_NAMES;
+use psdcal_model::{ChannelGains, Model, Param, Pose, SensorModel};
 use serde::Serialize;
 
-use crate::covariance::{covariance_with_gains, Covariance};
+use crate::covariance::{covariance, Covariance};
 use crate::data::CalibrationData;
 use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
 use crate::refine::{
-    refine_with_gains, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
+    refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
 };
-use crate::report::{fit_statistics_with_gains, FitStatistics};
+use crate::report::{fit_statistics, FitStatistics};
 use crate::weighting::NoiseModel;
 use crate::CalibError;
 
@@ -41,8 +42,10 @@ pub struct CalibrateOptions {
     pub refine: RefineOptions,
     /// The global search used when `l1` is freed.
     pub global: GlobalOptions,
-    /// Values of the parameters that are not freed.
-    pub base: SensorModel,
+    /// The model's stages and the values of the parameters that are not
+    /// freed (the standard chain with zero distortion by default; a chain
+    /// with more stages, e.g. a PSD map, carries them into the fit).
+    pub base: Model,
 }
 
 impl Default for CalibrateOptions {
@@ -54,7 +57,7 @@ impl Default for CalibrateOptions {
             init: InitOptions::default(),
             refine: RefineOptions::default(),
             global: GlobalOptions::default(),
-            base: SensorModel::pinhole(8.0, 0.0, 0.0),
+            base: Model::standard(&SensorModel::pinhole(8.0, 0.0, 0.0)),
         }
     }
 }
@@ -62,16 +65,16 @@ impl Default for CalibrateOptions {
 /// A finished calibration.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CalibrationResult {
-    /// The estimated sensor model.
-    pub model: SensorModel,
+    /// The estimated model (every stage; the gains when they were freed).
+    pub model: Model,
     /// The estimated relative channel gains, when they were freed.
     pub gains: Option<ChannelGains>,
     /// Which start won the gain estimation, when the gains were freed.
     pub gain_start: Option<String>,
     /// One `sensor_from_template` pose per image.
     pub poses: Vec<Pose>,
-    /// The freed parameters.
-    pub free: Vec<Param>,
+    /// Names of the freed parameters, in covariance order.
+    pub free: Vec<String>,
     /// The cost minimised.
     pub cost_kind: CostKind,
     /// The noise model that weighted it.
@@ -99,7 +102,7 @@ pub fn calibrate(
     data: &CalibrationData,
     options: &CalibrateOptions,
 ) -> Result<CalibrationResult, CalibError> {
-    let free = &options.refine.free;
+    let free = options.refine.free_names();
     let init = initialize(data, &options.init)?;
     let start = start_model(options, &init.model)?;
     let (refined, global, gain_start) = if options.refine.fit_gains {
@@ -126,17 +129,8 @@ pub fn calibrate(
             fit_gains: false,
             ..options.refine.clone()
         };
-        let b = refine_global(data, &start, &init.poses, &fixed, &options.global).and_then(
-            |(plain, _)| {
-                refine_with_gains(
-                    data,
-                    &plain.model,
-                    &ChannelGains::UNIT,
-                    &plain.poses,
-                    &options.refine,
-                )
-            },
-        );
+        let b = refine_global(data, &start, &init.poses, &fixed, &options.global)
+            .and_then(|(plain, _)| refine(data, &plain.model, &plain.poses, &options.refine));
         consider(b, "gains fixed first, then freed");
         if options.init.focal_guess.is_some() && init.report.route == InitRoute::ClosedForm {
             let searched = InitOptions {
@@ -155,7 +149,7 @@ pub fn calibrate(
         let (r, g) = refine_global(data, &start, &init.poses, &options.refine, &options.global)?;
         (r, g, None)
     };
-    let fitted_gains = options.refine.fit_gains.then_some(refined.gains);
+    let fitted_gains = refined.model.gains();
     if !refined.report.termination.converged() {
         return Err(CalibError::NotConverged {
             reason: format!(
@@ -165,19 +159,9 @@ pub fn calibrate(
             ),
         });
     }
-    let covariance = covariance_with_gains(
-        data,
-        options.refine.cost,
-        free,
-        options.refine.robust,
-        &refined.model,
-        fitted_gains.as_ref(),
-        &refined.poses,
-        refined.cost,
-        refined.weights.as_ref(),
-    )?;
-    if let Some(sd) = covariance.std(Param::F) {
-        let f = refined.model.intrinsics.f;
+    let covariance = covariance(data, &refined, &options.refine)?;
+    if let Some(sd) = covariance.std("f") {
+        let f = refined.model.get("f").unwrap_or(f64::NAN);
         if sd > MAX_RELATIVE_STD_F * f {
             return Err(CalibError::Degenerate {
                 reason: format!(
@@ -188,10 +172,9 @@ pub fn calibrate(
             });
         }
     }
-    let statistics = fit_statistics_with_gains(
+    let statistics = fit_statistics(
         data,
         &refined.model,
-        fitted_gains.as_ref(),
         &refined.poses,
         options.refine.cost,
         options.refine.robust,
@@ -227,7 +210,7 @@ pub fn calibrate(
         gain_start,
         model: refined.model,
         poses: refined.poses,
-        free: free.clone(),
+        free,
         cost_kind: options.refine.cost,
         noise: options.refine.noise,
         robust: options.refine.robust,
@@ -243,14 +226,11 @@ pub fn calibrate(
 
 /// The refinement's start: `options.base` with the freed parameters the
 /// initialisation estimates (`f, cx, cy, k1, k2`) taken from `init_model`.
-fn start_model(
-    options: &CalibrateOptions,
-    init_model: &SensorModel,
-) -> Result<SensorModel, CalibError> {
-    let mut start = options.base;
+fn start_model(options: &CalibrateOptions, init_model: &SensorModel) -> Result<Model, CalibError> {
+    let mut start = options.base.clone();
     for p in [Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2] {
         if options.refine.free.contains(&p) {
-            start.set(p, init_model.get(p));
+            start.set(p.name(), init_model.get(p))?;
         }
     }
     // A fixed f, cx or cy must have been given; the poses come from the start.
@@ -328,31 +308,8 @@ impl CalibrationResult {
                 .collect()
         };
         CalibrationSummary {
-            parameters: Param::ALL
-                .iter()
-                .map(|p| ParameterSummary {
-                    name: p.name().into(),
-                    value: self.model.get(*p),
-                    std: self.covariance.std(*p),
-                    unit: p.unit().into(),
-                    estimated: self.free.contains(p),
-                })
-                .collect(),
-            gains: match (self.gains, self.covariance.gain_std()) {
-                (Some(g), sd) => crate::covariance::GAIN_NAMES
-                    .iter()
-                    .zip(g.to_array())
-                    .enumerate()
-                    .map(|(k, (name, value))| ParameterSummary {
-                        name: name.to_string(),
-                        value,
-                        std: sd.map(|s| s[k]),
-                        unit: "1".into(),
-                        estimated: true,
-                    })
-                    .collect(),
-                (None, _) => Vec::new(),
-            },
+            parameters: self.parameter_summaries(false),
+            gains: self.parameter_summaries(true),
             gain_start: self.gain_start.clone(),
             cost: self.cost_kind,
             noise: self.noise,
@@ -381,5 +338,30 @@ impl CalibrationResult {
             global: self.global.clone(),
             warnings: self.warnings.clone(),
         }
+    }
+}
+
+impl CalibrationResult {
+    /// The standard parameters of the estimated model.
+    pub fn sensor_model(&self) -> SensorModel {
+        self.model.sensor_model()
+    }
+
+    /// Every parameter of the model but the gains (`gains == false`), or the
+    /// gains alone, with σ when estimated.
+    fn parameter_summaries(&self, gains: bool) -> Vec<ParameterSummary> {
+        self.model
+            .parameters()
+            .iter()
+            .zip(self.model.values())
+            .filter(|(p, _)| GAIN_NAMES.contains(&p.name.as_str()) == gains)
+            .map(|(p, value)| ParameterSummary {
+                name: p.name.clone(),
+                value: *value,
+                std: self.covariance.std(&p.name),
+                unit: p.unit.clone(),
+                estimated: self.free.contains(&p.name),
+            })
+            .collect()
     }
 }

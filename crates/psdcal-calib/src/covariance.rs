@@ -16,15 +16,13 @@
 //! k1 with l1 when the centres nearly coincide), are reported as warnings.
 
 use nalgebra::{DMatrix, Matrix6};
-use psdcal_model::{ChannelGains, Param, Pose, SensorModel};
 
 use crate::data::CalibrationData;
-use crate::refine::{free_columns, normal_equations, CostKind, RobustLoss};
-use crate::weighting::PointWeights;
-
-/// Names of the relative gains in covariance rows and files.
-pub const GAIN_NAMES: [&str; 3] = ["g_x2", "g_y1", "g_y2"];
+use crate::refine::{CalibrationProblem, FitState, RefineOptions, Refined};
+use crate::solver;
 use crate::CalibError;
+
+pub use psdcal_model::stages::gains::GAIN_NAMES;
 
 /// Correlation magnitude above which a pair of parameters is flagged.
 pub const CORRELATION_WARNING: f64 = 0.98;
@@ -34,11 +32,8 @@ pub const INFLATION_WARNING: f64 = 1e4;
 /// The covariance of a calibration's estimate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Covariance {
-    /// The estimated sensor parameters, in the order of `matrix` (the gains,
-    /// when estimated, follow them).
-    pub params: Vec<Param>,
-    /// Names of every row of `matrix`: the parameters, then `g_x2`, `g_y1`,
-    /// `g_y2` when the gains were estimated.
+    /// Names of every row of `matrix`: the freed parameters in the order
+    /// of [`RefineOptions::free_names`] (standard ones, gains, other stages').
     pub names: Vec<String>,
     /// Their covariance (σ² S⁻¹), in their units squared.
     pub matrix: DMatrix<f64>,
@@ -53,18 +48,20 @@ pub struct Covariance {
 }
 
 impl Covariance {
-    /// Standard deviation of an estimated parameter (`None` when it was fixed).
-    pub fn std(&self, p: Param) -> Option<f64> {
-        let k = self.params.iter().position(|q| *q == p)?;
+    /// Standard deviation of an estimated parameter by name (`None` when it
+    /// was fixed).
+    pub fn std(&self, name: impl AsRef<str>) -> Option<f64> {
+        let k = self.names.iter().position(|q| q == name.as_ref())?;
         Some(self.matrix[(k, k)].max(0.0).sqrt())
     }
 
     /// Standard deviations of the relative gains `(g_x2, g_y1, g_y2)`, when
     /// they were estimated.
     pub fn gain_std(&self) -> Option<[f64; 3]> {
-        let k = self.params.len();
-        (self.names.len() == k + 3)
-            .then(|| std::array::from_fn(|i| self.matrix[(k + i, k + i)].max(0.0).sqrt()))
+        let sd = GAIN_NAMES.map(|n| self.std(n));
+        sd.iter()
+            .all(Option::is_some)
+            .then(|| sd.map(|s| s.unwrap_or(0.0)))
     }
 
     /// Correlation matrix of the estimated parameters.
@@ -81,52 +78,27 @@ impl Covariance {
     }
 }
 
-/// Computes the covariance at a solution `(model, poses)` whose cost is
-/// `cost`.
+/// The covariance at a refinement's solution (its model, poses, cost and
+/// point weights) for the cost and freed parameters of `options`.
 pub fn covariance(
     data: &CalibrationData,
-    cost_kind: CostKind,
-    free: &[Param],
-    robust: Option<RobustLoss>,
-    model: &SensorModel,
-    poses: &[Pose],
-    cost: f64,
+    refined: &Refined,
+    options: &RefineOptions,
 ) -> Result<Covariance, CalibError> {
-    covariance_with_gains(
-        data, cost_kind, free, robust, model, None, poses, cost, None,
-    )
-}
-
-/// [`covariance`] of a fit that also estimated the channel gains (`gains`
-/// = their estimate): the matrix then has three more trailing rows and
-/// columns, `g_x2, g_y1, g_y2`. `weights`: the point weights of a
-/// noise-weighted fit ([`crate::Refined::weights`]), whose `cost` is then
-/// the weighted cost.
-#[allow(clippy::too_many_arguments)]
-pub fn covariance_with_gains(
-    data: &CalibrationData,
-    cost_kind: CostKind,
-    free: &[Param],
-    robust: Option<RobustLoss>,
-    model: &SensorModel,
-    gains: Option<&ChannelGains>,
-    poses: &[Pose],
-    cost: f64,
-    weights: Option<&PointWeights>,
-) -> Result<Covariance, CalibError> {
-    let columns = free_columns(free, gains.is_some());
-    let ne = normal_equations(
-        data, cost_kind, &columns, robust, model, gains, poses, weights,
+    let names = options.free_names();
+    let problem = CalibrationProblem::new(
+        data,
+        options.cost,
+        &refined.model,
+        &names,
+        refined.weights.as_ref(),
     )?;
-    let names: Vec<String> = free
-        .iter()
-        .map(|p| p.name().to_string())
-        .chain(
-            gains
-                .iter()
-                .flat_map(|_| GAIN_NAMES.iter().map(|n| n.to_string())),
-        )
-        .collect();
+    let state = FitState {
+        model: refined.model.clone(),
+        poses: refined.poses.clone(),
+    };
+    let ne = solver::normal_equations(&problem, &state, options.robust)?;
+    let (columns, poses, cost) = (problem.columns(), &refined.poses, refined.cost);
     let parameters = columns.len() + 6 * poses.len();
     let observations = 2 * data.point_count();
     if observations <= parameters {
@@ -157,7 +129,6 @@ pub fn covariance_with_gains(
     }
     let matrix = s_inv * sigma2;
     let cov = Covariance {
-        params: free.to_vec(),
         names: names.clone(),
         matrix,
         pose_blocks: pose_inv.into_iter().map(|b| b * sigma2).collect(),

@@ -17,7 +17,7 @@
 //! 3. the lowest final cost wins; distinct minima (different `l1`, or costs
 //!    differing by more than 1e-9 relative) are reported with their costs.
 
-use psdcal_model::{Param, Pose, SensorModel};
+use psdcal_model::{Model, Param, Pose};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
@@ -79,14 +79,17 @@ pub struct GlobalReport {
 /// searches for the global minimum as the module documentation describes.
 pub fn refine_global(
     data: &CalibrationData,
-    model: &SensorModel,
+    model: impl Into<Model>,
     poses: &[Pose],
     options: &RefineOptions,
     global: &GlobalOptions,
 ) -> Result<(Refined, Option<GlobalReport>), CalibError> {
+    let model: Model = model.into();
+    let model = &model;
     if !options.free.contains(&Param::L1) {
         return Ok((refine(data, model, poses, options)?, None));
     }
+    let l1_of = |m: &Model| m.get("l1").unwrap_or(0.0);
     let profile_options = RefineOptions {
         free: options
             .free
@@ -102,9 +105,9 @@ pub fn refine_global(
     let grid = &global.l1_grid;
     let start = (0..grid.len())
         .min_by(|&a, &b| {
-            (grid[a] - model.distortion.l1)
+            (grid[a] - l1_of(model))
                 .abs()
-                .total_cmp(&(grid[b] - model.distortion.l1).abs())
+                .total_cmp(&(grid[b] - l1_of(model)).abs())
         })
         .ok_or_else(|| CalibError::Numerical {
             stage: "global search",
@@ -113,25 +116,26 @@ pub fn refine_global(
     let mut profile: Vec<Option<Refined>> = vec![None; grid.len()];
     let downwards = (0..=start).rev();
     let upwards = start + 1..grid.len();
-    let mut at_start = (*model, poses.to_vec());
+    let mut at_start = (model.clone(), poses.to_vec());
     for (pass, indices) in [downwards.collect::<Vec<_>>(), upwards.collect()]
         .into_iter()
         .enumerate()
     {
         // The upward pass continues from the profile's solution at the start.
         let mut current = if pass == 0 {
-            (*model, poses.to_vec())
+            (model.clone(), poses.to_vec())
         } else {
             at_start.clone()
         };
         for k in indices {
             let l1 = grid[k];
-            let mut m = current.0;
-            m.distortion.k1 += m.distortion.l1 - l1;
-            m.distortion.l1 = l1;
+            let mut m = current.0.clone();
+            let k1 = m.get("k1").unwrap_or(0.0) + l1_of(&m) - l1;
+            m.set("k1", k1)?;
+            m.set("l1", l1)?;
             refinements += 1;
             if let Ok(r) = refine(data, &m, &current.1, &profile_options) {
-                current = (r.model, r.poses.clone());
+                current = (r.model.clone(), r.poses.clone());
                 if k == start {
                     at_start = current.clone();
                 }
@@ -173,7 +177,8 @@ pub fn refine_global(
     finals.sort_by(|a, b| a.cost.total_cmp(&b.cost));
     let mut minima: Vec<LocalMinimum> = Vec::new();
     for r in &finals {
-        let d = &r.model.distortion;
+        let sensor = r.model.sensor_model();
+        let (d, k) = (&sensor.distortion, &sensor.intrinsics);
         let distinct = minima.iter().all(|m| {
             (m.l1 - d.l1).abs() > 1e-6 * (1.0 + m.l1.abs()).max(1e-3)
                 && (m.cost - r.cost).abs() > 1e-9 * m.cost.max(1e-300)
@@ -183,9 +188,9 @@ pub fn refine_global(
                 cost: r.cost,
                 l1: d.l1,
                 k1: d.k1,
-                f: r.model.intrinsics.f,
-                cx: r.model.intrinsics.cx,
-                cy: r.model.intrinsics.cy,
+                f: k.f,
+                cx: k.cx,
+                cy: k.cy,
             });
         }
     }

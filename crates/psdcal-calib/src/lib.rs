@@ -29,16 +29,16 @@ pub mod refine;
 pub mod report;
 pub mod weighting;
 
-pub use covariance::{covariance, covariance_with_gains, Covariance, GAIN_NAMES};
+pub use covariance::{covariance, Covariance, GAIN_NAMES};
 pub use electrical::{equal_current_gains, GainEstimate};
 pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
 pub use refine::{
-    refine, refine_with_gains, CostKind, RefineOptions, RefineReport, Refined, RobustLoss,
-    Termination,
+    refine, CalibrationProblem, CostKind, FitState, RefineOptions, RefineReport, Refined,
+    RobustLoss, Termination,
 };
-pub use report::{
-    fit_statistics, fit_statistics_with_gains, FitStatistics, ImageStats, PointError,
-};
+pub use report::{fit_statistics, FitStatistics, ImageStats, PointError};
+pub mod solver;
+pub use solver::{Problem, Solution, SolverOptions, SolverReport};
 pub use weighting::{point_covariance, NoiseModel, PointWeights};
 pub mod calibrate;
 pub use calibrate::{

@@ -22,15 +22,14 @@
 //!
 //! The same blocks give the covariance of the estimate (undamped):
 //! `Cov(a) = S⁻¹`, `Cov(b_i) = V_i⁻¹ + V_i⁻¹ W_iᵀ S⁻¹ W_i V_i⁻¹`, both times σ².
+//!
+//! Residual rows (`d`, one or two) and the global size `p` are runtime
+//! values; blocks are poses (six parameters).
 
-use nalgebra::{DMatrix, DVector, Matrix6, SMatrix, Vector2, Vector6};
-use psdcal_model::N_PARAMS;
+use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 
-/// Columns of the global block: the 11 sensor parameters, then the relative
-/// channel gains `g_x2, g_y1, g_y2`.
-pub const N_GLOBAL: usize = N_PARAMS + 3;
-
-/// Accumulated normal equations of one evaluation.
+/// Accumulated normal equations of one evaluation: `p` global parameters and
+/// `n` blocks of six (runtime `p`: two coefficients or hundreds).
 #[derive(Debug, Clone)]
 pub struct NormalEquations {
     /// `U = Σ AᵀA` over every residual (p × p).
@@ -45,63 +44,57 @@ pub struct NormalEquations {
     pub g_b: Vec<Vector6<f64>>,
 }
 
-/// Normal equations accumulated over all 11 sensor parameters with
-/// fixed-size blocks (no allocation per point); [`FullNormalEquations::select`]
-/// then keeps the freed ones.
-#[derive(Debug, Clone)]
-pub struct FullNormalEquations {
-    u: SMatrix<f64, N_GLOBAL, N_GLOBAL>,
-    g_a: SMatrix<f64, N_GLOBAL, 1>,
-    v: Vec<Matrix6<f64>>,
-    w: Vec<SMatrix<f64, N_GLOBAL, 6>>,
-    g_b: Vec<Vector6<f64>>,
+/// One residual's contribution: `d` rows (`r.len()`), its Jacobian with
+/// respect to the `p` global parameters (`a`, d × p, column-major) and, when
+/// it belongs to a block, with respect to that block (`b`, d × 6).
+#[derive(Debug, Clone, Copy)]
+pub struct ResidualTerm<'a> {
+    /// The residual.
+    pub r: &'a [f64],
+    /// `∂r/∂a`, column-major (`a[d·j + row]`).
+    pub a: &'a [f64],
+    /// The block and `∂r/∂b_i` (column-major), when the residual has one.
+    pub block: Option<(usize, &'a [f64])>,
 }
 
-impl FullNormalEquations {
-    /// Zeroed blocks for `n` images.
-    pub fn zeros(n: usize) -> Self {
-        Self {
-            u: SMatrix::zeros(),
-            g_a: SMatrix::zeros(),
-            v: vec![Matrix6::zeros(); n],
-            w: vec![SMatrix::zeros(); n],
-            g_b: vec![Vector6::zeros(); n],
+impl NormalEquations {
+    /// Adds one residual with weight `weight` (robust reweighting).
+    pub fn add(&mut self, weight: f64, term: &ResidualTerm<'_>) {
+        let d = term.r.len();
+        let p = self.g_a.len();
+        for j in 0..p {
+            let aj = &term.a[d * j..d * j + d];
+            let g: f64 = aj.iter().zip(term.r).map(|(a, r)| a * r).sum();
+            self.g_a[j] += weight * g;
+            for k in j..p {
+                let ak = &term.a[d * k..d * k + d];
+                let s: f64 = aj.iter().zip(ak).map(|(a, b)| a * b).sum();
+                self.u[(j, k)] += weight * s;
+            }
+        }
+        if let Some((i, b)) = term.block {
+            for row in 0..d {
+                let br = Vector6::from_fn(|c, _| b[d * c + row]);
+                let wbr = br * weight;
+                self.v[i] += wbr * br.transpose();
+                self.g_b[i] += wbr * term.r[row];
+                for j in 0..p {
+                    let a = term.a[d * j + row];
+                    for c in 0..6 {
+                        self.w[i][(j, c)] += a * wbr[c];
+                    }
+                }
+            }
         }
     }
 
-    /// Adds one weighted 2-vector residual `r` of image `i` with its Jacobians
-    /// `a = ∂r/∂(model, gains)` (all [`N_GLOBAL`] columns) and `b = ∂r/∂pose_i`.
-    pub fn add(
-        &mut self,
-        i: usize,
-        weight: f64,
-        r: &Vector2<f64>,
-        a: &SMatrix<f64, 2, N_GLOBAL>,
-        b: &SMatrix<f64, 2, 6>,
-    ) {
-        let at = a.transpose() * weight;
-        self.u += at * a;
-        self.g_a += at * r;
-        let bt = b.transpose() * weight;
-        self.v[i] += bt * b;
-        self.g_b[i] += bt * r;
-        self.w[i] += at * b;
-    }
-
-    /// The normal equations of the freed global columns only (indices into
-    /// the [`N_GLOBAL`] columns).
-    pub fn select(&self, free: &[usize]) -> NormalEquations {
-        let p = free.len();
-        NormalEquations {
-            u: DMatrix::from_fn(p, p, |i, j| self.u[(free[i], free[j])]),
-            g_a: DVector::from_fn(p, |i, _| self.g_a[free[i]]),
-            v: self.v.clone(),
-            w: self
-                .w
-                .iter()
-                .map(|w| DMatrix::from_fn(p, 6, |i, j| w[(free[i], j)]))
-                .collect(),
-            g_b: self.g_b.clone(),
+    /// Mirrors the upper triangle of `U` (accumulated by [`Self::add`]).
+    pub fn finish(&mut self) {
+        let p = self.u.nrows();
+        for j in 0..p {
+            for k in (j + 1)..p {
+                self.u[(k, j)] = self.u[(j, k)];
+            }
         }
     }
 }

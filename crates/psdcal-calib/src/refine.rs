@@ -1,5 +1,6 @@
-//! Levenberg–Marquardt refinement of the sensor parameters and every pose
-//! (MODEL.md §4.6, the paper's (P29)).
+//! Levenberg–Marquardt refinement of the model's freed parameters and every
+//! pose (MODEL.md §4.6, the paper's (P29)), as a [`Problem`] for the one
+//! solver ([`crate::solver`]).
 //!
 //! Cost (template plane, the default): for every observed point `m_ij` of LED
 //! `j` in image `i`,
@@ -8,38 +9,39 @@
 //! r_ij = back_project(θ, pose_i, m_ij) − (X_j, Y_j),   cost = Σ ‖r_ij‖²   (mm²)
 //! ```
 //!
-//! i.e. the measured point is corrected for distortion, its ray is cut with
-//! the template plane of its pose and compared with the LED. `cost` is the
-//! paper's *residual*. The image-plane alternative is
+//! i.e. the measured point is corrected through the model's chain, its ray
+//! is cut with the template plane of its pose and compared with the LED.
+//! `cost` is the paper's *residual*. The image-plane alternative is
 //! `r_ij = project(θ, pose_i, X_j, Y_j) − m_ij` (mm on the sensor).
 //!
-//! With a robust loss `ρ` of scale `c` on `s = ‖r‖²` (Huber:
-//! `ρ = s` for `s ≤ c²`, else `2c√s − c²`; Cauchy: `ρ = c² ln(1 + s/c²)`), the
-//! cost is `Σ ρ(s_ij)` and each step reweights the normal equations with
-//! `ρ'(s_ij)` (iteratively reweighted least squares).
+//! The freed parameters are any of the model's, by name: the standard ones
+//! ([`Param`]), the channel gains (the points are then recomputed from their
+//! amplitudes through the gains stage, MODEL.md §1), or the parameters of any
+//! other stage. Poses are updated additively in `(rvec, t)`.
 //!
-//! Each iteration solves the damped normal equations through the Schur
-//! complement on the pose blocks ([`crate::normal_equations`]) with
-//! Marquardt's diagonal damping `(1 + λ)`, updated as Nielsen proposes: after
-//! a step that lowers the cost `λ` falls ×1/3 and `ν = 2`; after one that does
-//! not, `λ ← λν`, `ν ← 2ν` (so a run of rejections ends within about ten
-//! steps). Poses are updated additively in `(rvec, t)`.
+//! With a noise model other than uniform, each residual is whitened
+//! ([`crate::weighting`]); because template-plane weights depend on the
+//! parameters, they are recomputed at the solution and the refinement
+//! repeated until the weighted cost settles (at most five passes).
 //!
-//! Stopping: an *exact fit* when the RMS residual is below 1e-10 (mm on the
-//! template plane; a few hundred times the rounding floor of the
-//! back-projection), a negligible step or cost change, saturated damping, or
-//! the iteration budget.
+//! Stopping (the solver's): an *exact fit* when the RMS residual is below
+//! 1e-10 (mm; a few hundred times the rounding floor of the back-projection),
+//! a negligible step or cost change, saturated damping, or the iteration
+//! budget. A run that ends on the budget still returns its last state.
 
-use nalgebra::Matrix2x3;
-use nalgebra::{SMatrix, Vector2};
-use psdcal_model::sensor::impact_point_gain_jacobian;
-use psdcal_model::{ChannelGains, Param, Pose, RotationJacobian, SensorModel, N_PARAMS};
+use nalgebra::{Matrix2, Matrix2x3, SMatrix, Vector2};
+use psdcal_model::stages::gains::GAIN_NAMES;
+use psdcal_model::stages::Gains;
+use psdcal_model::{ChainJacobian, Model, ModelError, Param, Pose, SensorModel};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::normal_equations::{FullNormalEquations, NormalEquations, N_GLOBAL};
+use crate::normal_equations::{ResidualTerm, Step};
+use crate::solver::{self, Problem, SolverOptions};
 use crate::weighting::{NoiseModel, PointWeights};
 use crate::CalibError;
+
+pub use crate::solver::{RobustLoss, SolverReport as RefineReport, Termination};
 
 /// Mean squared residual per point below which the fit is exact (RMS 1e-10).
 const EXACT_FIT_MS: f64 = 1e-20;
@@ -54,63 +56,19 @@ pub enum CostKind {
     Image,
 }
 
-/// A robust loss on the squared norm of a point's residual.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "lowercase")]
-pub enum RobustLoss {
-    /// Quadratic up to `scale`, linear beyond.
-    Huber {
-        /// Residual norm at which the loss turns linear (cost units: mm).
-        scale: f64,
-    },
-    /// Logarithmic: outliers far beyond `scale` barely count.
-    Cauchy {
-        /// Residual norm scale (mm).
-        scale: f64,
-    },
-}
-
-impl RobustLoss {
-    /// `ρ(s)` for a squared residual norm `s`.
-    pub fn rho(&self, s: f64) -> f64 {
-        match *self {
-            RobustLoss::Huber { scale } => {
-                if s <= scale * scale {
-                    s
-                } else {
-                    2.0 * scale * s.sqrt() - scale * scale
-                }
-            }
-            RobustLoss::Cauchy { scale } => scale * scale * (s / (scale * scale)).ln_1p(),
-        }
-    }
-
-    /// `ρ'(s)`: the weight of the residual in the reweighted normal equations.
-    pub fn weight(&self, s: f64) -> f64 {
-        match *self {
-            RobustLoss::Huber { scale } => {
-                if s <= scale * scale {
-                    1.0
-                } else {
-                    scale / s.sqrt()
-                }
-            }
-            RobustLoss::Cauchy { scale } => 1.0 / (1.0 + s / (scale * scale)),
-        }
-    }
-}
-
 /// Options of [`refine`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct RefineOptions {
     /// The cost minimised.
     pub cost: CostKind,
-    /// The freed sensor parameters (the others stay at their start values).
+    /// The freed standard parameters (the others stay at their start values).
     pub free: Vec<Param>,
-    /// Also estimate the relative channel gains `g_x2, g_y1, g_y2` (issue 7):
-    /// needs the data's amplitudes; every impact point is then recomputed
-    /// from its amplitudes divided by the current gains (MODEL.md §1).
+    /// Also estimate the relative channel gains `g_x2, g_y1, g_y2`: needs the
+    /// data's amplitudes; every impact point is then recomputed from its
+    /// amplitudes divided by the current gains (MODEL.md §1).
     pub fit_gains: bool,
+    /// Freed parameters of the model's other stages, by name.
+    pub free_stage_parameters: Vec<String>,
     /// How the points' noise is weighted ([`crate::weighting`]; uniform,
     /// the paper's unweighted cost, by default).
     pub noise: NoiseModel,
@@ -135,6 +93,7 @@ impl Default for RefineOptions {
             noise: NoiseModel::Uniform,
             robust: None,
             fit_gains: false,
+            free_stage_parameters: Vec::new(),
             max_iterations: 500,
             cost_tolerance: 1e-10,
             step_tolerance: 1e-10,
@@ -143,52 +102,24 @@ impl Default for RefineOptions {
     }
 }
 
-/// Why the refinement stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Termination {
-    /// The cost is zero to rounding (noise-free data).
-    ExactFit,
-    /// An accepted step changed the cost by less than the tolerance.
-    CostConverged,
-    /// The step became negligible.
-    StepConverged,
-    /// The damping grew without finding a lower cost: a minimum to the
-    /// precision of the arithmetic.
-    DampingSaturated,
-    /// The iteration budget ran out.
-    MaxIterations,
-}
-
-impl Termination {
-    /// Whether the solution is a converged minimum.
-    pub fn converged(self) -> bool {
-        !matches!(self, Termination::MaxIterations)
+impl RefineOptions {
+    /// Names of every freed parameter, in covariance order: the standard
+    /// ones as listed, the gains, then the other stages'.
+    pub fn free_names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self.free.iter().map(|p| p.name().to_string()).collect();
+        if self.fit_gains {
+            names.extend(GAIN_NAMES.iter().map(|n| n.to_string()));
+        }
+        names.extend(self.free_stage_parameters.iter().cloned());
+        names
     }
-}
-
-/// What the refinement did.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct RefineReport {
-    /// Why it stopped.
-    pub termination: Termination,
-    /// Iterations (solved steps, accepted or not).
-    pub iterations: usize,
-    /// Accepted steps.
-    pub accepted: usize,
-    /// Cost after each accepted step, starting with the initial cost.
-    pub cost_history: Vec<f64>,
-    /// Final damping.
-    pub final_lambda: f64,
 }
 
 /// The refined parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Refined {
-    /// Sensor parameters.
-    pub model: SensorModel,
-    /// Relative channel gains (the start's when not fitted).
-    pub gains: ChannelGains,
+    /// The model (every stage's parameters; the gains when it owns them).
+    pub model: Model,
     /// One `sensor_from_template` pose per image.
     pub poses: Vec<Pose>,
     /// Final cost (robust cost when a loss is set; weighted by `weights`
@@ -200,194 +131,253 @@ pub struct Refined {
     pub report: RefineReport,
 }
 
-/// Residual of one observation (no Jacobians).
-pub fn residual(
-    data: &CalibrationData,
-    cost: CostKind,
-    model: &SensorModel,
-    pose: &Pose,
-    led: usize,
-    measured: &Vector2<f64>,
-) -> Result<Vector2<f64>, psdcal_model::ModelError> {
-    let xy = data.template[led];
-    Ok(match cost {
-        CostKind::Template => model.back_project(pose, measured)? - xy,
-        CostKind::Image => model.project(pose, &xy)? - measured,
-    })
-}
-
-/// A residual with its Jacobians with respect to the global parameters
-/// (2×14: model, then gains) and the pose (2×6).
-type ResidualWithJacobians = (Vector2<f64>, SMatrix<f64, 2, N_GLOBAL>, SMatrix<f64, 2, 6>);
-
-/// The measured point of observation `k` of image `i`: the stored point, or,
-/// with `gains`, the point recomputed from its amplitudes divided by them,
-/// with its Jacobian with respect to `(g_x2, g_y1, g_y2)`.
-pub fn measured_point(
-    data: &CalibrationData,
-    i: usize,
-    k: usize,
-    gains: Option<&ChannelGains>,
-) -> Result<(Vector2<f64>, Option<Matrix2x3<f64>>), psdcal_model::ModelError> {
-    match (gains, data.amplitudes.as_ref()) {
-        (Some(g), Some(amps)) => {
-            let (m, j) = impact_point_gain_jacobian(&data.geometry, &amps[i][k], g)?;
-            Ok((m, Some(j)))
-        }
-        _ => Ok((data.images[i].points[k].measured, None)),
+impl Refined {
+    /// The standard parameters of the refined model.
+    pub fn sensor_model(&self) -> SensorModel {
+        self.model.sensor_model()
     }
 }
 
-/// Residual of one observation with its Jacobians with respect to every
-/// global parameter and to the pose. `dm_dg` is the measured point's
-/// Jacobian with respect to the gains, when they are estimated.
-// The arguments are the point's whole context on the solver's hot path;
-// bundling them would only add a struct built per point.
-#[allow(clippy::too_many_arguments)]
-fn residual_with_jacobians(
-    data: &CalibrationData,
-    cost: CostKind,
-    model: &SensorModel,
-    pose: &Pose,
-    rotation: &RotationJacobian,
-    led: usize,
-    measured: &Vector2<f64>,
-    dm_dg: Option<&Matrix2x3<f64>>,
-) -> Result<ResidualWithJacobians, psdcal_model::ModelError> {
-    let xy = data.template[led];
-    let mut a = SMatrix::<f64, 2, N_GLOBAL>::zeros();
-    let (r, b) = match cost {
-        CostKind::Template => {
-            let (p, j) = model.back_project_with_jacobians_using(pose, rotation, measured)?;
-            a.fixed_view_mut::<2, N_PARAMS>(0, 0)
-                .copy_from(&j.wrt_model);
-            if let Some(g) = dm_dg {
-                a.fixed_view_mut::<2, 3>(0, N_PARAMS)
-                    .copy_from(&(j.wrt_measured * g));
-            }
-            (p - xy, j.wrt_pose)
-        }
-        CostKind::Image => {
-            let (p, j) = model.project_with_jacobians_using(pose, rotation, &xy)?;
-            a.fixed_view_mut::<2, N_PARAMS>(0, 0)
-                .copy_from(&j.wrt_model);
-            if let Some(g) = dm_dg {
-                a.fixed_view_mut::<2, 3>(0, N_PARAMS).copy_from(&(-g));
-            }
-            (p - measured, j.wrt_pose)
-        }
-    };
-    Ok((r, a, b))
+/// What the refinement estimates: the model and one pose per image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitState {
+    /// The model.
+    pub model: Model,
+    /// One `sensor_from_template` per image.
+    pub poses: Vec<Pose>,
 }
 
-/// The global columns of the freed parameters (and of the gains).
-pub(crate) fn free_columns(free: &[Param], fit_gains: bool) -> Vec<usize> {
-    let mut cols: Vec<usize> = free.iter().map(|p| p.index()).collect();
-    if fit_gains {
-        cols.extend(N_PARAMS..N_GLOBAL);
+/// The calibration cost of a data set as a [`Problem`]: the model's freed
+/// columns are the global block, each image's pose a block of six.
+#[derive(Debug, Clone)]
+pub struct CalibrationProblem<'a> {
+    data: &'a CalibrationData,
+    cost: CostKind,
+    /// Flat model columns of the freed parameters, in order.
+    columns: Vec<usize>,
+    /// Position of each flat column among the freed ones.
+    position: Vec<Option<usize>>,
+    /// Recompute the points from the amplitudes through the gains stage.
+    amplitudes: bool,
+    weights: Option<&'a PointWeights>,
+}
+
+impl<'a> CalibrationProblem<'a> {
+    /// The problem of `data` for `model` with the parameters `free` (names)
+    /// freed; `weights` whiten the residuals.
+    pub fn new(
+        data: &'a CalibrationData,
+        cost: CostKind,
+        model: &Model,
+        free: &[String],
+        weights: Option<&'a PointWeights>,
+    ) -> Result<Self, CalibError> {
+        let mut columns = Vec::with_capacity(free.len());
+        for name in free {
+            let column = model.index(name).ok_or_else(|| CalibError::InvalidInput {
+                reason: format!(
+                    "cannot free '{name}': the model has no such parameter (it has {})",
+                    model.names().join(", ")
+                ),
+            })?;
+            if columns.contains(&column) {
+                return Err(CalibError::Numerical {
+                    stage: "refinement",
+                    reason: format!("parameter {name} freed twice"),
+                });
+            }
+            columns.push(column);
+        }
+        let mut position = vec![None; model.len()];
+        for (k, c) in columns.iter().enumerate() {
+            position[*c] = Some(k);
+        }
+        let amplitudes = model.gains_stage().is_some();
+        if amplitudes && !data.has_amplitudes() {
+            return Err(CalibError::InvalidInput {
+                reason: "estimating the channel gains needs the electrode amplitudes of every point (signals.csv)".into(),
+            });
+        }
+        Ok(Self {
+            data,
+            cost,
+            columns,
+            position,
+            amplitudes,
+            weights,
+        })
     }
-    cols
-}
 
-/// Total cost, or the first observation that cannot be evaluated.
-pub fn total_cost(
-    data: &CalibrationData,
-    cost: CostKind,
-    robust: Option<RobustLoss>,
-    model: &SensorModel,
-    poses: &[Pose],
-) -> Result<f64, (usize, usize, psdcal_model::ModelError)> {
-    total_cost_with_gains(data, cost, robust, model, None, poses)
-}
+    /// The flat model columns of the freed parameters.
+    pub fn columns(&self) -> &[usize] {
+        &self.columns
+    }
 
-/// [`total_cost`] with the measured points recomputed from the amplitudes
-/// with `gains` (when given).
-pub fn total_cost_with_gains(
-    data: &CalibrationData,
-    cost: CostKind,
-    robust: Option<RobustLoss>,
-    model: &SensorModel,
-    gains: Option<&ChannelGains>,
-    poses: &[Pose],
-) -> Result<f64, (usize, usize, psdcal_model::ModelError)> {
-    weighted_cost(data, cost, robust, model, gains, poses, None)
-}
+    fn point_error(&self, image: usize, k: usize, e: ModelError) -> CalibError {
+        point_error(self.data, image, self.data.images[image].points[k].led, e)
+    }
 
-/// [`total_cost_with_gains`] with every residual whitened by `weights`.
-pub(crate) fn weighted_cost(
-    data: &CalibrationData,
-    cost: CostKind,
-    robust: Option<RobustLoss>,
-    model: &SensorModel,
-    gains: Option<&ChannelGains>,
-    poses: &[Pose],
-    weights: Option<&PointWeights>,
-) -> Result<f64, (usize, usize, psdcal_model::ModelError)> {
-    let mut total = 0.0;
-    for (i, image) in data.images.iter().enumerate() {
-        for (k, obs) in image.points.iter().enumerate() {
-            let (m, _) = measured_point(data, i, k, gains).map_err(|e| (i, k, e))?;
-            let mut r =
-                residual(data, cost, model, &poses[i], obs.led, &m).map_err(|e| (i, k, e))?;
-            if let Some(w) = weights {
-                r = w.get(i, k) * r;
-            }
-            let s = r.norm_squared();
-            total += robust.map_or(s, |l| l.rho(s));
+    /// The measured point of observation `k` of image `i` and, when it comes
+    /// from the amplitudes through the gains stage, `∂m/∂gains`.
+    pub fn measured(
+        &self,
+        model: &Model,
+        i: usize,
+        k: usize,
+    ) -> Result<(Vector2<f64>, Option<Matrix2x3<f64>>), ModelError> {
+        match (self.amplitudes, self.data.amplitudes.as_ref()) {
+            (true, Some(amps)) => model
+                .measured_from_amplitudes_with_jacobian(&amps[i][k])
+                .map(|(m, j)| (m, Some(j))),
+            _ => Ok((self.data.images[i].points[k].measured, None)),
         }
     }
-    Ok(total)
-}
 
-/// Accumulates the normal equations at the current parameters.
-// The cost's definition (kind, loss, weights) and the evaluation point
-// (model, gains, poses), as in `weighted_cost`, plus the freed columns.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn normal_equations(
-    data: &CalibrationData,
-    cost: CostKind,
-    free: &[usize],
-    robust: Option<RobustLoss>,
-    model: &SensorModel,
-    gains: Option<&ChannelGains>,
-    poses: &[Pose],
-    weights: Option<&PointWeights>,
-) -> Result<NormalEquations, CalibError> {
-    let mut ne = FullNormalEquations::zeros(data.images.len());
-    for (i, image) in data.images.iter().enumerate() {
-        let rotation = poses[i].rotation_jacobian();
-        for (k, obs) in image.points.iter().enumerate() {
-            let (m, dm_dg) =
-                measured_point(data, i, k, gains).map_err(|e| point_error(data, i, obs.led, e))?;
-            let (mut r, mut a, mut b) = residual_with_jacobians(
-                data,
-                cost,
-                model,
-                &poses[i],
-                &rotation,
-                obs.led,
-                &m,
-                dm_dg.as_ref(),
-            )
-            .map_err(|e| point_error(data, i, obs.led, e))?;
-            if let Some(w) = weights {
-                let w = w.get(i, k);
-                r = w * r;
-                a = w * a;
-                b = w * b;
-            }
-            let weight = robust.map_or(1.0, |l| l.weight(r.norm_squared()));
-            ne.add(i, weight, &r, &a, &b);
-        }
+    /// The (unweighted) residual of observation `k` of image `i`.
+    pub fn residual(
+        &self,
+        state: &FitState,
+        i: usize,
+        k: usize,
+    ) -> Result<Vector2<f64>, ModelError> {
+        let obs = &self.data.images[i].points[k];
+        let xy = self.data.template[obs.led];
+        let (m, _) = self.measured(&state.model, i, k)?;
+        let pose = &state.poses[i];
+        Ok(match self.cost {
+            CostKind::Template => state.model.back_project(pose, &m)? - xy,
+            CostKind::Image => state.model.project(pose, &xy)? - m,
+        })
     }
-    Ok(ne.select(free))
+
+    /// Residual, `∂r/∂θ_free` (2×p, column-major into `a`) and `∂r/∂pose`.
+    fn linearize(
+        &self,
+        state: &FitState,
+        i: usize,
+        k: usize,
+        rotation: &psdcal_model::RotationJacobian,
+        jac: &mut ChainJacobian,
+        a: &mut [f64],
+    ) -> Result<(Vector2<f64>, SMatrix<f64, 2, 6>), ModelError> {
+        let obs = &self.data.images[i].points[k];
+        let xy = self.data.template[obs.led];
+        let (m, dm_dg) = self.measured(&state.model, i, k)?;
+        let pose = &state.poses[i];
+        // `gain_map`: how the measured point's gain Jacobian enters r.
+        let (r, b, gain_map) = match self.cost {
+            CostKind::Template => {
+                let (p, j) = state
+                    .model
+                    .back_project_with_jacobians(pose, rotation, &m, jac)?;
+                (p - xy, j.wrt_pose, j.wrt_point)
+            }
+            CostKind::Image => {
+                let (p, j) = state
+                    .model
+                    .project_with_jacobians(pose, rotation, &xy, jac)?;
+                (p - m, j.wrt_pose, -Matrix2::identity())
+            }
+        };
+        for (slot, c) in self.columns.iter().enumerate() {
+            a[2 * slot] = jac.wrt_params[2 * c];
+            a[2 * slot + 1] = jac.wrt_params[2 * c + 1];
+        }
+        if let (Some(g), Some(cols)) = (dm_dg, state.model.gain_columns()) {
+            let dr_dg = gain_map * g;
+            for (n, c) in cols.iter().enumerate() {
+                if let Some(slot) = self.position[*c] {
+                    a[2 * slot] += dr_dg[(0, n)];
+                    a[2 * slot + 1] += dr_dg[(1, n)];
+                }
+            }
+        }
+        Ok((r, b))
+    }
 }
 
-fn point_error(
+impl Problem for CalibrationProblem<'_> {
+    type State = FitState;
+    type Error = CalibError;
+
+    fn global_len(&self) -> usize {
+        self.columns.len()
+    }
+
+    fn block_count(&self) -> usize {
+        self.data.images.len()
+    }
+
+    fn evaluate(
+        &self,
+        state: &FitState,
+        jacobians: bool,
+        visit: &mut dyn FnMut(&ResidualTerm<'_>),
+    ) -> Result<(), CalibError> {
+        let p = self.columns.len();
+        let mut jac = state.model.jacobian_buffer();
+        let mut a = vec![0.0; 2 * p];
+        for (i, image) in self.data.images.iter().enumerate() {
+            let rotation = jacobians.then(|| state.poses[i].rotation_jacobian());
+            for k in 0..image.points.len() {
+                let w = self.weights.map(|w| *w.get(i, k));
+                if let Some(rotation) = &rotation {
+                    let (mut r, mut b) = self
+                        .linearize(state, i, k, rotation, &mut jac, &mut a)
+                        .map_err(|e| self.point_error(i, k, e))?;
+                    if let Some(w) = w {
+                        r = w * r;
+                        b = w * b;
+                        for column in a.chunks_exact_mut(2) {
+                            let v = w * Vector2::new(column[0], column[1]);
+                            column.copy_from_slice(v.as_slice());
+                        }
+                    }
+                    visit(&ResidualTerm {
+                        r: r.as_slice(),
+                        a: &a,
+                        block: Some((i, b.as_slice())),
+                    });
+                } else {
+                    let mut r = self
+                        .residual(state, i, k)
+                        .map_err(|e| self.point_error(i, k, e))?;
+                    if let Some(w) = w {
+                        r = w * r;
+                    }
+                    visit(&ResidualTerm {
+                        r: r.as_slice(),
+                        a: &[],
+                        block: None,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn apply_step(&self, state: &FitState, step: &Step) -> Option<FitState> {
+        let model = state.model.stepped(&self.columns, step.da.as_slice());
+        model.validate().ok()?;
+        let poses = state
+            .poses
+            .iter()
+            .zip(&step.db)
+            .map(|(pose, d)| {
+                let a = pose.to_array();
+                Pose::from_array(&std::array::from_fn(|k| a[k] + d[k]))
+            })
+            .collect();
+        Some(FitState { model, poses })
+    }
+}
+
+/// Names the image and LED of a point that cannot be evaluated.
+pub(crate) fn point_error(
     data: &CalibrationData,
     image: usize,
     led: usize,
-    e: psdcal_model::ModelError,
+    e: ModelError,
 ) -> CalibError {
     CalibError::Numerical {
         stage: "refinement",
@@ -395,7 +385,7 @@ fn point_error(
     }
 }
 
-fn validate(data: &CalibrationData, poses: &[Pose], free: &[Param]) -> Result<(), CalibError> {
+fn validate(data: &CalibrationData, poses: &[Pose]) -> Result<(), CalibError> {
     if poses.len() != data.images.len() {
         return Err(CalibError::Numerical {
             stage: "refinement",
@@ -412,26 +402,47 @@ fn validate(data: &CalibrationData, poses: &[Pose], free: &[Param]) -> Result<()
             }
         }
     }
-    let mut seen = [false; N_PARAMS];
-    for p in free {
-        if std::mem::replace(&mut seen[p.index()], true) {
-            return Err(CalibError::Numerical {
-                stage: "refinement",
-                reason: format!("parameter {p} freed twice"),
-            });
-        }
-    }
     Ok(())
 }
 
-/// Refines `model` (its `free` parameters) and every pose from `start`.
-pub fn refine(
+/// The model a refinement starts from: `start`, with a gains stage (unit
+/// gains) added when the options free the gains and it has none.
+pub fn start_model(data: &CalibrationData, start: Model, options: &RefineOptions) -> Model {
+    if options.fit_gains && start.gains_stage().is_none() {
+        start.with_stages_and_gains(Some(Gains::new(data.geometry)))
+    } else {
+        start
+    }
+}
+
+/// The solver options of a refinement.
+fn solver_options(data: &CalibrationData, options: &RefineOptions) -> SolverOptions {
+    let points = data.point_count() as f64;
+    SolverOptions {
+        max_iterations: options.max_iterations,
+        cost_tolerance: options.cost_tolerance,
+        step_tolerance: options.step_tolerance,
+        initial_lambda: options.initial_lambda,
+        exact_cost: EXACT_FIT_MS * points,
+        step_floor: 1e-26 * points,
+        robust: options.robust,
+    }
+}
+
+/// Total cost of `(model, poses)` (robust when a loss is given).
+pub fn total_cost(
     data: &CalibrationData,
-    model: &SensorModel,
+    cost: CostKind,
+    robust: Option<RobustLoss>,
+    model: &Model,
     poses: &[Pose],
-    options: &RefineOptions,
-) -> Result<Refined, CalibError> {
-    refine_with_gains(data, model, &ChannelGains::UNIT, poses, options)
+) -> Result<f64, CalibError> {
+    let problem = CalibrationProblem::new(data, cost, model, &[], None)?;
+    let state = FitState {
+        model: model.clone(),
+        poses: poses.to_vec(),
+    };
+    solver::cost(&problem, &state, robust)
 }
 
 /// Most reweighting passes of a noise-weighted template-plane refinement.
@@ -440,249 +451,80 @@ const MAX_REWEIGHTINGS: usize = 5;
 /// by less than this fraction.
 const REWEIGHT_TOLERANCE: f64 = 1e-6;
 
-/// [`refine`] from given channel gains; with `options.fit_gains` they are
-/// estimated too (the data must carry amplitudes).
+/// Refines the freed parameters of `start` and every pose.
 ///
-/// With a noise model other than uniform, the points are whitened
+/// With `options.fit_gains`, a model without a gains stage gets one (unit
+/// gains). With a noise model other than uniform, the points are whitened
 /// ([`crate::weighting`]) with weights computed at the start; when the
 /// weights depend on the parameters (template-plane cost, or fitted gains)
 /// they are recomputed at the solution and the refinement repeated until
 /// the weighted cost changes by less than 1e-6 of itself (at most five
-/// passes). Iterations add up over the passes; the cost history restarts
-/// its descent at each pass.
-pub fn refine_with_gains(
+/// passes). Iterations add up over the passes.
+pub fn refine(
     data: &CalibrationData,
-    model: &SensorModel,
-    gains: &ChannelGains,
+    start: impl Into<Model>,
     poses: &[Pose],
     options: &RefineOptions,
 ) -> Result<Refined, CalibError> {
-    validate(data, poses, &options.free)?;
-    if options.fit_gains && !data.has_amplitudes() {
-        return Err(CalibError::InvalidInput {
-            reason: "estimating the channel gains needs the electrode amplitudes of every point (signals.csv)".into(),
-        });
-    }
-    gains.validate()?;
-    let weights_at = |m: &SensorModel, g: &ChannelGains, p: &[Pose]| {
-        PointWeights::compute(
-            data,
-            options.noise,
-            options.cost,
-            m,
-            gains_in_cost(options, g).as_ref(),
-            p,
-        )
+    validate(data, poses)?;
+    let model = start_model(data, start.into(), options);
+    model.validate()?;
+    let free = options.free_names();
+    let weights_at =
+        |s: &FitState| PointWeights::compute(data, options.noise, options.cost, &s.model, &s.poses);
+    let mut state = FitState {
+        model,
+        poses: poses.to_vec(),
     };
-    let mut weights = weights_at(model, gains, poses)?;
-    let mut result = levenberg_marquardt(data, model, gains, poses, options, weights.as_ref())?;
+    let mut weights = weights_at(&state)?;
+    let settings = solver_options(data, options);
+    let problem =
+        CalibrationProblem::new(data, options.cost, &state.model, &free, weights.as_ref())?;
+    let mut solution = solver::solve(&problem, state, &settings)?;
     let parameter_dependent = options.cost == CostKind::Template || options.fit_gains;
     if weights.is_some() && parameter_dependent {
         for _ in 1..MAX_REWEIGHTINGS {
-            if !result.report.termination.converged() {
+            if !solution.report.termination.converged() {
                 break;
             }
-            let next = weights_at(&result.model, &result.gains, &result.poses)?;
-            let reweighted = weighted_cost(
+            let next = weights_at(&solution.state)?;
+            let reweighted = {
+                let p = CalibrationProblem::new(
+                    data,
+                    options.cost,
+                    &solution.state.model,
+                    &[],
+                    next.as_ref(),
+                )?;
+                solver::cost(&p, &solution.state, options.robust)?
+            };
+            weights = next;
+            if (reweighted - solution.cost).abs() <= REWEIGHT_TOLERANCE * solution.cost {
+                solution.cost = reweighted;
+                break;
+            }
+            let p = CalibrationProblem::new(
                 data,
                 options.cost,
-                options.robust,
-                &result.model,
-                gains_in_cost(options, &result.gains).as_ref(),
-                &result.poses,
-                next.as_ref(),
-            )
-            .map_err(|(i, k, e)| point_error(data, i, data.images[i].points[k].led, e))?;
-            weights = next;
-            let settled = (reweighted - result.cost).abs() <= REWEIGHT_TOLERANCE * result.cost;
-            if settled {
-                result.cost = reweighted;
-                break;
-            }
-            let pass = levenberg_marquardt(
-                data,
-                &result.model,
-                &result.gains,
-                &result.poses,
-                options,
+                &solution.state.model,
+                &free,
                 weights.as_ref(),
             )?;
-            let mut report = pass.report.clone();
-            report.iterations += result.report.iterations;
-            report.accepted += result.report.accepted;
-            let mut history = std::mem::take(&mut result.report.cost_history);
-            history.extend(report.cost_history);
-            report.cost_history = history;
-            result = Refined { report, ..pass };
+            let mut pass = solver::solve(&p, solution.state.clone(), &settings)?;
+            pass.report.iterations += solution.report.iterations;
+            pass.report.accepted += solution.report.accepted;
+            let mut history = std::mem::take(&mut solution.report.cost_history);
+            history.extend(pass.report.cost_history);
+            pass.report.cost_history = history;
+            solution = pass;
         }
     }
-    result.weights = weights;
-    Ok(result)
-}
-
-/// The gains the cost recomputes the points with: the current ones when they
-/// are estimated, none (the stored points) otherwise.
-fn gains_in_cost(options: &RefineOptions, gains: &ChannelGains) -> Option<ChannelGains> {
-    options.fit_gains.then_some(*gains)
-}
-
-/// One Levenberg–Marquardt run with fixed point weights.
-fn levenberg_marquardt(
-    data: &CalibrationData,
-    model: &SensorModel,
-    gains: &ChannelGains,
-    poses: &[Pose],
-    options: &RefineOptions,
-    weights: Option<&PointWeights>,
-) -> Result<Refined, CalibError> {
-    let columns = free_columns(&options.free, options.fit_gains);
-    let mut model = *model;
-    let mut gains = *gains;
-    let mut poses = poses.to_vec();
-    let mut cost = weighted_cost(
-        data,
-        options.cost,
-        options.robust,
-        &model,
-        gains_in_cost(options, &gains).as_ref(),
-        &poses,
-        weights,
-    )
-    .map_err(|(i, k, e)| point_error(data, i, data.images[i].points[k].led, e))?;
-    let mut history = vec![cost];
-    let mut lambda = options.initial_lambda;
-    let mut nu = 2.0;
-    let mut iterations = 0;
-    let mut accepted = 0;
-    let mut ne = normal_equations(
-        data,
-        options.cost,
-        &columns,
-        options.robust,
-        &model,
-        gains_in_cost(options, &gains).as_ref(),
-        &poses,
-        weights,
-    )?;
-    let termination = loop {
-        if cost <= EXACT_FIT_MS * data.point_count() as f64 {
-            break Termination::ExactFit;
-        }
-        if iterations >= options.max_iterations {
-            break Termination::MaxIterations;
-        }
-        if lambda > 1e16 {
-            break Termination::DampingSaturated;
-        }
-        iterations += 1;
-        let Some(step) = ne.solve(lambda) else {
-            lambda *= nu;
-            nu *= 2.0;
-            continue;
-        };
-        let mut trial_model = model;
-        for (k, p) in options.free.iter().enumerate() {
-            trial_model.set(*p, model.get(*p) + step.da[k]);
-        }
-        let mut trial_gains = gains;
-        if options.fit_gains {
-            let n = options.free.len();
-            trial_gains.x2 += step.da[n];
-            trial_gains.y1 += step.da[n + 1];
-            trial_gains.y2 += step.da[n + 2];
-        }
-        let trial_poses: Vec<Pose> = poses
-            .iter()
-            .zip(&step.db)
-            .map(|(pose, d)| {
-                let a = pose.to_array();
-                Pose::from_array(&std::array::from_fn(|k| a[k] + d[k]))
-            })
-            .collect();
-        let trial_cost = if trial_model.validate().is_ok() && trial_gains.validate().is_ok() {
-            weighted_cost(
-                data,
-                options.cost,
-                options.robust,
-                &trial_model,
-                gains_in_cost(options, &trial_gains).as_ref(),
-                &trial_poses,
-                weights,
-            )
-            .unwrap_or(f64::INFINITY)
-        } else {
-            f64::INFINITY
-        };
-        if trial_cost < cost {
-            let small_step =
-                step_is_negligible(&ne, &step, cost, data.point_count(), options.step_tolerance);
-            let small_change = (cost - trial_cost) <= options.cost_tolerance * cost;
-            model = trial_model;
-            gains = trial_gains;
-            poses = trial_poses;
-            cost = trial_cost;
-            history.push(cost);
-            accepted += 1;
-            lambda = (lambda / 3.0).max(1e-15);
-            nu = 2.0;
-            if small_step {
-                break Termination::StepConverged;
-            }
-            if small_change {
-                break Termination::CostConverged;
-            }
-            ne = normal_equations(
-                data,
-                options.cost,
-                &columns,
-                options.robust,
-                &model,
-                gains_in_cost(options, &gains).as_ref(),
-                &poses,
-                weights,
-            )?;
-        } else {
-            lambda *= nu;
-            nu *= 2.0;
-        }
-    };
+    state = solution.state;
     Ok(Refined {
-        model,
-        gains,
-        poses,
-        cost,
-        weights: None,
-        report: RefineReport {
-            termination,
-            iterations,
-            accepted,
-            cost_history: history,
-            final_lambda: lambda,
-        },
+        model: state.model,
+        poses: state.poses,
+        cost: solution.cost,
+        weights,
+        report: solution.report,
     })
-}
-
-/// Whether a step is negligible: the change it makes to the residuals,
-/// `‖J δ‖ ≈ sqrt(Σ δ_k² diag(JᵀJ)_k)` (mm), is below `tolerance` times the
-/// residual norm `sqrt(cost)` (with a floor at rounding level, 1e-13 mm per
-/// point, for exact data). One threshold thus serves `f` (mm) and `k3`
-/// (mm⁻⁶) alike.
-fn step_is_negligible(
-    ne: &NormalEquations,
-    step: &crate::normal_equations::Step,
-    cost: f64,
-    points: usize,
-    tolerance: f64,
-) -> bool {
-    let mut change2 = 0.0;
-    for k in 0..step.da.len() {
-        change2 += step.da[k] * step.da[k] * ne.u[(k, k)];
-    }
-    for (i, db) in step.db.iter().enumerate() {
-        for k in 0..6 {
-            change2 += db[k] * db[k] * ne.v[i][(k, k)];
-        }
-    }
-    let floor = 1e-26 * points as f64;
-    change2 <= tolerance * tolerance * cost.max(floor)
 }

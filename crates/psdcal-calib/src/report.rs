@@ -9,11 +9,11 @@
 //! `e_m = ‖project(θ, pose_i, X_j, Y_j) − m_ij‖` (mm on the sensor).
 //! RMS values are `sqrt(mean(e²))` over points.
 
-use psdcal_model::{ChannelGains, Pose, SensorModel};
+use psdcal_model::{Model, Pose};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::{measured_point, residual, CostKind, RobustLoss};
+use crate::refine::{CalibrationProblem, CostKind, FitState, RobustLoss};
 
 /// How many of the worst points a report lists.
 pub const WORST_POINTS: usize = 10;
@@ -69,28 +69,26 @@ pub struct FitStatistics {
     pub unprojectable: usize,
 }
 
-/// Computes the fit statistics of `(model, poses)` on `data`. `cost` and
-/// `robust` say what was minimised (to flag outliers in the right units).
+/// Computes the fit statistics of `(model, poses)` on `data` (the points
+/// recomputed from the amplitudes when the model owns the gains). `cost`
+/// and `robust` say what was minimised (to flag outliers in the right units).
 pub fn fit_statistics(
     data: &CalibrationData,
-    model: &SensorModel,
+    model: &Model,
     poses: &[Pose],
     cost: CostKind,
     robust: Option<RobustLoss>,
 ) -> FitStatistics {
-    fit_statistics_with_gains(data, model, None, poses, cost, robust)
-}
-
-/// [`fit_statistics`] with the measured points recomputed from the
-/// amplitudes with estimated `gains` (when given).
-pub fn fit_statistics_with_gains(
-    data: &CalibrationData,
-    model: &SensorModel,
-    gains: Option<&ChannelGains>,
-    poses: &[Pose],
-    cost: CostKind,
-    robust: Option<RobustLoss>,
-) -> FitStatistics {
+    let state = FitState {
+        model: model.clone(),
+        poses: poses.to_vec(),
+    };
+    let problems = [CostKind::Template, CostKind::Image]
+        .map(|kind| CalibrationProblem::new(data, kind, model, &[], None));
+    let [Ok(template), Ok(image_plane)] = problems else {
+        // Only a gains stage without amplitudes fails here: nothing to measure.
+        return FitStatistics::empty(data);
+    };
     let mut all: Vec<PointError> = Vec::with_capacity(data.point_count());
     let mut outliers = Vec::new();
     let mut per_image = Vec::with_capacity(data.images.len());
@@ -98,20 +96,11 @@ pub fn fit_statistics_with_gains(
     for (i, image) in data.images.iter().enumerate() {
         let (mut img_t, mut img_m, mut img_n_m) = (0.0, 0.0, 0usize);
         for (k, obs) in image.points.iter().enumerate() {
-            let measured = measured_point(data, i, k, gains).map_or(obs.measured, |(m, _)| m);
-            let e_t = residual(
-                data,
-                CostKind::Template,
-                model,
-                &poses[i],
-                obs.led,
-                &measured,
-            )
-            .map(|r| r.norm())
-            .unwrap_or(f64::INFINITY);
-            let e_m = residual(data, CostKind::Image, model, &poses[i], obs.led, &measured)
-                .ok()
-                .map(|r| r.norm());
+            let e_t = template
+                .residual(&state, i, k)
+                .map(|r| r.norm())
+                .unwrap_or(f64::INFINITY);
+            let e_m = image_plane.residual(&state, i, k).ok().map(|r| r.norm());
             img_t += e_t * e_t;
             match e_m {
                 Some(e) => {
@@ -170,5 +159,22 @@ pub fn fit_statistics_with_gains(
         worst_points: all,
         outliers,
         unprojectable,
+    }
+}
+
+impl FitStatistics {
+    /// Statistics of nothing (no point could be evaluated).
+    fn empty(data: &CalibrationData) -> Self {
+        Self {
+            residual_mm2: f64::INFINITY,
+            rms_template_mm: f64::INFINITY,
+            rms_image_mm: f64::INFINITY,
+            points: data.point_count(),
+            images: data.images.len(),
+            per_image: Vec::new(),
+            worst_points: Vec::new(),
+            outliers: Vec::new(),
+            unprojectable: data.point_count(),
+        }
     }
 }

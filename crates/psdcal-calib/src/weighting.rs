@@ -52,11 +52,11 @@
 
 use nalgebra::{Matrix2, Vector2};
 use psdcal_model::sensor::{electrode_currents, impact_point_amplitude_jacobian};
-use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel};
+use psdcal_model::{Amplitudes, ChannelGains, Model, Pose, PsdGeometry};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::{measured_point, CostKind};
+use crate::refine::CostKind;
 use crate::CalibError;
 
 /// Floor added to a point's covariance, relative to the variance of a point
@@ -149,8 +149,7 @@ impl PointWeights {
         data: &CalibrationData,
         noise: NoiseModel,
         cost: CostKind,
-        model: &SensorModel,
-        gains: Option<&ChannelGains>,
+        model: &Model,
         poses: &[Pose],
     ) -> Result<Option<Self>, CalibError> {
         if noise == NoiseModel::Uniform {
@@ -161,24 +160,30 @@ impl PointWeights {
         for (i, image) in data.images.iter().enumerate() {
             let mut row = Vec::with_capacity(image.points.len());
             let rotation = poses[i].rotation_jacobian();
+            let mut jac = model.jacobian_buffer();
             for (k, obs) in image.points.iter().enumerate() {
                 let numerical = |e: psdcal_model::ModelError| CalibError::Numerical {
                     stage: "noise weighting",
                     reason: format!("image '{}', LED #{}: {e}", image.id, obs.led + 1),
                 };
-                let (m, _) = measured_point(data, i, k, gains).map_err(numerical)?;
+                let m = match (model.gains(), data.amplitudes.as_ref()) {
+                    (Some(_), Some(a)) => model
+                        .measured_from_amplitudes(&a[i][k])
+                        .map_err(numerical)?,
+                    _ => obs.measured,
+                };
                 let corrected = data
                     .amplitudes
                     .as_ref()
-                    .map(|a| a[i][k].divide_gains(gains.unwrap_or(&ChannelGains::UNIT)));
+                    .map(|a| a[i][k].divide_gains(&model.gains().unwrap_or(ChannelGains::UNIT)));
                 let c_m = point_covariance(noise, &data.geometry, &m, corrected.as_ref());
                 let c = match cost {
                     CostKind::Image => c_m,
                     CostKind::Template => {
                         let (_, j) = model
-                            .back_project_with_jacobians_using(&poses[i], &rotation, &m)
+                            .back_project_with_jacobians(&poses[i], &rotation, &m, &mut jac)
                             .map_err(numerical)?;
-                        j.wrt_measured * c_m * j.wrt_measured.transpose()
+                        j.wrt_point * c_m * j.wrt_point.transpose()
                     }
                 };
                 trace_sum += 0.5 * c.trace();

@@ -20,7 +20,7 @@ fn noise_free_end_to_end_both_lenses() {
                 "{name}: residual {:e}",
                 r.statistics.residual_mm2
             );
-            assert_recovered(name, &r.model, &truth, &r.free);
+            assert_recovered(name, &r.sensor_model(), &truth, &r.free);
         }
     }
 }
@@ -57,7 +57,7 @@ fn noise_free_end_to_end_with_every_lens_term_freed() {
             "residual {:e}",
             r.statistics.residual_mm2
         );
-        assert_recovered("all lens terms", &r.model, &truth, &r.free);
+        assert_recovered("all lens terms", &r.sensor_model(), &truth, &r.free);
     }
 }
 
@@ -90,7 +90,7 @@ fn noise_free_end_to_end_with_l1_freed() {
             "{name}: residual {:e}",
             r.statistics.residual_mm2
         );
-        assert_recovered(name, &r.model, &truth, &r.free);
+        assert_recovered(name, &r.sensor_model(), &truth, &r.free);
         let g = r.global.as_ref().expect("global search ran");
         assert!(g.minima[0].cost < 1e-12);
     }

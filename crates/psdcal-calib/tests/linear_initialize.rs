@@ -128,9 +128,9 @@ fn fallback_on_raw_distorted_data_without_preliminary_correction() {
                 )
                 .unwrap();
                 assert!(
-                    rel(full.model.intrinsics.f, f0) < 1e-6,
+                    rel(full.sensor_model().intrinsics.f, f0) < 1e-6,
                     "{name} seed {seed} {label}: calibrated f = {}",
-                    full.model.intrinsics.f
+                    full.sensor_model().intrinsics.f
                 );
                 // The start's k1 has the right sign (with f off it compensates
                 // part of the distortion; the refinement settles it).

@@ -20,10 +20,10 @@ fn noise_free_recovery_both_lenses_both_costs() {
                 cost,
                 ..RefineOptions::default()
             };
-            let r = refine(&s.data, &m0, &p0, &options).unwrap();
+            let r = refine(&s.data, m0, &p0, &options).unwrap();
             assert!(r.report.termination.converged(), "{name}: {:?}", r.report);
             assert!(r.cost < 1e-12, "{name} {cost:?}: residual {:e} mm²", r.cost);
-            assert_recovered(name, &r.model, &truth, &options.free);
+            assert_recovered(name, &r.sensor_model(), &truth, &options.free);
         }
     }
 }
@@ -52,9 +52,9 @@ fn noise_free_recovery_with_every_lens_term_freed() {
         free: free.clone(),
         ..RefineOptions::default()
     };
-    let r = refine(&s.data, &m0, &p0, &options).unwrap();
+    let r = refine(&s.data, m0, &p0, &options).unwrap();
     assert!(r.cost < 1e-12, "residual {:e}", r.cost);
-    assert_recovered("full", &r.model, &truth, &free);
+    assert_recovered("full", &r.sensor_model(), &truth, &free);
 }
 
 #[test]
@@ -77,9 +77,9 @@ fn noise_free_recovery_with_l1_freed_on_psd_distortion() {
             free: free.clone(),
             ..RefineOptions::default()
         };
-        let r = refine(&s.data, &m0, &p0, &options).unwrap();
+        let r = refine(&s.data, m0, &p0, &options).unwrap();
         assert!(r.cost < 1e-12, "residual {:e}", r.cost);
-        assert_recovered("l1", &r.model, &truth, &free);
+        assert_recovered("l1", &r.sensor_model(), &truth, &free);
     }
 }
 
@@ -99,21 +99,12 @@ fn monte_carlo_spread_matches_reported_sigma() {
         let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(1000 + trial);
         let data = support::observe(&truth, &base.poses, sigma_mm, &mut rng);
         let (m0, p0) = perturbed(&truth, &base.poses);
-        let r = refine(&data, &m0, &p0, &options).unwrap();
-        let cov = covariance(
-            &data,
-            options.cost,
-            &options.free,
-            None,
-            &r.model,
-            &r.poses,
-            r.cost,
-        )
-        .unwrap();
+        let r = refine(&data, m0, &p0, &options).unwrap();
+        let cov = covariance(&data, &r, &options).unwrap();
         estimates.push([
-            r.model.intrinsics.f,
-            r.model.intrinsics.cx,
-            r.model.intrinsics.cy,
+            r.sensor_model().intrinsics.f,
+            r.sensor_model().intrinsics.cx,
+            r.sensor_model().intrinsics.cy,
         ]);
         reported.push([
             cov.std(Param::F).unwrap(),
@@ -152,30 +143,23 @@ fn robust_loss_resists_outliers_and_reports_them() {
         s.data.images[i].points[k].measured.x += 0.3;
     }
     let (m0, p0) = perturbed(&truth, &s.poses);
-    let plain = refine(&s.data, &m0, &p0, &RefineOptions::default()).unwrap();
+    let plain = refine(&s.data, m0, &p0, &RefineOptions::default()).unwrap();
     // Huber scale: 3 σ on the template plane (σ_template ≈ σ · depth / f ≈ 0.04 mm).
     let robust = Some(RobustLoss::Huber { scale: 0.12 });
     let options = RefineOptions {
         robust,
         ..RefineOptions::default()
     };
-    let r = refine(&s.data, &m0, &p0, &options).unwrap();
+    let r = refine(&s.data, m0, &p0, &options).unwrap();
     let clean = scenario(truth, 9, sigma_mm, 21);
-    let reference = refine(&clean.data, &m0, &p0, &RefineOptions::default()).unwrap();
-    let cov = covariance(
-        &clean.data,
-        options.cost,
-        &options.free,
-        None,
-        &reference.model,
-        &reference.poses,
-        reference.cost,
-    )
-    .unwrap();
+    let reference = refine(&clean.data, m0, &p0, &RefineOptions::default()).unwrap();
+    let cov = covariance(&clean.data, &reference, &RefineOptions::default()).unwrap();
     let sigma_f = cov.std(Param::F).unwrap();
     // Robust: within 3 σ of the outlier-free estimate; plain: pulled far away.
-    let robust_shift = (r.model.intrinsics.f - reference.model.intrinsics.f).abs();
-    let plain_shift = (plain.model.intrinsics.f - reference.model.intrinsics.f).abs();
+    let robust_shift =
+        (r.sensor_model().intrinsics.f - reference.sensor_model().intrinsics.f).abs();
+    let plain_shift =
+        (plain.sensor_model().intrinsics.f - reference.sensor_model().intrinsics.f).abs();
     println!("σ_f {sigma_f:.3e}: robust shift {robust_shift:.3e}, plain shift {plain_shift:.3e}");
     assert!(
         robust_shift < 3.0 * sigma_f,
@@ -209,7 +193,7 @@ fn fit_statistics_agree_with_the_cost() {
     let truth = SensorModel::paper_lens1();
     let s = scenario(truth, 9, 5e-4, 4);
     let (m0, p0) = perturbed(&truth, &s.poses);
-    let r = refine(&s.data, &m0, &p0, &RefineOptions::default()).unwrap();
+    let r = refine(&s.data, m0, &p0, &RefineOptions::default()).unwrap();
     let stats = fit_statistics(&s.data, &r.model, &r.poses, CostKind::Template, None);
     assert!((stats.residual_mm2 - r.cost).abs() <= 1e-12 * r.cost);
     assert_eq!(stats.points, 126);

@@ -144,7 +144,7 @@ fn calibrate_options(config: &CalibrateConfig) -> CalibrateOptions {
             robust: config.robust,
             ..RefineOptions::default()
         },
-        base,
+        base: base.into(),
         ..CalibrateOptions::default()
     }
 }
@@ -155,8 +155,9 @@ fn calibration_file(
     data: &CalibrationData,
     config: &CalibrateConfig,
 ) -> Calibration {
-    let mut file = Calibration::from_model(&result.model, &config.geometry);
-    file.set_estimated(&result.free);
+    let mut file = Calibration::from_model(&result.sensor_model(), &config.geometry);
+    let free: Vec<Param> = result.free.iter().filter_map(|n| n.parse().ok()).collect();
+    file.set_estimated(&free);
     if let Some(g) = &result.gains {
         file.gains = Some(psdcal_io::GainsRecord::new(g, true));
     }
@@ -286,9 +287,10 @@ fn write_summary(
     }
     writeln!(out)?;
     writeln!(out, "parameter          value           std    unit")?;
+    let sensor = r.sensor_model();
     for p in Param::ALL {
-        let value = r.model.get(p);
-        match r.covariance.std(p) {
+        let value = sensor.get(p);
+        match r.covariance.std(p.name()) {
             Some(sd) => writeln!(
                 out,
                 "{:<9} {:>15.8e} ± {:<11.3e} {}",

@@ -29,18 +29,19 @@ pub fn run(args: &DemoArgs, output: Output) -> anyhow::Result<()> {
     let data = sim.calibration_data();
     let result = calibrate(&data, &CalibrateOptions::default())?;
     let aoa_deg = sim
-        .aoa_rms_error(&result.model, &ChannelGains::UNIT)
+        .aoa_rms_error(&result.sensor_model(), &ChannelGains::UNIT)
         .to_degrees();
     let elapsed = started.elapsed().as_secs_f64();
     let rows: Vec<(Param, f64, f64, Option<f64>)> = result
         .free
         .iter()
-        .map(|&p| {
+        .filter_map(|n| n.parse::<Param>().ok())
+        .map(|p| {
             (
                 p,
                 sim.truth.get(p),
-                result.model.get(p),
-                result.covariance.std(p),
+                result.sensor_model().get(p),
+                result.covariance.std(p.name()),
             )
         })
         .collect();

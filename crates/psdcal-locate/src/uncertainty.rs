@@ -128,6 +128,19 @@ impl ParameterCovariance {
         )
     }
 
+    /// A covariance of parameters given by name (`f`, `cx`, …, `g_x2`, …),
+    /// e.g. a calibration's.
+    pub fn from_names<S: AsRef<str>>(
+        names: &[S],
+        matrix: &DMatrix<f64>,
+    ) -> Result<Self, LocateError> {
+        let entries = names
+            .iter()
+            .map(|n| Estimated::parse(n.as_ref()))
+            .collect::<Result<Vec<_>, _>>()?;
+        Self::new(entries, matrix.clone())
+    }
+
     /// The covariance as calibration.json stores it: names (`f`, `cx`, …,
     /// `g_x2`, …) and rows.
     ///

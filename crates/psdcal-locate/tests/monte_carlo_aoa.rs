@@ -41,10 +41,10 @@ fn run(name: &str, truth: SensorModel, pose_seed: u64) {
         let result = calibrate(&data, &CalibrateOptions::default())
             .unwrap_or_else(|e| panic!("{name}: trial {trial}: {e}"));
         let cov =
-            ParameterCovariance::from_params(&result.covariance.params, &result.covariance.matrix)
+            ParameterCovariance::from_names(&result.covariance.names, &result.covariance.matrix)
                 .unwrap();
-        let sensor =
-            CalibratedSensor::new(result.model, PsdGeometry::default()).with_covariance(cov);
+        let sensor = CalibratedSensor::new(result.sensor_model(), PsdGeometry::default())
+            .with_covariance(cov);
         let mut a = Vec::new();
         let mut s = Vec::new();
         for m in &points {

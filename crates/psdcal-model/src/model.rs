@@ -621,3 +621,21 @@ impl Model {
         }
     }
 }
+
+impl From<&SensorModel> for Model {
+    fn from(sensor: &SensorModel) -> Self {
+        Model::standard(sensor)
+    }
+}
+
+impl From<SensorModel> for Model {
+    fn from(sensor: SensorModel) -> Self {
+        Model::standard(&sensor)
+    }
+}
+
+impl From<&Model> for Model {
+    fn from(model: &Model) -> Self {
+        model.clone()
+    }
+}

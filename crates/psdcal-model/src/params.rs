@@ -102,6 +102,12 @@ impl Param {
     }
 }
 
+impl AsRef<str> for Param {
+    fn as_ref(&self) -> &str {
+        self.name()
+    }
+}
+
 impl fmt::Display for Param {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())

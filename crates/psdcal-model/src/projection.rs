@@ -198,6 +198,9 @@ impl SensorModel {
     }
 }
 
+/// A template-plane point with `∂(X, Y)/∂(a, b)` and `∂(X, Y)/∂(rvec, t)`.
+pub type PlaneIntersection = (Vector2<f64>, Matrix2<f64>, SMatrix<f64, 2, N_POSE>);
+
 /// The template-plane point `(X, Y)` hit by the normalised ray `(a, b, 1)`
 /// for the pose `(R, t)` (its rotation Jacobian precomputed), with
 /// `∂(X, Y)/∂(a, b)` (2×2) and `∂(X, Y)/∂(rvec, t)` (2×6) (module
@@ -206,7 +209,7 @@ pub fn plane_intersection_with_jacobians(
     rotation: &RotationJacobian,
     t: &Vector3<f64>,
     ab: &Vector2<f64>,
-) -> Result<(Vector2<f64>, Matrix2<f64>, SMatrix<f64, 2, N_POSE>), ModelError> {
+) -> Result<PlaneIntersection, ModelError> {
     let (rot, drot) = (rotation.r, rotation.dr);
     let (xy, s, q) = intersect_template_plane(&rot, t, ab)?;
     let n = Vector3::new(ab.x, ab.y, 1.0);

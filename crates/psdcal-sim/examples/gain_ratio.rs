@@ -91,8 +91,8 @@ fn main() {
             let fitted = calibrate(&sim.calibration_data(), &options(true)).ok()?;
             let plain = calibrate(&reference.calibration_data(), &options(false)).ok()?;
             Some((
-                sim.aoa_rms_error(&fitted.model, &fitted.gains?),
-                reference.aoa_rms_error(&plain.model, &ChannelGains::UNIT),
+                sim.aoa_rms_error(&fitted.sensor_model(), &fitted.gains?),
+                reference.aoa_rms_error(&plain.sensor_model(), &ChannelGains::UNIT),
             ))
         })
         .collect();

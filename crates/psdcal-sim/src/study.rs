@@ -498,7 +498,7 @@ pub fn run_trial(condition: &Condition, options: &StudyOptions, trial: u64) -> T
                         ..CalibrateOptions::default()
                     };
                     let r = calibrate(&data, &options).map_err(|e| e.to_string())?;
-                    let m = &r.model;
+                    let m = &r.sensor_model();
                     let gains = r.gains.unwrap_or(ChannelGains::UNIT);
                     let aoa = sim.aoa_rms_error(m, &gains).to_degrees();
                     Ok(vec![

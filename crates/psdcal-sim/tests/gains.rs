@@ -42,7 +42,7 @@ fn noise_free_imbalance_is_recovered_exactly() {
                     "{lens:?} seed {seed}: gain {est} vs {truth}"
                 );
             }
-            let (m, t) = (&r.model, &sim.truth);
+            let (m, t) = (&r.sensor_model(), &sim.truth);
             for (name, e, tv) in [
                 ("f", m.intrinsics.f, t.intrinsics.f),
                 ("cx", m.intrinsics.cx, t.intrinsics.cx),
@@ -115,12 +115,13 @@ fn self_calibration_removes_the_imbalance_at_40_db() {
             assert_eq!(sim.poses, reference.poses);
             let fitted = calibrate(&sim.calibration_data(), &with_gains()).unwrap();
             let g = fitted.gains.unwrap();
-            let with_gains_aoa = sim.aoa_rms_error(&fitted.model, &g);
+            let with_gains_aoa = sim.aoa_rms_error(&fitted.sensor_model(), &g);
             let ref_fit = calibrate(&reference.calibration_data(), &plain()).unwrap();
-            let reference_aoa = reference.aoa_rms_error(&ref_fit.model, &ChannelGains::UNIT);
+            let reference_aoa =
+                reference.aoa_rms_error(&ref_fit.sensor_model(), &ChannelGains::UNIT);
             let plain_deg = (seed < plain_seeds).then(|| {
                 let plain = calibrate(&sim.calibration_data(), &plain()).unwrap();
-                sim.aoa_rms_error(&plain.model, &ChannelGains::UNIT)
+                sim.aoa_rms_error(&plain.sensor_model(), &ChannelGains::UNIT)
                     .to_degrees()
             });
             let truth = sim.gains.to_array();
@@ -204,7 +205,7 @@ fn monte_carlo_spread(noise: NoiseModel, trials: u64) -> Vec<(String, f64, f64)>
             }
             data.amplitudes = Some(amplitudes);
             let r = calibrate(&data, &calibrate_options).unwrap();
-            let m = &r.model.intrinsics;
+            let m = &r.sensor_model().intrinsics;
             let mut values = vec![m.f, m.cx, m.cy];
             values.extend(r.gains.unwrap().to_array());
             let cov = &r.covariance;

@@ -45,7 +45,7 @@ fn weighting_keeps_exact_data_exact() {
                         "{lens:?} {noise:?} {cost:?}: gain {e} vs {t}"
                     );
                 }
-                let (m, t) = (&r.model.intrinsics, &sim.truth.intrinsics);
+                let (m, t) = (&r.sensor_model().intrinsics, &sim.truth.intrinsics);
                 assert!(
                     (m.f - t.f).abs() < 1e-6 * t.f,
                     "{lens:?} {noise:?} {cost:?}: f {}",
@@ -53,8 +53,8 @@ fn weighting_keeps_exact_data_exact() {
                 );
                 assert!((m.cx - t.cx).abs() < 1e-6 && (m.cy - t.cy).abs() < 1e-6);
                 let k1 = sim.truth.distortion.k1;
-                assert!((r.model.distortion.k1 - k1).abs() < 1e-6 * k1.abs());
-                assert!(sim.aoa_rms_error(&r.model, &g) < 1e-9);
+                assert!((r.sensor_model().distortion.k1 - k1).abs() < 1e-6 * k1.abs());
+                assert!(sim.aoa_rms_error(&r.sensor_model(), &g) < 1e-9);
             }
         }
     }
@@ -94,7 +94,7 @@ fn every_gain_start_reaches_the_exact_minimum_with_a_nominal_focal_length() {
         "{start}: {:e}",
         r.statistics.residual_mm2
     );
-    assert!((r.model.intrinsics.f / sim.truth.intrinsics.f - 1.0).abs() < 1e-9);
+    assert!((r.sensor_model().intrinsics.f / sim.truth.intrinsics.f - 1.0).abs() < 1e-9);
 }
 
 #[test]
@@ -117,7 +117,7 @@ fn weighting_by_channel_snr_beats_the_unweighted_cost_on_channel_snr_noise() {
             let data = sim.calibration_data();
             let aoa = |noise| {
                 let r = calibrate(&data, &options(noise, CostKind::Template, false)).unwrap();
-                sim.aoa_rms_error(&r.model, &ChannelGains::UNIT)
+                sim.aoa_rms_error(&r.sensor_model(), &ChannelGains::UNIT)
             };
             (aoa(NoiseModel::Uniform), aoa(NoiseModel::ChannelSnr))
         })

@@ -73,7 +73,7 @@ pub fn run(seed: u64) -> Outcome {
     };
     let automatic = calibrate(&s.data, &options).ok().map(|r| r.cost);
     let mut reference =
-        refine(&s.data, &truth, &s.poses, &refine_options).map_or(f64::INFINITY, |r| r.cost);
+        refine(&s.data, truth, &s.poses, &refine_options).map_or(f64::INFINITY, |r| r.cost);
     for _ in 0..24 {
         let mut m = truth;
         m.intrinsics.f *= rng.random_range(0.6..1.6);
@@ -97,7 +97,7 @@ pub fn run(seed: u64) -> Outcome {
                 Pose::new(p.rvec + dr, p.t * scale)
             })
             .collect();
-        if let Ok(r) = refine(&s.data, &m, &poses, &refine_options) {
+        if let Ok(r) = refine(&s.data, m, &poses, &refine_options) {
             if r.report.termination.converged() {
                 reference = reference.min(r.cost);
             }

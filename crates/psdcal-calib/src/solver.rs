@@ -1,0 +1,328 @@
+//! The one solver of psdcal: Levenberg–Marquardt over a global parameter
+//! block plus independent six-parameter blocks (the poses), eliminated by the
+//! Schur complement ([`crate::normal_equations`]). The refinement (P29), the
+//! start's profile and the preliminary correction are all problems for it.
+//!
+//! A [`Problem`] visits its residuals at a state ([`Problem::evaluate`]),
+//! each a [`ResidualTerm`] of one or two rows with its Jacobians, and moves
+//! the state by a step ([`Problem::apply_step`]). The solver owns what is
+//! common:
+//!
+//! - the cost `Σ ρ(‖r‖²)` with an optional robust loss `ρ`
+//!   ([`RobustLoss`]; Huber `ρ = s` for `s ≤ c²`, else `2c√s − c²`; Cauchy
+//!   `ρ = c² ln(1 + s/c²)`), each residual's normal equations reweighted by
+//!   `ρ'(s)` (iteratively reweighted least squares); per-residual weights
+//!   (whitening) are the problem's, applied to `r` and its Jacobians;
+//! - Marquardt's diagonal damping `(1 + λ)`, solved after Jacobi scaling,
+//!   with Nielsen's update: after a step that lowers the cost `λ` falls ×1/3
+//!   and `ν = 2`; after one that does not, `λ ← λν`, `ν ← 2ν`;
+//! - stopping: an *exact fit* when the cost is below
+//!   [`SolverOptions::exact_cost`], a negligible step (the residual change
+//!   `‖J δ‖ ≈ √(Σ δ_k² (JᵀJ)_kk)` below `step_tolerance · √cost`, with a
+//!   rounding floor), a cost change below `cost_tolerance · cost`, saturated
+//!   damping (`λ > 1e16`), or the iteration budget;
+//! - a [`SolverReport`] (termination, iterations, accepted steps, cost
+//!   history); the last state is returned whatever the termination.
+
+use serde::Serialize;
+
+use crate::normal_equations::{NormalEquations, ResidualTerm, Step};
+
+/// A robust loss on the squared norm of a residual.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum RobustLoss {
+    /// Quadratic up to `scale`, linear beyond.
+    Huber {
+        /// Residual norm at which the loss turns linear (cost units: mm).
+        scale: f64,
+    },
+    /// Logarithmic: outliers far beyond `scale` barely count.
+    Cauchy {
+        /// Residual norm scale (mm).
+        scale: f64,
+    },
+}
+
+impl RobustLoss {
+    /// `ρ(s)` for a squared residual norm `s`.
+    pub fn rho(&self, s: f64) -> f64 {
+        match *self {
+            RobustLoss::Huber { scale } => {
+                if s <= scale * scale {
+                    s
+                } else {
+                    2.0 * scale * s.sqrt() - scale * scale
+                }
+            }
+            RobustLoss::Cauchy { scale } => scale * scale * (s / (scale * scale)).ln_1p(),
+        }
+    }
+
+    /// `ρ'(s)`: the weight of the residual in the reweighted normal equations.
+    pub fn weight(&self, s: f64) -> f64 {
+        match *self {
+            RobustLoss::Huber { scale } => {
+                if s <= scale * scale {
+                    1.0
+                } else {
+                    scale / s.sqrt()
+                }
+            }
+            RobustLoss::Cauchy { scale } => 1.0 / (1.0 + s / (scale * scale)),
+        }
+    }
+}
+
+/// Why the solver stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Termination {
+    /// The cost is zero to rounding (noise-free data).
+    ExactFit,
+    /// An accepted step changed the cost by less than the tolerance.
+    CostConverged,
+    /// The step became negligible.
+    StepConverged,
+    /// The damping grew without finding a lower cost: a minimum to the
+    /// precision of the arithmetic.
+    DampingSaturated,
+    /// The iteration budget ran out.
+    MaxIterations,
+}
+
+impl Termination {
+    /// Whether the solution is a converged minimum.
+    pub fn converged(self) -> bool {
+        !matches!(self, Termination::MaxIterations)
+    }
+
+    /// Plain-language description, for reports.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Termination::ExactFit => "exact fit (noise-free data)",
+            Termination::CostConverged => "converged (cost no longer decreasing)",
+            Termination::StepConverged => "converged (negligible step)",
+            Termination::DampingSaturated => "converged (no lower cost to machine precision)",
+            Termination::MaxIterations => "iteration budget exhausted",
+        }
+    }
+}
+
+/// What the solver did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SolverReport {
+    /// Why it stopped.
+    pub termination: Termination,
+    /// Iterations (solved steps, accepted or not).
+    pub iterations: usize,
+    /// Accepted steps.
+    pub accepted: usize,
+    /// Cost after each accepted step, starting with the initial cost.
+    pub cost_history: Vec<f64>,
+    /// Final damping.
+    pub final_lambda: f64,
+}
+
+/// Options of [`solve`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverOptions {
+    /// Iteration budget (accepted and rejected steps both count).
+    pub max_iterations: usize,
+    /// Stop when an accepted step lowers the cost by less than this fraction.
+    pub cost_tolerance: f64,
+    /// Stop when the step changes the residuals by less than this fraction
+    /// of their norm.
+    pub step_tolerance: f64,
+    /// Starting damping.
+    pub initial_lambda: f64,
+    /// Cost at or below which the fit is exact.
+    pub exact_cost: f64,
+    /// Rounding floor of the residual norm², below which steps count as
+    /// negligible whatever the cost.
+    pub step_floor: f64,
+    /// Optional robust loss.
+    pub robust: Option<RobustLoss>,
+}
+
+impl Default for SolverOptions {
+    fn default() -> Self {
+        Self {
+            max_iterations: 500,
+            cost_tolerance: 1e-10,
+            step_tolerance: 1e-10,
+            initial_lambda: 1e-3,
+            exact_cost: 0.0,
+            step_floor: 0.0,
+            robust: None,
+        }
+    }
+}
+
+/// A least-squares problem: a state, its residuals and how a step moves it.
+pub trait Problem {
+    /// Everything that is estimated (parameters and poses).
+    type State: Clone;
+    /// Why a residual could not be evaluated.
+    type Error;
+
+    /// Number of free global parameters (the columns of every `a`).
+    fn global_len(&self) -> usize;
+
+    /// Number of six-parameter blocks.
+    fn block_count(&self) -> usize;
+
+    /// Visits every residual at `state`; `a` and the block Jacobian are only
+    /// read when `jacobians` is true (they may be empty otherwise).
+    fn evaluate(
+        &self,
+        state: &Self::State,
+        jacobians: bool,
+        visit: &mut dyn FnMut(&ResidualTerm<'_>),
+    ) -> Result<(), Self::Error>;
+
+    /// The state moved by `step`, or `None` when it leaves the domain (the
+    /// step is then rejected like one that raises the cost).
+    fn apply_step(&self, state: &Self::State, step: &Step) -> Option<Self::State>;
+}
+
+/// The solver's answer: the last state, its cost and the report.
+#[derive(Debug, Clone)]
+pub struct Solution<S> {
+    /// The last accepted state (the start when nothing was accepted).
+    pub state: S,
+    /// Its cost.
+    pub cost: f64,
+    /// What the solver did.
+    pub report: SolverReport,
+}
+
+/// The cost `Σ ρ(‖r‖²)` of a problem at a state.
+pub fn cost<P: Problem>(
+    problem: &P,
+    state: &P::State,
+    robust: Option<RobustLoss>,
+) -> Result<f64, P::Error> {
+    let mut total = 0.0;
+    problem.evaluate(state, false, &mut |term| {
+        let s: f64 = term.r.iter().map(|r| r * r).sum();
+        total += robust.map_or(s, |l| l.rho(s));
+    })?;
+    Ok(total)
+}
+
+/// The normal equations of a problem at a state (robustly reweighted).
+pub fn normal_equations<P: Problem>(
+    problem: &P,
+    state: &P::State,
+    robust: Option<RobustLoss>,
+) -> Result<NormalEquations, P::Error> {
+    let mut ne = NormalEquations::zeros(problem.global_len(), problem.block_count());
+    problem.evaluate(state, true, &mut |term| {
+        let s: f64 = term.r.iter().map(|r| r * r).sum();
+        ne.add(robust.map_or(1.0, |l| l.weight(s)), term);
+    })?;
+    ne.finish();
+    Ok(ne)
+}
+
+/// Minimises the problem's cost from `start` (module documentation). Fails
+/// only when the start itself cannot be evaluated.
+pub fn solve<P: Problem>(
+    problem: &P,
+    start: P::State,
+    options: &SolverOptions,
+) -> Result<Solution<P::State>, P::Error> {
+    let robust = options.robust;
+    let mut state = start;
+    let mut cost_now = cost(problem, &state, robust)?;
+    let mut history = vec![cost_now];
+    let (mut lambda, mut nu) = (options.initial_lambda, 2.0);
+    let (mut iterations, mut accepted) = (0, 0);
+    let mut ne = normal_equations(problem, &state, robust)?;
+    let termination = loop {
+        if cost_now <= options.exact_cost {
+            break Termination::ExactFit;
+        }
+        if iterations >= options.max_iterations {
+            break Termination::MaxIterations;
+        }
+        if lambda > 1e16 {
+            break Termination::DampingSaturated;
+        }
+        iterations += 1;
+        let Some(step) = ne.solve(lambda) else {
+            lambda *= nu;
+            nu *= 2.0;
+            continue;
+        };
+        let trial = problem.apply_step(&state, &step);
+        let trial_cost = trial
+            .as_ref()
+            .and_then(|t| cost(problem, t, robust).ok())
+            .filter(|c| c.is_finite())
+            .unwrap_or(f64::INFINITY);
+        match trial {
+            Some(next) if trial_cost < cost_now => {
+                let small_step = step_is_negligible(&ne, &step, cost_now, options);
+                let small_change = (cost_now - trial_cost) <= options.cost_tolerance * cost_now;
+                state = next;
+                cost_now = trial_cost;
+                history.push(cost_now);
+                accepted += 1;
+                lambda = (lambda / 3.0).max(1e-15);
+                nu = 2.0;
+                if small_step {
+                    break Termination::StepConverged;
+                }
+                if small_change {
+                    break Termination::CostConverged;
+                }
+                match normal_equations(problem, &state, robust) {
+                    Ok(next_ne) => ne = next_ne,
+                    // The accepted state evaluates (its cost is finite), so
+                    // this cannot happen; stop on the state reached.
+                    Err(_) => break Termination::DampingSaturated,
+                }
+            }
+            _ => {
+                lambda *= nu;
+                nu *= 2.0;
+            }
+        }
+    };
+    Ok(Solution {
+        state,
+        cost: cost_now,
+        report: SolverReport {
+            termination,
+            iterations,
+            accepted,
+            cost_history: history,
+            final_lambda: lambda,
+        },
+    })
+}
+
+/// Whether a step is negligible: the change it makes to the residuals,
+/// `‖J δ‖ ≈ sqrt(Σ δ_k² diag(JᵀJ)_k)`, is below `step_tolerance` times the
+/// residual norm `sqrt(cost)` (with the rounding floor for exact data). One
+/// threshold thus serves `f` (mm) and `k3` (mm⁻⁶) alike.
+fn step_is_negligible(
+    ne: &NormalEquations,
+    step: &Step,
+    cost: f64,
+    options: &SolverOptions,
+) -> bool {
+    let mut change2 = 0.0;
+    for k in 0..step.da.len() {
+        change2 += step.da[k] * step.da[k] * ne.u[(k, k)];
+    }
+    for (i, db) in step.db.iter().enumerate() {
+        for k in 0..6 {
+            change2 += db[k] * db[k] * ne.v[i][(k, k)];
+        }
+    }
+    let tolerance = options.step_tolerance;
+    change2 <= tolerance * tolerance * cost.max(options.step_floor)
+}
