@@ -18,6 +18,7 @@
 pub mod camera;
 pub mod distortion;
 mod error;
+pub mod paper_setup;
 pub mod params;
 pub mod pose;
 pub mod projection;
