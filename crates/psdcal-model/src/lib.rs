@@ -15,10 +15,12 @@
 //! the repository for symbols and frames.
 #![warn(missing_docs)]
 
+// The paper's simulated set-up as psdcal fixes it (docs/model.md §7).
+pub mod paper_setup;
+
 pub mod camera;
 pub mod distortion;
 mod error;
-pub mod paper_setup;
 pub mod params;
 pub mod pose;
 pub mod projection;
