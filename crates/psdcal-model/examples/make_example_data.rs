@@ -8,26 +8,13 @@
 use std::fmt::Write as _;
 
 use nalgebra::{Vector2, Vector3};
+use psdcal_model::paper_setup::SCATTER14_MM;
 use psdcal_model::sensor::{electrode_currents, is_on_active_area, transimpedance_gain};
 use psdcal_model::{Pose, PsdGeometry, SensorModel};
 
-/// LED positions on the template (mm): 14 LEDs, no three collinear.
-const TEMPLATE_MM: [(f64, f64); 14] = [
-    (-140.0, -120.0),
-    (-60.0, -135.0),
-    (35.0, -110.0),
-    (120.0, -140.0),
-    (-120.0, -40.0),
-    (-25.0, -55.0),
-    (70.0, -30.0),
-    (145.0, -60.0),
-    (-135.0, 50.0),
-    (-50.0, 35.0),
-    (40.0, 60.0),
-    (130.0, 25.0),
-    (-80.0, 130.0),
-    (90.0, 140.0),
-];
+/// LED positions on the template (mm): `scatter14`, 14 LEDs, no three
+/// collinear (the paper's set-up as psdcal fixes it).
+const TEMPLATE_MM: [(f64, f64); 14] = SCATTER14_MM;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let model = SensorModel::paper_lens2();

@@ -18,6 +18,9 @@
 //! the repository for symbols and frames.
 #![warn(missing_docs)]
 
+// The paper's simulated set-up as psdcal fixes it (docs/model.md §7).
+pub mod paper_setup;
+
 pub mod camera;
 pub mod distortion;
 mod error;

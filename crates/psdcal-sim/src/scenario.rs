@@ -93,33 +93,16 @@ pub struct Template {
     pub line_names: Vec<String>,
 }
 
-/// The 14 unaligned LEDs of `scatter14`, mm.
-pub const SCATTER14_MM: [(f64, f64); 14] = [
-    (-140.0, -120.0),
-    (-60.0, -135.0),
-    (35.0, -110.0),
-    (120.0, -140.0),
-    (-120.0, -40.0),
-    (-25.0, -55.0),
-    (70.0, -30.0),
-    (145.0, -60.0),
-    (-135.0, 50.0),
-    (-50.0, 35.0),
-    (40.0, 60.0),
-    (130.0, 25.0),
-    (-80.0, 130.0),
-    (90.0, 140.0),
-];
+/// The 14 unaligned LEDs of `scatter14`, mm (defined once, in
+/// [`psdcal_model::paper_setup`]).
+pub use psdcal_model::paper_setup::SCATTER14_MM;
 
 impl TemplateKind {
     /// The template's LEDs and lines.
     pub fn template(self) -> Template {
         match self {
             TemplateKind::Scatter14 => Template {
-                leds: SCATTER14_MM
-                    .iter()
-                    .map(|&(x, y)| Vector2::new(x, y))
-                    .collect(),
+                leds: psdcal_model::paper_setup::scatter14(),
                 lines: Vec::new(),
                 line_names: Vec::new(),
             },

@@ -8,88 +8,32 @@
 //! up to 30° about a random in-plane axis, any roll; a pose is redrawn (from
 //! a fixed-seed ChaCha8 stream) until every LED's measured point lies inside
 //! ±4.4 mm, and the aim is pulled towards the centre when no pose fits.
+//!
+//! The templates, the pose draw and the observations come from
+//! `psdcal-testkit`; this module names them as the linear tests use them and
+//! turns the points into `CalibrationData`.
 #![allow(dead_code)]
 
-use nalgebra::{Rotation3, Unit, Vector2, Vector3};
-use psdcal_calib::{CalibrationData, ImageObservations, Observation};
-use psdcal_model::{Pose, PsdGeometry, SensorModel};
-use rand::{Rng, SeedableRng};
+#[path = "../support/data.rs"]
+mod data;
+
+use nalgebra::Vector2;
+use psdcal_calib::CalibrationData;
+use psdcal_model::{Pose, SensorModel};
+use psdcal_testkit::PointKind;
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
+use rand_distr::Normal;
 
-/// Half-side of the square every measured point must fall in, mm.
-pub const HALF_SIDE_MM: f64 = 4.4;
-
-/// 14 LEDs (mm), no three collinear.
+/// 14 LEDs (mm), no three collinear: `scatter14`.
 pub fn unaligned_template() -> Vec<Vector2<f64>> {
-    [
-        (-140.0, -120.0),
-        (-60.0, -135.0),
-        (35.0, -110.0),
-        (120.0, -140.0),
-        (-120.0, -40.0),
-        (-25.0, -55.0),
-        (70.0, -30.0),
-        (145.0, -60.0),
-        (-135.0, 50.0),
-        (-50.0, 35.0),
-        (40.0, 60.0),
-        (130.0, 25.0),
-        (-80.0, 130.0),
-        (90.0, 140.0),
-    ]
-    .iter()
-    .map(|&(x, y)| Vector2::new(x, y))
-    .collect()
+    psdcal_testkit::scatter14()
 }
 
 /// A 5 × 5 grid (pitch 75 mm, ±150 mm) and its 12 lines: 5 rows, 5 columns,
 /// 2 diagonals.
 pub fn grid_template() -> (Vec<Vector2<f64>>, Vec<Vec<usize>>) {
-    let pts = (0..5)
-        .flat_map(|i| {
-            (0..5).map(move |j| Vector2::new(-150.0 + 75.0 * j as f64, -150.0 + 75.0 * i as f64))
-        })
-        .collect();
-    let mut lines: Vec<Vec<usize>> = Vec::new();
-    for i in 0..5 {
-        lines.push((0..5).map(|j| 5 * i + j).collect());
-        lines.push((0..5).map(|j| 5 * j + i).collect());
-    }
-    lines.push((0..5).map(|k| 6 * k).collect());
-    lines.push((0..5).map(|k| 4 * (k + 1)).collect());
-    (pts, lines)
-}
-
-/// Pose with the template centre seen at `aim` (ideal image, mm) at depth
-/// `z`, tilted by `tilt` about the in-plane axis at angle `axis`, rolled by
-/// `roll` about the template normal.
-pub fn aimed_pose(
-    model: &SensorModel,
-    aim: Vector2<f64>,
-    z: f64,
-    tilt: f64,
-    axis: f64,
-    roll: f64,
-) -> Pose {
-    let k = &model.intrinsics;
-    let tilt_rot = Rotation3::from_axis_angle(
-        &Unit::new_normalize(Vector3::new(axis.cos(), axis.sin(), 0.0)),
-        tilt,
-    );
-    let roll_rot = Rotation3::from_axis_angle(&Vector3::z_axis(), roll);
-    let r = (tilt_rot * roll_rot).into_inner();
-    let t = Vector3::new((aim.x - k.cx) * z / k.f, (aim.y - k.cy) * z / k.f, z);
-    Pose::from_rotation(&r, t)
-}
-
-/// Whether every template point of `pose` projects (with distortion) inside
-/// ±[`HALF_SIDE_MM`].
-pub fn fits(model: &SensorModel, pose: &Pose, template: &[Vector2<f64>]) -> bool {
-    template.iter().all(|p| match model.project(pose, p) {
-        Ok(m) => m.x.abs() <= HALF_SIDE_MM && m.y.abs() <= HALF_SIDE_MM,
-        Err(_) => false,
-    })
+    psdcal_testkit::grid75()
 }
 
 /// `n` random poses (module documentation) that keep `template` on the sensor.
@@ -101,33 +45,7 @@ pub fn poses(
     max_tilt: f64,
     seed: u64,
 ) -> Vec<Pose> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut out = Vec::with_capacity(n);
-    for k in 0..n {
-        let cell = Vector2::new((k % 3) as f64 - 1.0, ((k / 3) % 3) as f64 - 1.0);
-        let mut reach = 2.8;
-        'aim: loop {
-            for _ in 0..400 {
-                let z = rng.random_range(700.0..1500.0);
-                let aim = cell * reach
-                    + Vector2::new(rng.random_range(-0.2..0.2), rng.random_range(-0.2..0.2));
-                let pose = if max_tilt > 0.0 {
-                    let tilt = rng.random_range(0.3 * max_tilt..max_tilt);
-                    let axis = rng.random_range(0.0..std::f64::consts::TAU);
-                    let roll = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-                    aimed_pose(model, aim, z, tilt, axis, roll)
-                } else {
-                    aimed_pose(model, aim, z, 0.0, 0.0, 0.0)
-                };
-                if fits(model, &pose, template) {
-                    out.push(pose);
-                    break 'aim;
-                }
-            }
-            reach *= 0.8;
-        }
-    }
-    out
+    psdcal_testkit::aimed_grid_poses(model, template, n, max_tilt, seed)
 }
 
 /// The data of `poses`: measured points (`ideal = false`, through the
@@ -144,35 +62,16 @@ pub fn observe(
 ) -> CalibrationData {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, sigma_mm.max(1e-300)).expect("valid sigma");
-    let images = poses
-        .iter()
-        .enumerate()
-        .map(|(i, pose)| ImageObservations {
-            id: format!("{}", i + 1),
-            points: template
-                .iter()
-                .enumerate()
-                .map(|(led, p)| {
-                    let mut m = if ideal {
-                        model.project_ideal(pose, p).expect("in front")
-                    } else {
-                        model.project(pose, p).expect("projectable")
-                    };
-                    if sigma_mm > 0.0 {
-                        m += Vector2::new(noise.sample(&mut rng), noise.sample(&mut rng));
-                    }
-                    Observation { led, measured: m }
-                })
-                .collect(),
-        })
-        .collect();
-    CalibrationData {
-        amplitudes: None,
-        template: template.to_vec(),
-        lines: lines.to_vec(),
-        images,
-        geometry: PsdGeometry::default(),
+    let kind = if ideal {
+        PointKind::Ideal
+    } else {
+        PointKind::Measured
+    };
+    let mut points = psdcal_testkit::image_points(model, template, poses, kind);
+    if sigma_mm > 0.0 {
+        psdcal_testkit::add_noise(&mut points, &noise, &mut rng);
     }
+    data::calibration_data(template, lines, points)
 }
 
 /// A scenario: the truth and what it produced.

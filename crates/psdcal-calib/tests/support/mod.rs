@@ -1,16 +1,22 @@
 //! Synthetic calibration scenarios for the refinement tests: a 14-LED
 //! unaligned template, poses 0.7–1.5 m away tilted up to 30° whose images
 //! together cover the sensor, optional Gaussian noise on the measured points.
+//! The templates, the pose draw and the observations come from
+//! `psdcal-testkit`; this module turns them into `CalibrationData`.
 #![allow(dead_code)]
 
+mod data;
 pub mod robustness;
 
-use nalgebra::{Vector2, Vector3};
-use psdcal_calib::{CalibrationData, ImageObservations, Observation};
-use psdcal_model::{Param, Pose, PsdGeometry, SensorModel};
-use rand::{Rng, SeedableRng};
+pub use data::calibration_data;
+
+use nalgebra::Vector2;
+use psdcal_calib::CalibrationData;
+use psdcal_model::{Param, Pose, SensorModel};
+use psdcal_testkit::PointKind;
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
+use rand_distr::Normal;
 
 /// Asserts that every `free` parameter of `got` matches `truth`: relative
 /// 1e-6 where the value is not zero, absolute otherwise in the parameter's
@@ -36,42 +42,10 @@ pub fn assert_recovered<P: AsRef<str>>(
     }
 }
 
-/// 14 LEDs (mm), no three collinear.
-pub const TEMPLATE_MM: [(f64, f64); 14] = [
-    (-140.0, -120.0),
-    (-60.0, -135.0),
-    (35.0, -110.0),
-    (120.0, -140.0),
-    (-120.0, -40.0),
-    (-25.0, -55.0),
-    (70.0, -30.0),
-    (145.0, -60.0),
-    (-135.0, 50.0),
-    (-50.0, 35.0),
-    (40.0, 60.0),
-    (130.0, 25.0),
-    (-80.0, 130.0),
-    (90.0, 140.0),
-];
-
-/// Six more LEDs for a 20-LED template (still no three collinear).
-pub const EXTRA_MM: [(f64, f64); 6] = [
-    (-10.0, -150.0),
-    (100.0, 95.0),
-    (-150.0, 110.0),
-    (15.0, 145.0),
-    (150.0, -10.0),
-    (-95.0, -95.0),
-];
-
-/// The first `leds` LEDs of the 20-LED template (14 or 20).
+/// The first `leds` LEDs of the 20-LED template (14 or 20): `scatter14`
+/// and six more.
 pub fn template(leds: usize) -> Vec<Vector2<f64>> {
-    TEMPLATE_MM
-        .iter()
-        .chain(EXTRA_MM.iter())
-        .take(leds)
-        .map(|&(x, y)| Vector2::new(x, y))
-        .collect()
+    psdcal_testkit::scatter(leds)
 }
 
 /// A scenario: the truth and the data it produced.
@@ -96,38 +70,7 @@ pub fn poses_for(
     n: usize,
     rng: &mut ChaCha8Rng,
 ) -> Vec<Pose> {
-    let mut out = Vec::with_capacity(n);
-    while out.len() < n {
-        let k = out.len() % 9;
-        let aim = Vector2::new(-2.6 + 2.6 * (k % 3) as f64, -2.6 + 2.6 * (k / 3) as f64)
-            + Vector2::new(rng.random_range(-0.6..0.6), rng.random_range(-0.6..0.6));
-        let z: f64 = rng.random_range(700.0..1500.0);
-        let tilt: f64 = rng.random_range(0.0..30f64.to_radians());
-        let axis_angle: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-        let roll: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-        let tilt_pose = Pose::new(
-            Vector3::new(axis_angle.cos(), axis_angle.sin(), 0.0) * tilt,
-            Vector3::zeros(),
-        );
-        let roll_pose = Pose::new(Vector3::new(0.0, 0.0, roll), Vector3::zeros());
-        let rot = tilt_pose.compose(&roll_pose);
-        let t = Vector3::new(
-            (aim.x - truth.intrinsics.cx) * z / truth.intrinsics.f,
-            (aim.y - truth.intrinsics.cy) * z / truth.intrinsics.f,
-            z,
-        );
-        let pose = Pose::new(rot.rvec, t);
-        let inside = template.iter().all(|xy| {
-            truth
-                .project(&pose, xy)
-                .map(|m| m.x.abs() < 4.4 && m.y.abs() < 4.4)
-                .unwrap_or(false)
-        });
-        if inside {
-            out.push(pose);
-        }
-    }
-    out
+    psdcal_testkit::covering_poses(truth, template, n, rng)
 }
 
 /// A scenario with `n` images and point noise of std `sigma_mm` per
@@ -168,56 +111,15 @@ pub fn observe_with(
     sigma_mm: f64,
     rng: &mut ChaCha8Rng,
 ) -> CalibrationData {
-    let template = template.to_vec();
     let noise = Normal::new(0.0, sigma_mm.max(0.0)).expect("valid sigma");
-    let images = poses
-        .iter()
-        .enumerate()
-        .map(|(i, pose)| ImageObservations {
-            id: format!("{}", i + 1),
-            points: template
-                .iter()
-                .enumerate()
-                .map(|(led, xy)| {
-                    let m = truth.project(pose, xy).expect("pose checked");
-                    let n = if sigma_mm > 0.0 {
-                        Vector2::new(noise.sample(rng), noise.sample(rng))
-                    } else {
-                        Vector2::zeros()
-                    };
-                    Observation {
-                        led,
-                        measured: m + n,
-                    }
-                })
-                .collect(),
-        })
-        .collect();
-    CalibrationData {
-        amplitudes: None,
-        template,
-        lines: Vec::new(),
-        images,
-        geometry: PsdGeometry::default(),
+    let mut points = psdcal_testkit::image_points(truth, template, poses, PointKind::Measured);
+    if sigma_mm > 0.0 {
+        psdcal_testkit::add_noise(&mut points, &noise, rng);
     }
+    calibration_data(template, &[], points)
 }
 
 /// The truth disturbed: a start for the refinement that is near but not at it.
 pub fn perturbed(truth: &SensorModel, poses: &[Pose]) -> (SensorModel, Vec<Pose>) {
-    let mut m = *truth;
-    m.intrinsics.f *= 1.04;
-    m.intrinsics.cx += 0.15;
-    m.intrinsics.cy -= 0.2;
-    m.distortion.k1 *= 0.8;
-    m.distortion.k2 = 0.0;
-    let p = poses
-        .iter()
-        .map(|p| {
-            Pose::new(
-                p.rvec + Vector3::new(0.01, -0.015, 0.02),
-                p.t + Vector3::new(8.0, -5.0, 30.0),
-            )
-        })
-        .collect();
-    (m, p)
+    psdcal_testkit::perturbed(truth, poses)
 }

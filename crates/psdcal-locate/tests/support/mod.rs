@@ -1,16 +1,18 @@
 //! Shared helpers of psdcal-locate's tests: models, rigs, synthetic
 //! calibration scenarios (the idea of psdcal-calib's `tests/support`: a
 //! 14-LED template, poses 0.7–1.5 m away tilted up to 30°, Gaussian point
-//! noise) and finite differences.
+//! noise) and finite differences. The template, the pose draw and the
+//! observations come from `psdcal-testkit`.
 #![allow(dead_code)]
 
 use nalgebra::{Vector2, Vector3};
 use psdcal_calib::{CalibrationData, ImageObservations, Observation};
 use psdcal_locate::{measured_from_ray, CalibratedSensor, Rig, RigSensor};
 use psdcal_model::{Pose, PsdGeometry, SensorModel};
-use rand::{Rng, SeedableRng};
+use psdcal_testkit::PointKind;
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
+use rand_distr::Normal;
 
 /// The paper's two lenses, and lens 2 with every model term non-zero.
 pub fn models() -> Vec<(&'static str, SensorModel)> {
@@ -97,69 +99,16 @@ pub fn rel(analytic: f64, numeric: f64, scale: f64) -> f64 {
 
 // --- Calibration scenarios -------------------------------------------------
 
-/// 14 LEDs (mm), no three collinear.
-pub const TEMPLATE_MM: [(f64, f64); 14] = [
-    (-140.0, -120.0),
-    (-60.0, -135.0),
-    (35.0, -110.0),
-    (120.0, -140.0),
-    (-120.0, -40.0),
-    (-25.0, -55.0),
-    (70.0, -30.0),
-    (145.0, -60.0),
-    (-135.0, 50.0),
-    (-50.0, 35.0),
-    (40.0, 60.0),
-    (130.0, 25.0),
-    (-80.0, 130.0),
-    (90.0, 140.0),
-];
-
-/// The template.
+/// The template: `scatter14`, 14 LEDs (mm), no three collinear.
 pub fn template() -> Vec<Vector2<f64>> {
-    TEMPLATE_MM
-        .iter()
-        .map(|&(x, y)| Vector2::new(x, y))
-        .collect()
+    psdcal_testkit::scatter14()
 }
 
 /// Random poses aimed at a jittered 3 × 3 grid over the sensor, 0.7–1.5 m
 /// away, tilted up to 30° about an axis in the template plane, any roll;
 /// redrawn until every LED falls inside ±4.4 mm.
 pub fn poses(truth: &SensorModel, n: usize, rng: &mut ChaCha8Rng) -> Vec<Pose> {
-    let template = template();
-    let mut out = Vec::with_capacity(n);
-    while out.len() < n {
-        let k = out.len() % 9;
-        let aim = Vector2::new(-2.6 + 2.6 * (k % 3) as f64, -2.6 + 2.6 * (k / 3) as f64)
-            + Vector2::new(rng.random_range(-0.6..0.6), rng.random_range(-0.6..0.6));
-        let z: f64 = rng.random_range(700.0..1500.0);
-        let tilt: f64 = rng.random_range(0.0..30f64.to_radians());
-        let axis_angle: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-        let roll: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-        let tilt_pose = Pose::new(
-            Vector3::new(axis_angle.cos(), axis_angle.sin(), 0.0) * tilt,
-            Vector3::zeros(),
-        );
-        let roll_pose = Pose::new(Vector3::new(0.0, 0.0, roll), Vector3::zeros());
-        let rot = tilt_pose.compose(&roll_pose);
-        let t = Vector3::new(
-            (aim.x - truth.intrinsics.cx) * z / truth.intrinsics.f,
-            (aim.y - truth.intrinsics.cy) * z / truth.intrinsics.f,
-            z,
-        );
-        let pose = Pose::new(rot.rvec, t);
-        let inside = template.iter().all(|xy| {
-            truth
-                .project(&pose, xy)
-                .map(|m| m.x.abs() < 4.4 && m.y.abs() < 4.4)
-                .unwrap_or(false)
-        });
-        if inside {
-            out.push(pose);
-        }
-    }
-    out
+    psdcal_testkit::covering_poses(truth, &template(), n, rng)
 }
 
 /// The poses of a scenario, from `seed`.
@@ -177,19 +126,17 @@ pub fn observe(
 ) -> CalibrationData {
     let template = template();
     let noise = Normal::new(0.0, sigma_mm).expect("valid sigma");
-    let images = poses
-        .iter()
+    let mut points = psdcal_testkit::image_points(truth, &template, poses, PointKind::Measured);
+    psdcal_testkit::add_noise(&mut points, &noise, rng);
+    let images = points
+        .into_iter()
         .enumerate()
-        .map(|(i, pose)| ImageObservations {
+        .map(|(i, image)| ImageObservations {
             id: format!("{}", i + 1),
-            points: template
-                .iter()
+            points: image
+                .into_iter()
                 .enumerate()
-                .map(|(led, xy)| Observation {
-                    led,
-                    measured: truth.project(pose, xy).expect("pose checked")
-                        + Vector2::new(noise.sample(rng), noise.sample(rng)),
-                })
+                .map(|(led, measured)| Observation { led, measured })
                 .collect(),
         })
         .collect();

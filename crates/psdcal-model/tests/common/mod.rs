@@ -54,15 +54,10 @@ pub fn example_poses() -> Vec<Pose> {
     ]
 }
 
-/// Template points (mm) used with [`example_poses`].
+/// Template points (mm) used with [`example_poses`]: the centre and four
+/// LEDs of `scatter14` (corners of the template).
 pub fn example_template_points() -> Vec<Vector2<f64>> {
-    vec![
-        Vector2::new(0.0, 0.0),
-        Vector2::new(-140.0, -120.0),
-        Vector2::new(145.0, -60.0),
-        Vector2::new(-80.0, 130.0),
-        Vector2::new(90.0, 140.0),
-    ]
+    vec![Vector2::new(0.0, 0.0), led(0), led(7), led(12), led(13)]
 }
 
 /// Typical magnitudes of the model parameters in [`psdcal_model::Param::ALL`]
@@ -134,4 +129,10 @@ pub fn check_jacobian_with_floor(
             scales[j]
         );
     }
+}
+
+/// LED `k` of `scatter14` (psdcal_model::paper_setup), mm.
+fn led(k: usize) -> Vector2<f64> {
+    let (x, y) = psdcal_model::paper_setup::SCATTER14_MM[k];
+    Vector2::new(x, y)
 }
