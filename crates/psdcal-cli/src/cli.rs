@@ -4,8 +4,11 @@
 use std::path::PathBuf;
 
 use clap::{ArgGroup, Args, CommandFactory, Parser, Subcommand};
-use psdcal_calib::{CostKind, NoiseModel, Preliminary, RobustLoss};
-use psdcal_model::{Param, PsdGeometry};
+pub use psdcal::PointSource;
+use psdcal::{CalibrationOptions, Param, PsdGeometry, Robust};
+use psdcal_model::UnknownParam;
+
+use crate::choice::{CostArg, NoiseArg, PreliminaryArg};
 
 const MAIN_EXAMPLES: &str = "\
 Examples:
@@ -169,19 +172,19 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "MM", value_parser = positive_mm)]
     pub focal_guess: Option<f64>,
     /// Cost to minimise: template (the paper's template-plane error) or image
-    #[arg(long, value_name = "KIND", default_value = "template", value_parser = ["template", "image"])]
-    pub cost: String,
+    #[arg(long, value_name = "KIND", value_enum, default_value_t = CostArg::Template)]
+    pub cost: CostArg,
     /// Noise weighting of the cost: uniform (unweighted, the paper's),
     /// channel-snr (the same SNR on every electrode channel: points near the
     /// electrodes weigh more) or channel-floor (the same absolute noise on
     /// every channel: brighter spots weigh more)
-    #[arg(long, value_name = "MODEL", default_value = "uniform", value_parser = ["uniform", "channel-snr", "channel-floor"])]
-    pub noise: String,
+    #[arg(long, value_name = "MODEL", value_enum, default_value_t = NoiseArg::Uniform)]
+    pub noise: NoiseArg,
     /// Preliminary distortion correction before the linear stage: auto (line
     /// straightness when the template declares lines, else homography
     /// consistency), straightness, homography, or off
-    #[arg(long, value_name = "METHOD", default_value = "auto", value_parser = ["auto", "straightness", "homography", "off"])]
-    pub preliminary: String,
+    #[arg(long, value_name = "METHOD", value_enum, default_value_t = PreliminaryArg::Auto)]
+    pub preliminary: PreliminaryArg,
     /// Skip the preliminary distortion correction (same as --preliminary off)
     #[arg(long, conflicts_with = "preliminary")]
     pub no_preliminary: bool,
@@ -190,7 +193,7 @@ pub struct CalibrateArgs {
     pub no_normalize: bool,
     /// Robust loss: huber:SCALE or cauchy:SCALE (SCALE in mm of the cost)
     #[arg(long, value_name = "LOSS:SCALE", value_parser = parse_robust)]
-    pub robust: Option<RobustLoss>,
+    pub robust: Option<Robust>,
     /// Value of a fixed parameter, NAME=VALUE (repeatable), e.g. l1=-1.3058e-3
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment, allow_negative_numbers = true)]
     pub set: Vec<(Param, f64)>,
@@ -241,15 +244,6 @@ pub enum Output {
     Json,
 }
 
-/// Where `check` takes its points from.
-#[derive(Debug, Clone, PartialEq)]
-pub enum PointSource {
-    /// observations.csv.
-    Observations(PathBuf),
-    /// signals.csv.
-    Signals(PathBuf),
-}
-
 /// Validated configuration of `psdcal check`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CheckConfig {
@@ -276,16 +270,8 @@ pub struct CalibrateConfig {
     pub strict: bool,
     pub out: PathBuf,
     pub residuals: Option<PathBuf>,
-    pub free: Vec<Param>,
-    pub fit_gains: bool,
     pub gains_file: Option<PathBuf>,
-    pub fixed_values: Vec<(Param, f64)>,
-    pub focal_guess: Option<f64>,
-    pub cost: CostKind,
-    pub noise: NoiseModel,
-    pub preliminary: Preliminary,
-    pub normalize: bool,
-    pub robust: Option<RobustLoss>,
+    pub options: CalibrationOptions,
 }
 
 /// What to run.
@@ -370,33 +356,22 @@ impl Cli {
                     strict: args.strict,
                     out: args.out,
                     residuals: args.residuals,
-                    free,
-                    fit_gains,
                     gains_file: args.gains,
-                    fixed_values: args.set,
-                    focal_guess: args.focal_guess,
-                    cost: if args.cost == "image" {
-                        CostKind::Image
-                    } else {
-                        CostKind::Template
+                    options: CalibrationOptions {
+                        free,
+                        fit_gains,
+                        fixed: args.set,
+                        focal_guess: args.focal_guess,
+                        cost: args.cost.into(),
+                        noise: args.noise.into(),
+                        preliminary: if args.no_preliminary {
+                            psdcal::Preliminary::Off
+                        } else {
+                            args.preliminary.into()
+                        },
+                        normalize: !args.no_normalize,
+                        robust: args.robust,
                     },
-                    noise: match args.noise.as_str() {
-                        "channel-snr" => NoiseModel::ChannelSnr,
-                        "channel-floor" => NoiseModel::ChannelFloor,
-                        _ => NoiseModel::Uniform,
-                    },
-                    preliminary: if args.no_preliminary {
-                        Preliminary::Off
-                    } else {
-                        match args.preliminary.as_str() {
-                            "straightness" => Preliminary::Straightness,
-                            "homography" => Preliminary::HomographyConsistency,
-                            "off" => Preliminary::Off,
-                            _ => Preliminary::Auto,
-                        }
-                    },
-                    normalize: !args.no_normalize,
-                    robust: args.robust,
                 })
             }
             Command::Correct(args) => {
@@ -430,9 +405,7 @@ fn parse_fit(text: &str) -> Result<FitList, String> {
             gains = true;
             continue;
         }
-        let p: Param = name
-            .parse()
-            .map_err(|e: psdcal_model::UnknownParam| e.to_string())?;
+        let p: Param = name.parse().map_err(|e: UnknownParam| e.to_string())?;
         if out.contains(&p) {
             return Err(format!("'{p}' is listed twice"));
         }
@@ -445,14 +418,14 @@ fn parse_fit(text: &str) -> Result<FitList, String> {
 }
 
 /// `--robust huber:0.1` or `cauchy:0.1`.
-fn parse_robust(text: &str) -> Result<RobustLoss, String> {
+fn parse_robust(text: &str) -> Result<Robust, String> {
     let (kind, scale) = text
         .split_once(':')
         .ok_or_else(|| format!("expected LOSS:SCALE such as huber:0.1, found '{text}'"))?;
     let scale = positive_mm(scale)?;
     match kind.trim().to_ascii_lowercase().as_str() {
-        "huber" => Ok(RobustLoss::Huber { scale }),
-        "cauchy" => Ok(RobustLoss::Cauchy { scale }),
+        "huber" => Ok(Robust::Huber { scale }),
+        "cauchy" => Ok(Robust::Cauchy { scale }),
         other => Err(format!("unknown loss '{other}' (expected huber or cauchy)")),
     }
 }
@@ -462,9 +435,7 @@ fn parse_assignment(text: &str) -> Result<(Param, f64), String> {
     let (name, value) = text
         .split_once('=')
         .ok_or_else(|| format!("expected NAME=VALUE such as l1=-1.3e-3, found '{text}'"))?;
-    let p: Param = name
-        .parse()
-        .map_err(|e: psdcal_model::UnknownParam| e.to_string())?;
+    let p: Param = name.parse().map_err(|e: UnknownParam| e.to_string())?;
     match value.trim().parse::<f64>() {
         Ok(v) if v.is_finite() => Ok((p, v)),
         _ => Err(format!("expected a finite number for {p}, found '{value}'")),

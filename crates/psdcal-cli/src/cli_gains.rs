@@ -5,6 +5,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use crate::choice::GainsMethodArg;
+
 pub const GAINS_EXAMPLES: &str = "\
 Example:
   psdcal gains --signals equal.csv --method equal-current --out gains.json
@@ -23,8 +25,8 @@ pub struct GainsArgs {
     #[arg(long, short = 's', value_name = "FILE")]
     pub signals: PathBuf,
     /// Estimation method (equal-current: all four channels carry the same current)
-    #[arg(long, value_name = "METHOD", default_value = "equal-current", value_parser = ["equal-current"])]
-    pub method: String,
+    #[arg(long, value_name = "METHOD", value_enum, default_value_t = GainsMethodArg::EqualCurrent)]
+    pub method: GainsMethodArg,
     /// Where to write gains.json (atomically); standard output when absent
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,

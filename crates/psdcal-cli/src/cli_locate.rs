@@ -5,9 +5,11 @@ use std::path::PathBuf;
 
 use clap::{ArgGroup, Args, CommandFactory};
 use nalgebra::Vector3;
-use psdcal_locate::{LocateOptions, Plane, MAX_GRID};
-use psdcal_model::Param;
+use psdcal::{LocateOptions, Param, Plane, MAX_GRID};
+pub use psdcal::{LocateTarget, MapModel, MapSource};
+use psdcal_model::UnknownParam;
 
+use crate::choice::LensArg;
 use crate::cli::{positive_mm, Cli, Output};
 
 pub const AOA_EXAMPLES: &str = "\
@@ -148,8 +150,8 @@ pub struct MapArgs {
     #[arg(long, short = 'c', value_name = "FILE")]
     pub calibration: Option<PathBuf>,
     /// The paper's simulated lens instead of a calibration: 1 (f = 25 mm) or 2 (f = 8 mm), 9 x 9 mm PSD
-    #[arg(long, value_name = "N", value_parser = ["1", "2"])]
-    pub lens: Option<String>,
+    #[arg(long, value_name = "N", value_enum)]
+    pub lens: Option<LensArg>,
     /// Parameter error NAME=VALUE (repeatable or comma-separated), e.g. f=0.05,cx=0.02,k1=1e-4
     #[arg(long = "error", value_name = "NAME=VALUE", value_parser = parse_error_list, allow_hyphen_values = true)]
     pub errors: Vec<Vec<(Param, f64)>>,
@@ -186,15 +188,6 @@ pub struct AoaConfig {
     pub point_sigma_mm: Option<f64>,
 }
 
-/// Where `locate` puts the emitters.
-#[derive(Debug, Clone, PartialEq)]
-pub enum LocateTarget {
-    /// A plane in the sensor frame (`--distance` or `--plane`), with the calibration.
-    Plane { calibration: PathBuf, plane: Plane },
-    /// A rig file.
-    Rig(PathBuf),
-}
-
 /// Validated configuration of `psdcal locate`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LocateConfig {
@@ -203,20 +196,6 @@ pub struct LocateConfig {
     pub out: Option<PathBuf>,
     pub options: LocateOptions,
     pub point_sigma_given: bool,
-}
-
-/// Which model `map` evaluates.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MapModel {
-    Calibration(PathBuf),
-    PaperLens(u8),
-}
-
-/// Where the map's errors come from.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MapSource {
-    Errors(Vec<(Param, f64)>),
-    KSigma(f64),
 }
 
 /// Validated configuration of `psdcal map`.
@@ -311,7 +290,7 @@ impl MapArgs {
         }
         let model = match (self.calibration, self.lens) {
             (Some(path), None) => MapModel::Calibration(path),
-            (None, Some(lens)) => MapModel::PaperLens(if lens == "1" { 1 } else { 2 }),
+            (None, Some(lens)) => MapModel::PaperLens(if lens == LensArg::One { 1 } else { 2 }),
             _ => {
                 return Err(usage(
                     clap::error::ErrorKind::ArgumentConflict,
@@ -413,9 +392,7 @@ fn parse_error_list(text: &str) -> Result<Vec<(Param, f64)>, String> {
         let (name, value) = item
             .split_once('=')
             .ok_or_else(|| format!("expected NAME=VALUE such as f=0.05, found '{item}'"))?;
-        let p: Param = name
-            .parse()
-            .map_err(|e: psdcal_model::UnknownParam| e.to_string())?;
+        let p: Param = name.parse().map_err(|e: UnknownParam| e.to_string())?;
         let v = number(value)
             .ok_or_else(|| format!("expected a finite number for {p}, found '{value}'"))?;
         out.push((p, v));

@@ -4,7 +4,9 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use psdcal_sim::{Lens, TemplateKind, TABLE_IDS};
+use psdcal::MAX_RECORD_CYCLES;
+
+use crate::choice::{choice, name, LensArg, TableArg, TemplateArg};
 
 pub const SIMULATE_EXAMPLES: &str = "\
 Examples:
@@ -39,8 +41,8 @@ Example:
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct SimulateArgs {
     /// The paper's lens: 1 (f = 25 mm) or 2 (f = 8 mm)
-    #[arg(long, value_name = "1|2", default_value = "2", value_parser = parse_lens)]
-    pub lens: Lens,
+    #[arg(long, value_name = "1|2", default_value = "2", value_parser = choice::<LensArg>)]
+    pub lens: LensArg,
     /// Per-channel SNR in dB (no noise when absent)
     #[arg(long, value_name = "DB", value_parser = parse_snr, allow_negative_numbers = true)]
     pub snr: Option<f64>,
@@ -54,8 +56,8 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "N", default_value = "9", value_parser = parse_images)]
     pub images: usize,
     /// Template: scatter14 (14 unaligned LEDs) or grid (5 x 5 with lines)
-    #[arg(long, value_name = "NAME", default_value = "scatter14", value_parser = parse_template)]
-    pub template: TemplateKind,
+    #[arg(long, value_name = "NAME", default_value = "scatter14", value_parser = choice::<TemplateArg>)]
+    pub template: TemplateArg,
     /// Length of each LED's record in modulation cycles (the first 25 are
     /// the filter's transient; the rest are demodulated). Longer records
     /// average more samples: residuals fall in proportion (the paper's
@@ -74,8 +76,8 @@ pub struct SimulateArgs {
 #[derive(Debug, Args)]
 pub struct StudyArgs {
     /// Tables to run: table1 ... table10, fig9, or all
-    #[arg(value_name = "TABLE", default_value = "all", value_parser = parse_table)]
-    pub tables: Vec<String>,
+    #[arg(value_name = "TABLE", default_value = "all", value_parser = choice::<TableArg>)]
+    pub tables: Vec<TableArg>,
     /// Trials per condition
     #[arg(long, value_name = "N", default_value = "200", value_parser = parse_trials)]
     pub trials: usize,
@@ -125,25 +127,9 @@ pub struct StudyConfig {
 impl StudyArgs {
     /// The configuration: `all` expands, duplicates go, the paper's order.
     pub fn into_config(self) -> StudyConfig {
-        let mut wanted: Vec<String> = Vec::new();
-        for t in self.tables {
-            if t == "all" {
-                wanted.extend(TABLE_IDS.iter().map(|s| s.to_string()));
-                wanted.push("fig9".into());
-            } else {
-                wanted.push(t);
-            }
-        }
-        let order = |t: &String| {
-            TABLE_IDS
-                .iter()
-                .position(|x| x == t)
-                .unwrap_or(TABLE_IDS.len())
-        };
-        wanted.sort_by_key(order);
-        wanted.dedup();
+        let ids: Vec<String> = self.tables.iter().map(name).collect();
         StudyConfig {
-            tables: wanted,
+            tables: psdcal::expand_tables(&ids),
             trials: self.trials,
             threads: self.threads,
             seed: self.seed,
@@ -151,16 +137,6 @@ impl StudyArgs {
             out: self.out,
             report: self.report,
         }
-    }
-}
-
-fn parse_lens(text: &str) -> Result<Lens, String> {
-    match text.trim() {
-        "1" => Ok(Lens::One),
-        "2" => Ok(Lens::Two),
-        _ => Err(format!(
-            "expected 1 (f = 25 mm) or 2 (f = 8 mm), found '{text}'"
-        )),
     }
 }
 
@@ -180,25 +156,6 @@ fn parse_images(text: &str) -> Result<usize, String> {
     }
 }
 
-fn parse_template(text: &str) -> Result<TemplateKind, String> {
-    match text.trim() {
-        "scatter14" => Ok(TemplateKind::Scatter14),
-        "grid" => Ok(TemplateKind::Grid),
-        _ => Err(format!("expected scatter14 or grid, found '{text}'")),
-    }
-}
-
-fn parse_table(text: &str) -> Result<String, String> {
-    let t = text.trim().to_ascii_lowercase();
-    if t == "all" || t == "fig9" || TABLE_IDS.contains(&t.as_str()) {
-        Ok(t)
-    } else {
-        Err(format!(
-            "unknown table '{text}'; expected table1 ... table10, fig9 or all"
-        ))
-    }
-}
-
 fn parse_trials(text: &str) -> Result<usize, String> {
     match text.trim().parse::<usize>() {
         Ok(n) if (1..=1_000_000).contains(&n) => Ok(n),
@@ -208,14 +165,8 @@ fn parse_trials(text: &str) -> Result<usize, String> {
     }
 }
 
-/// Default record length, cycles ([`psdcal_sim::ChainConfig`]).
-pub const DEFAULT_RECORD_CYCLES: usize = 65;
-
-/// Longest record accepted, cycles (10 s per LED at 1 kHz).
-const MAX_RECORD_CYCLES: usize = 10_000;
-
 fn parse_record_cycles(text: &str) -> Result<usize, String> {
-    let transient = psdcal_sim::ChainConfig::default().transient_cycles;
+    let transient = psdcal::transient_cycles();
     match text.trim().parse::<usize>() {
         Ok(n) if n > transient && n <= MAX_RECORD_CYCLES => Ok(n),
         _ => Err(format!(
@@ -223,25 +174,6 @@ fn parse_record_cycles(text: &str) -> Result<usize, String> {
              {transient}-cycle filter transient), found '{text}'",
             transient + 1
         )),
-    }
-}
-
-/// The default signal chain with records of `record_cycles` cycles.
-pub fn chain_with_record(record_cycles: usize) -> anyhow::Result<psdcal_sim::SignalChain> {
-    let config = psdcal_sim::ChainConfig {
-        record_cycles,
-        ..psdcal_sim::ChainConfig::default()
-    };
-    psdcal_sim::SignalChain::new(config)
-        .map_err(|e| anyhow::anyhow!("--record-cycles {record_cycles}: {e}"))
-}
-
-/// ` --record-cycles N` when `n` is not the default, for reproduce lines.
-pub fn record_cycles_flag(n: usize) -> String {
-    if n == DEFAULT_RECORD_CYCLES {
-        String::new()
-    } else {
-        format!(" --record-cycles {n}")
     }
 }
 

@@ -1,9 +1,10 @@
 //! `psdcal`: the command-line tool. Argument parsing and output only; the
-//! work is done by psdcal-io, psdcal-calib and psdcal-model.
+//! work is done by the `psdcal` library.
 //!
 //! Exit codes: 0 success, 1 failure (one `error: ...` line on stderr),
 //! 2 usage error (clap).
 
+mod choice;
 mod cli;
 mod cli_gains;
 mod cli_locate;
@@ -20,7 +21,6 @@ mod cmd_map;
 mod cmd_report;
 mod cmd_simulate;
 mod cmd_study;
-mod locate_output;
 mod report;
 
 use std::process::ExitCode;
@@ -50,7 +50,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            report::print_error(&error);
+            report::print_error(&report::lower(error));
             ExitCode::FAILURE
         }
     }

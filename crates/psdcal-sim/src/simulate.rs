@@ -15,7 +15,6 @@
 //! exactly (its own tests show it), and skipping keeps noise-free studies fast.
 
 use nalgebra::Vector2;
-use psdcal_calib::{CalibrationData, ImageObservations, Observation};
 use psdcal_model::sensor::{electrode_currents, impact_point};
 use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel};
 use rand_chacha::ChaCha8Rng;
@@ -199,37 +198,6 @@ fn scale(a: &Amplitudes, k: f64) -> Amplitudes {
 }
 
 impl Simulation {
-    /// The calibration's input: the measured points of every image, with the
-    /// demodulated amplitudes behind them (for estimating the gains).
-    pub fn calibration_data(&self) -> CalibrationData {
-        CalibrationData {
-            amplitudes: Some(
-                self.images
-                    .iter()
-                    .map(|im| im.points.iter().map(|p| p.amplitudes).collect())
-                    .collect(),
-            ),
-            template: self.template.leds.clone(),
-            lines: self.template.lines.clone(),
-            images: self
-                .images
-                .iter()
-                .map(|im| ImageObservations {
-                    id: im.id.clone(),
-                    points: im
-                        .points
-                        .iter()
-                        .map(|p| Observation {
-                            led: p.led,
-                            measured: p.measured,
-                        })
-                        .collect(),
-                })
-                .collect(),
-            geometry: self.options.geometry,
-        }
-    }
-
     /// RMS angle-of-arrival error (rad) of a calibrated `model` over held-out
     /// directions: a 9 × 9 grid of true ideal points over 80 % of the sensor,
     /// each measured through the true distortion and the true (possibly
