@@ -88,50 +88,23 @@ pub enum TableArg {
     All,
 }
 
-impl From<CostArg> for psdcal::Cost {
-    fn from(a: CostArg) -> Self {
-        match a {
-            CostArg::Template => Self::Template,
-            CostArg::Image => Self::Image,
+/// `From<$arg> for $lib` mapping the variants of the same names.
+macro_rules! same_variants {
+    ($arg:ident => $lib:path { $($v:ident),* }) => {
+        impl From<$arg> for $lib {
+            fn from(a: $arg) -> Self {
+                use $lib as Lib;
+                match a {
+                    $($arg::$v => Lib::$v,)*
+                }
+            }
         }
-    }
+    };
 }
 
-impl From<NoiseArg> for psdcal::Noise {
-    fn from(a: NoiseArg) -> Self {
-        match a {
-            NoiseArg::Uniform => Self::Uniform,
-            NoiseArg::ChannelSnr => Self::ChannelSnr,
-            NoiseArg::ChannelFloor => Self::ChannelFloor,
-        }
-    }
-}
-
-impl From<PreliminaryArg> for psdcal::Preliminary {
-    fn from(a: PreliminaryArg) -> Self {
-        match a {
-            PreliminaryArg::Auto => Self::Auto,
-            PreliminaryArg::Straightness => Self::Straightness,
-            PreliminaryArg::Homography => Self::Homography,
-            PreliminaryArg::Off => Self::Off,
-        }
-    }
-}
-
-impl From<LensArg> for psdcal::Lens {
-    fn from(a: LensArg) -> Self {
-        match a {
-            LensArg::One => Self::One,
-            LensArg::Two => Self::Two,
-        }
-    }
-}
-
-impl From<TemplateArg> for psdcal::TemplateKind {
-    fn from(a: TemplateArg) -> Self {
-        match a {
-            TemplateArg::Scatter14 => Self::Scatter14,
-            TemplateArg::Grid => Self::Grid,
-        }
-    }
-}
+same_variants!(CostArg => psdcal::Cost { Template, Image });
+same_variants!(NoiseArg => psdcal::Noise { Uniform, ChannelSnr, ChannelFloor });
+same_variants!(PreliminaryArg => psdcal::Preliminary { Auto, Straightness, Homography, Off });
+same_variants!(LensArg => psdcal::Lens { One, Two });
+same_variants!(TemplateArg => psdcal::TemplateKind { Scatter14, Grid });
+same_variants!(GainsMethodArg => psdcal::GainsMethod { EqualCurrent });

@@ -10,67 +10,13 @@ use psdcal_model::UnknownParam;
 
 use crate::choice::{CostArg, NoiseArg, PreliminaryArg};
 
-const MAIN_EXAMPLES: &str = "\
-Examples:
-  psdcal demo
-  psdcal simulate --lens 2 --snr 40 --out sim
-  psdcal check --template template.csv --observations observations.csv
-  psdcal calibrate --template template.csv --observations observations.csv --out calibration.json
-  psdcal correct --calibration calibration.json --points points.csv --out ideal.csv
-  psdcal aoa --calibration calibration.json --points points.csv --out aoa.csv
-  psdcal locate --calibration calibration.json --points points.csv --distance 5000
-  psdcal map --lens 2 --error f=0.1,cx=0.05 --out map.csv
+const MAIN_EXAMPLES: &str = include_str!("../help/main.txt");
 
-Exit codes: 0 success, 1 failure (one 'error:' line on stderr), 2 usage error.";
+const CHECK_EXAMPLES: &str = include_str!("../help/check.txt");
 
-const CHECK_EXAMPLES: &str = "\
-Example:
-  psdcal check --template data/example/template.csv \\
-               --observations data/example/observations.csv
+const CALIBRATE_EXAMPLES: &str = include_str!("../help/calibrate.txt");
 
-  validates the data set and prints the number of LEDs, images and points, a
-  table of the points of each image with their x and y ranges, what was
-  dropped and why, and how much of the sensor the points cover (a 10 x 10 grid
-  over the active area). With electrode amplitudes instead of impact points:
-
-  psdcal check -t template.csv --signals signals.csv --lx 9 --ly 9 --strict
-
-Files:
-  template.csv      led, X_mm, Y_mm[, lines]   (lines: ';'-separated group labels)
-  observations.csv  image, led, x_mm, y_mm
-  signals.csv       image, led, vx1, vx2, vy1, vy2
-Columns are found by name; '#' lines and blank lines are ignored.";
-
-const CALIBRATE_EXAMPLES: &str = "\
-Examples:
-  psdcal calibrate --template data/example/template.csv \\
-                   --observations data/example/observations.csv --out calibration.json
-
-  fits f, cx, cy, k1, k2 (the paper's set) from automatic initialisation and
-  prints each parameter with its standard deviation, the residual (sum of
-  squared template-plane errors, mm^2), RMS errors and iterations.
-
-  psdcal calibrate -t template.csv -o observations.csv --fit f,cx,cy,skew,k1,k2,k3,p1,p2 \\
-                   --focal-guess 8 --robust huber:0.1 --residuals residuals.csv --out cal.json
-  psdcal calibrate -t template.csv -o observations.csv --fit f,cx,cy,k1,k2,l1 --out cal.json
-  psdcal calibrate -t template.csv -o observations.csv --set l1=-1.3058e-3 --out cal.json
-  psdcal calibrate -t template.csv -s signals.csv --fit f,cx,cy,k1,k2,gains --out cal.json
-
-Parameters: f cx cy skew k1 k2 k3 p1 p2 l1 l2 (MODEL.md). Freeing l1 with k1 runs a
-global search over l1 (the cost has several minima). A calibration that does not
-converge, or degenerate data, exits 1 with the reason.";
-
-const CORRECT_EXAMPLES: &str = "\
-Example:
-  psdcal correct --calibration calibration.json --points points.csv --out ideal.csv
-
-  reads points.csv (columns x_mm, y_mm, or vx1, vx2, vy1, vy2, plus any
-  others) and writes every input column unchanged followed by x_ideal_mm,
-  y_ideal_mm (and, for amplitudes, the measured x_mm, y_mm first, computed on
-  the calibration's sensor size with its channel gains divided out). Without
-  --out the table goes to standard output:
-
-  psdcal correct -c calibration.json -p points.csv > ideal.csv";
+const CORRECT_EXAMPLES: &str = include_str!("../help/correct.txt");
 
 /// psdcal: calibrate infrared position-sensitive-device (PSD) sensors.
 #[derive(Debug, Parser)]
@@ -463,111 +409,5 @@ pub(crate) fn positive_mm(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         _ => Err(format!("expected a positive length in mm, found '{text}'")),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn parse(args: &[&str]) -> Result<(Output, Job), clap::Error> {
-        Cli::try_parse_from(args)?.into_job()
-    }
-
-    #[test]
-    fn the_command_definition_is_consistent() {
-        Cli::command().debug_assert();
-    }
-
-    #[test]
-    fn check_with_observations_and_defaults() {
-        let (output, job) = parse(&["psdcal", "check", "-t", "t.csv", "-o", "o.csv"]).unwrap();
-        assert_eq!(output, Output::Text);
-        assert_eq!(
-            job,
-            Job::Check(CheckConfig {
-                template: "t.csv".into(),
-                points: PointSource::Observations("o.csv".into()),
-                geometry: PsdGeometry { lx: 9.0, ly: 9.0 },
-                strict: false,
-            })
-        );
-    }
-
-    #[test]
-    fn check_with_signals_geometry_strict_and_json_after_the_subcommand() {
-        let (output, job) = parse(&[
-            "psdcal",
-            "check",
-            "--template",
-            "t.csv",
-            "--signals",
-            "s.csv",
-            "--lx",
-            "10",
-            "--ly",
-            "8.5",
-            "--strict",
-            "--json",
-        ])
-        .unwrap();
-        assert_eq!(output, Output::Json);
-        let Job::Check(config) = job else {
-            panic!("expected check")
-        };
-        assert_eq!(config.points, PointSource::Signals("s.csv".into()));
-        assert_eq!(config.geometry, PsdGeometry { lx: 10.0, ly: 8.5 });
-        assert!(config.strict);
-    }
-
-    #[test]
-    fn usage_errors() {
-        use clap::error::ErrorKind;
-        let kind = |args: &[&str]| parse(args).unwrap_err().kind();
-        assert_eq!(
-            kind(&["psdcal", "check", "-t", "t.csv"]),
-            ErrorKind::MissingRequiredArgument
-        );
-        assert_eq!(
-            kind(&["psdcal", "check", "-t", "t", "-o", "o", "-s", "s"]),
-            ErrorKind::ArgumentConflict
-        );
-        assert_eq!(
-            kind(&["psdcal", "check", "-t", "t", "-o", "o", "--lx", "-1"]),
-            ErrorKind::ValueValidation
-        );
-        assert_eq!(
-            kind(&["psdcal", "check", "-t", "t", "-o", "o", "--ly", "nan"]),
-            ErrorKind::ValueValidation
-        );
-        assert_eq!(
-            kind(&["psdcal", "--quiet", "--json", "check", "-t", "t", "-o", "o"]),
-            ErrorKind::ArgumentConflict
-        );
-        assert_eq!(
-            kind(&["psdcal", "--json", "correct", "-c", "c", "-p", "p"]),
-            ErrorKind::MissingRequiredArgument
-        );
-        assert_eq!(
-            kind(&["psdcal", "frobnicate"]),
-            ErrorKind::InvalidSubcommand
-        );
-    }
-
-    #[test]
-    fn correct_config() {
-        let (output, job) = parse(&[
-            "psdcal", "-q", "correct", "-c", "c.json", "-p", "p.csv", "--out", "o.csv",
-        ])
-        .unwrap();
-        assert_eq!(output, Output::Quiet);
-        assert_eq!(
-            job,
-            Job::Correct(CorrectConfig {
-                calibration: "c.json".into(),
-                points: "p.csv".into(),
-                out: Some("o.csv".into()),
-            })
-        );
     }
 }

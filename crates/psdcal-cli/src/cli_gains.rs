@@ -7,16 +7,7 @@ use clap::Args;
 
 use crate::choice::GainsMethodArg;
 
-pub const GAINS_EXAMPLES: &str = "\
-Example:
-  psdcal gains --signals equal.csv --method equal-current --out gains.json
-  psdcal calibrate -t template.csv -s signals.csv --gains gains.json --out cal.json
-
-  equal.csv holds records (columns vx1, vx2, vy1, vy2; image and led optional) in which
-  all four channels carry the same current: a test current injected into every
-  channel, or a light spot centred on the PSD. Each gain relative to x1 is the mean
-  of its amplitude ratio, with its standard deviation. calibrate --gains divides them
-  out of the amplitudes and keeps them fixed (--fit ...,gains estimates them instead).";
+pub const GAINS_EXAMPLES: &str = include_str!("../help/gains.txt");
 
 /// Arguments of `psdcal gains`.
 #[derive(Debug, Clone, PartialEq, Args)]

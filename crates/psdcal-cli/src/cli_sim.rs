@@ -8,34 +8,11 @@ use psdcal::MAX_RECORD_CYCLES;
 
 use crate::choice::{choice, name, LensArg, TableArg, TemplateArg};
 
-pub const SIMULATE_EXAMPLES: &str = "\
-Examples:
-  psdcal simulate --lens 2 --snr 40 --out sim
-  psdcal simulate --lens 1 --snr 50 --imbalance --psd-distortion --images 12 --template grid --seed 7 --out sim
+pub const SIMULATE_EXAMPLES: &str = include_str!("../help/simulate.txt");
 
-  writes sim/template.csv, sim/observations.csv, sim/signals.csv and sim/truth.json
-  (every true parameter, pose and gain). Without --snr the data are noise-free.
-  Then: psdcal calibrate -t sim/template.csv -o sim/observations.csv --out sim/calibration.json";
+pub const STUDY_EXAMPLES: &str = include_str!("../help/study.txt");
 
-pub const STUDY_EXAMPLES: &str = "\
-Examples:
-  psdcal study table3 table4 --trials 200
-  psdcal study all --trials 200 --threads 2 --seed 1 --out study
-
-  runs the paper's conditions (Tables 1-10, Figure 9) over seeded trials in parallel
-  and prints each table, psdcal's mean (std) next to the paper's numbers; writes
-  study.md, study.csv and study.json into --out (and, with --report DIR, the
-  page DIR/study.html: tables, Figure 9 heat maps, histograms). The same seed
-  gives the same tables whatever the number of threads. Tables: table1 ...
-  table10, fig9, all.";
-
-pub const DEMO_EXAMPLES: &str = "\
-Example:
-  psdcal demo
-
-  simulates the paper's lens 2 at 40 dB (nine template poses, the 14-LED template),
-  calibrates it from automatic initialisation and prints the recovered parameters
-  against the truth, with their standard deviations and the angle-of-arrival error.";
+pub const DEMO_EXAMPLES: &str = include_str!("../help/demo.txt");
 
 /// Arguments of `psdcal simulate`.
 #[derive(Debug, Clone, PartialEq, Args)]

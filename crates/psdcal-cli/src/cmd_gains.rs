@@ -1,18 +1,13 @@
 //! `psdcal gains`: relative channel gains from equal-current records.
 
-use psdcal::GainsMethod;
 use psdcal_io::write_gains;
 
-use crate::choice::GainsMethodArg;
 use crate::cli::Output;
 use crate::cli_gains::GainsArgs;
 
 /// Runs `gains`.
 pub fn run(args: &GainsArgs, output: Output) -> anyhow::Result<()> {
-    let method = match args.method {
-        GainsMethodArg::EqualCurrent => GainsMethod::EqualCurrent,
-    };
-    let file = psdcal::estimate_gains(&args.signals, method)?;
+    let file = psdcal::estimate_gains(&args.signals, args.method.into())?;
     if let Some(path) = &args.out {
         write_gains(path, &file)?;
     }
