@@ -34,22 +34,13 @@ pub struct DataSetFiles {
     pub gains: Option<PathBuf>,
 }
 
-/// How a data set is validated.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// How a data set is validated (default: 9 × 9 mm, not strict).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LoadOptions {
     /// The PSD's active area.
     pub geometry: PsdGeometry,
     /// Every warning is an error instead of dropping the data.
     pub strict: bool,
-}
-
-impl Default for LoadOptions {
-    fn default() -> Self {
-        Self {
-            geometry: PsdGeometry::default(),
-            strict: false,
-        }
-    }
 }
 
 /// The points of a data set given in memory.
