@@ -70,6 +70,7 @@ mod map;
 mod options;
 mod provenance;
 mod report;
+mod report_tables;
 mod residuals;
 mod sensor;
 mod simulate;

@@ -2,19 +2,19 @@
 //! a calibration and, optionally, its data; psdcal-report draws it; the
 //! page and every plot (SVG and PNG) are written into one folder.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use nalgebra::Vector2;
-use psdcal_io::{write_atomic_bytes, Calibration, Warning};
+use psdcal_io::{write_atomic_bytes, Warning};
 use psdcal_locate::{error_map, ErrorSource, MapOptions};
-use psdcal_model::{Param, SensorModel};
+use psdcal_model::SensorModel;
 use psdcal_report::{
-    calibration_page, Arrow, ArrowSet, CalibrationReport, Frame, HeatCell, Plot, PlotData,
-    PointSet, Table,
+    calibration_page, Arrow, ArrowSet, CalibrationReport, Frame, HeatCell, Plot, PlotData, PointSet,
 };
 
 use crate::dataset::{DataSet, DataSetFiles, LoadOptions, PointSource};
 use crate::error::{Error, Result};
+use crate::report_tables::{residual_rows, tables};
 use crate::residuals::ResidualTable;
 use crate::sensor::LoadedSensor;
 
@@ -370,138 +370,4 @@ fn spiral(model: &SensorModel, radius: f64) -> (Points, Points) {
             ((m.x, m.y), (i.x, i.y))
         })
         .unzip()
-}
-
-/// Per image: residuals recomputed from the data.
-fn residual_rows(table: &ResidualTable) -> Table {
-    let rms = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.4}"));
-    Table {
-        caption: "Per image: residuals recomputed from the data".into(),
-        headers: [
-            "image",
-            "points",
-            "RMS template plane (mm)",
-            "RMS sensor (mm)",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: table
-            .images
-            .iter()
-            .map(|image| match image.residuals {
-                None => vec![
-                    image.id.clone(),
-                    image.points.to_string(),
-                    "not in the calibration".into(),
-                    "–".into(),
-                ],
-                Some(_) => {
-                    let (t, s) = image.rms();
-                    vec![image.id.clone(), image.points.to_string(), rms(t), rms(s)]
-                }
-            })
-            .collect(),
-    }
-}
-
-fn tables(
-    request: &ReportRequest,
-    calibration: &Calibration,
-    model: &SensorModel,
-    plots: Vec<Plot>,
-    recomputed: Option<Table>,
-) -> CalibrationReport {
-    let file_name = |p: &Path| p.display().to_string();
-    let short = request.calibration.file_name().map_or_else(
-        || file_name(&request.calibration),
-        |n| n.to_string_lossy().into_owned(),
-    );
-    let mut sources = vec![format!("calibration: {}", file_name(&request.calibration))];
-    if let Some((t, o)) = &request.data {
-        sources.push(format!("template: {}", file_name(t)));
-        sources.push(format!("observations: {}", file_name(o)));
-    }
-    sources.push(format!(
-        "written by {} {}; sensor {} × {} mm",
-        calibration.software.name,
-        calibration.software.version,
-        calibration.sensor.lx_mm,
-        calibration.sensor.ly_mm
-    ));
-    let parameters = Table {
-        caption: "Model parameters ± one standard deviation".into(),
-        headers: ["parameter", "value", "σ", "unit", ""]
-            .map(String::from)
-            .to_vec(),
-        rows: Param::ALL
-            .iter()
-            .map(|p| {
-                let name = p.name();
-                vec![
-                    name.to_string(),
-                    format!("{:.6e}", model.get(*p)),
-                    calibration
-                        .std
-                        .get(name)
-                        .map_or("–".into(), |s| format!("{s:.3e}")),
-                    p.unit().to_string(),
-                    if calibration.estimated.contains(p) {
-                        "estimated"
-                    } else {
-                        "fixed"
-                    }
-                    .to_string(),
-                ]
-            })
-            .collect(),
-    };
-    let fit = &calibration.fit;
-    let fit = Table {
-        caption: "Fit summary".into(),
-        headers: vec!["".into(), "value".into()],
-        rows: vec![
-            vec!["cost".into(), format!("{:?}", fit.cost)],
-            vec!["residual (mm²)".into(), format!("{:.6e}", fit.residual_mm2)],
-            vec![
-                "RMS template-plane error (mm)".into(),
-                format!("{:.4e}", fit.rms_template_mm),
-            ],
-            vec![
-                "RMS image error (mm)".into(),
-                format!("{:.4e}", fit.rms_image_mm),
-            ],
-            vec!["iterations".into(), fit.iterations.to_string()],
-            vec!["points".into(), fit.points.to_string()],
-            vec!["images".into(), fit.images.to_string()],
-            vec!["termination".into(), fit.termination.clone()],
-        ],
-    };
-    let images = Table {
-        caption: "Per image: fitted pose and RMS error".into(),
-        headers: ["image", "points", "RMS (mm)", "t (mm)", "rvec (rad)"]
-            .map(String::from)
-            .to_vec(),
-        rows: calibration
-            .images
-            .iter()
-            .map(|i| {
-                vec![
-                    i.id.clone(),
-                    i.points.to_string(),
-                    format!("{:.4e}", i.rms_mm),
-                    format!("{:.2}, {:.2}, {:.2}", i.t_mm[0], i.t_mm[1], i.t_mm[2]),
-                    format!("{:.4}, {:.4}, {:.4}", i.rvec[0], i.rvec[1], i.rvec[2]),
-                ]
-            })
-            .collect(),
-    };
-    CalibrationReport {
-        title: format!("psdcal calibration report: {short}"),
-        sources,
-        parameters,
-        fit,
-        plots,
-        images,
-        recomputed,
-    }
 }
