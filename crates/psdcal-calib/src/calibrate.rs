@@ -1,4 +1,4 @@
-//! The whole calibration, end to end (MODEL.md §4): the robust start
+//! The whole calibration, end to end (docs/model.md §4): the robust start
 //! ([`crate::initialize`]: preliminary correction, normalised DLT, closed
 //! form or focal search), Levenberg–Marquardt on the template-plane cost
 //! (P29) with the global search over `l1` when it is freed

@@ -1,4 +1,4 @@
-//! Uncertainty of a calibration (MODEL.md §4.6): the covariance
+//! Uncertainty of a calibration (docs/model.md §4.6): the covariance
 //! `σ² (JᵀJ)⁻¹` of the estimated parameters at the solution, with
 //! `σ² = cost / (2·points − parameters)` (`parameters` counts the freed
 //! sensor parameters and 6 per pose). For a noise-weighted fit

@@ -1,6 +1,6 @@
 //! The input of a calibration: a planar template of LEDs and, per image
 //! (template pose), the measured impact points of the LEDs seen in it
-//! (MODEL.md §4).
+//! (docs/model.md §4).
 
 use nalgebra::Vector2;
 use psdcal_model::{Amplitudes, PsdGeometry};
@@ -38,7 +38,7 @@ pub struct CalibrationData {
     /// The electrode amplitudes behind every point (`[image][point]`, same
     /// order as `images`), when the data came as signals: needed to estimate
     /// the channel gains, which recompute each impact point from its
-    /// amplitudes (MODEL.md §1). `measured` then holds the points computed
+    /// amplitudes (docs/model.md §1). `measured` then holds the points computed
     /// with the starting gains.
     pub amplitudes: Option<Vec<Vec<Amplitudes>>>,
 }

@@ -1,4 +1,4 @@
-//! Electrical calibration of the channel gains (the paper's route, MODEL.md
+//! Electrical calibration of the channel gains (the paper's route, docs/model.md
 //! §1): from records in which all four channels carry the same current — a
 //! test current injected into every channel, or a light spot centred on a
 //! symmetric PSD — each amplitude ratio `V_k / V_x1` measures the relative

@@ -61,7 +61,7 @@ pub enum CalibError {
         /// What is wrong with it.
         reason: String,
     },
-    /// The closed-form intrinsics (MODEL.md §4.4) give `f² ≤ 0`: the images
+    /// The closed-form intrinsics (docs/model.md §4.4) give `f² ≤ 0`: the images
     /// do not determine the focal length linearly (nearly affine images,
     /// e.g. poses nearly parallel to the sensor or a long focal length, or
     /// uncorrected distortion).

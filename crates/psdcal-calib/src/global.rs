@@ -3,7 +3,7 @@
 //!
 //! The two radial terms have distinct centres (the electrical centre (0, 0)
 //! and the optical centre (cx, cy)); near either centre they trade off
-//! (`k1 + l1` is what the data see, MODEL.md §2), so the template-plane cost
+//! (`k1 + l1` is what the data see, docs/model.md §2), so the template-plane cost
 //! (P29) is a long curved valley in which a single Levenberg–Marquardt run can
 //! stop at a wrong local minimum.
 //!

@@ -1,5 +1,5 @@
 //! Plane-to-sensor homographies by the direct linear transformation, with
-//! Hartley's data normalisation (MODEL.md §4.2–4.3; the paper's (P17), (P18)
+//! Hartley's data normalisation (docs/model.md §4.2–4.3; the paper's (P17), (P18)
 //! and (P36)–(P38)).
 //!
 //! A template point `(X, Y, 0)` and its image point `(x, y)` (both mm) are

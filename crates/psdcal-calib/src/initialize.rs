@@ -1,5 +1,5 @@
 //! The robust start of the refinement: preliminary correction, homographies,
-//! the closed form, and a focal-length search as its fallback (MODEL.md
+//! the closed form, and a focal-length search as its fallback (docs/model.md
 //! §4.1–4.5; the paper's (P17)–(P28), (P30), (P36)–(P38)).
 //!
 //! 1. Checks: at least 3 images with ≥ 4 points ([`CalibError::TooFewImages`]),

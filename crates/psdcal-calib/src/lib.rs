@@ -1,7 +1,7 @@
 //! # psdcal-calib
 //!
 //! Calibration of a PSD sensor from images of a planar LED template: the
-//! paper's adapted Zhang method (MODEL.md §4) — preliminary distortion
+//! paper's adapted Zhang method (docs/model.md §4) — preliminary distortion
 //! correction, data normalisation, homographies by DLT, the constrained closed
 //! form, and Levenberg–Marquardt refinement on the template-plane error (P29),
 //! with the parameters' covariance.

@@ -1,8 +1,8 @@
-//! Preliminary distortion correction (MODEL.md §4.1, the paper's Section 3.2
+//! Preliminary distortion correction (docs/model.md §4.1, the paper's Section 3.2
 //! and (P30)): a rough radial correction estimated before the linear stage,
 //! which is very sensitive to distortion.
 //!
-//! The correction has the form of the lens radial term of MODEL.md §2 with
+//! The correction has the form of the lens radial term of docs/model.md §2 with
 //! the centre `c` held fixed (the sensor centre `(0, 0)` by default):
 //!
 //! ```text

@@ -1,5 +1,5 @@
 //! Levenberg–Marquardt refinement of the model's freed parameters and every
-//! pose (MODEL.md §4.6, the paper's (P29)), as a [`Problem`] for the one
+//! pose (docs/model.md §4.6, the paper's (P29)), as a [`Problem`] for the one
 //! solver ([`crate::solver`]).
 //!
 //! Cost (template plane, the default): for every observed point `m_ij` of LED
@@ -16,7 +16,7 @@
 //!
 //! The freed parameters are any of the model's, by name: the standard ones
 //! ([`Param`]), the channel gains (the points are then recomputed from their
-//! amplitudes through the gains stage, MODEL.md §1), or the parameters of any
+//! amplitudes through the gains stage, docs/model.md §1), or the parameters of any
 //! other stage. Poses are updated additively in `(rvec, t)`.
 //!
 //! With a noise model other than uniform, each residual is whitened
@@ -65,7 +65,7 @@ pub struct RefineOptions {
     pub free: Vec<Param>,
     /// Also estimate the relative channel gains `g_x2, g_y1, g_y2`: needs the
     /// data's amplitudes; every impact point is then recomputed from its
-    /// amplitudes divided by the current gains (MODEL.md §1).
+    /// amplitudes divided by the current gains (docs/model.md §1).
     pub fit_gains: bool,
     /// Freed parameters of the model's other stages, by name.
     pub free_stage_parameters: Vec<String>,

@@ -1,4 +1,4 @@
-//! The fit statistics of a calibration (MODEL.md §4.6): the paper's
+//! The fit statistics of a calibration (docs/model.md §4.6): the paper's
 //! *residual* (sum over every point of the squared template-plane error, mm²),
 //! the RMS template-plane and image-plane errors, each image's RMS, the worst
 //! points, and — under a robust loss — the points it down-weighted.

@@ -1,5 +1,5 @@
 //! Line-straightness cost of the preliminary distortion correction
-//! (MODEL.md §4.1; the paper's Section 3.2, (P30)–(P35), here in the
+//! (docs/model.md §4.1; the paper's Section 3.2, (P30)–(P35), here in the
 //! Devernay–Faugeras total-least-squares form).
 //!
 //! For every declared template line seen with at least 3 of its LEDs in an

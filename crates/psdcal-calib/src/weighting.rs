@@ -3,7 +3,7 @@
 //! maximum-likelihood estimate under the chosen noise model instead of the
 //! paper's unweighted least squares (P29).
 //!
-//! The impact point of the pin-cushion PSD (MODEL.md §1) is
+//! The impact point of the pin-cushion PSD (docs/model.md §1) is
 //! `x = (Lx/2) N_x / S`, `y = (Ly/2) N_y / S` over the gain-corrected
 //! amplitudes `w_k = V_k / g_k`, `S = Σ w_k`, `N_x = Σ sx_k w_k`,
 //! `N_y = Σ sy_k w_k` (signs `sx, sy = ±1` of the electrode corners). Its
@@ -24,7 +24,7 @@
 //! - `Uniform`: every coordinate equally noisy and independent, `C_m = I`
 //!   (the paper's cost, the default);
 //! - `ChannelSnr`: the same SNR on every channel, `σ_k ∝ w_k` (the paper's
-//!   simulated noise, MODEL.md §6): `C_m ∝ Σ_k q_k² d_k d_kᵀ` with the
+//!   simulated noise, docs/model.md §6): `C_m ∝ Σ_k q_k² d_k d_kᵀ` with the
 //!   channel fractions `q_k = w_k / S` — from the amplitudes when the data
 //!   carry them, else from the forward model at the point
 //!   (`psdcal_model::sensor::electrode_currents`, `q = (1±u)(1±v)/4`). Points near the electrodes are far less noisy

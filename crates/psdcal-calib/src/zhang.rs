@@ -1,6 +1,6 @@
-//! The adapted Zhang closed form: intrinsics from homographies (MODEL.md §4.4,
+//! The adapted Zhang closed form: intrinsics from homographies (docs/model.md §4.4,
 //! the paper's (P19)–(P25) with its typos corrected) and a pose from one
-//! homography (MODEL.md §4.5, (P26)–(P28)).
+//! homography (docs/model.md §4.5, (P26)–(P28)).
 //!
 //! With one focal length and zero skew, `A = [[f, 0, cx], [0, f, cy], [0, 0, 1]]`
 //! and
@@ -215,7 +215,7 @@ fn pass(homographies: &[Homography], s: f64) -> Result<ClosedFormSolution, Calib
 }
 
 /// Closed-form intrinsics `(f², cx, cy)` from at least two homographies
-/// (MODEL.md §4.4). Two passes (see the module documentation); the returned
+/// (docs/model.md §4.4). Two passes (see the module documentation); the returned
 /// solution may have `f² ≤ 0`, which [`ClosedFormSolution::focal_length`]
 /// refuses.
 ///

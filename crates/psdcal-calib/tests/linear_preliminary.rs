@@ -1,4 +1,4 @@
-//! The preliminary radial correction (MODEL.md §4.1): line straightness and
+//! The preliminary radial correction (docs/model.md §4.1): line straightness and
 //! homography consistency.
 
 mod common;

@@ -4,70 +4,19 @@
 use std::path::PathBuf;
 
 use clap::{ArgGroup, Args, CommandFactory, Parser, Subcommand};
-use psdcal_calib::{CostKind, NoiseModel, Preliminary, RobustLoss};
-use psdcal_model::{Param, PsdGeometry};
+pub use psdcal::PointSource;
+use psdcal::{CalibrationOptions, Param, PsdGeometry, Robust};
+use psdcal_model::UnknownParam;
 
-const MAIN_EXAMPLES: &str = "\
-Examples:
-  psdcal demo
-  psdcal simulate --lens 2 --snr 40 --out sim
-  psdcal check --template template.csv --observations observations.csv
-  psdcal calibrate --template template.csv --observations observations.csv --out calibration.json
-  psdcal correct --calibration calibration.json --points points.csv --out ideal.csv
-  psdcal aoa --calibration calibration.json --points points.csv --out aoa.csv
-  psdcal locate --calibration calibration.json --points points.csv --distance 5000
-  psdcal map --lens 2 --error f=0.1,cx=0.05 --out map.csv
+use crate::choice::{CostArg, NoiseArg, PreliminaryArg};
 
-Exit codes: 0 success, 1 failure (one 'error:' line on stderr), 2 usage error.";
+const MAIN_EXAMPLES: &str = include_str!("../help/main.txt");
 
-const CHECK_EXAMPLES: &str = "\
-Example:
-  psdcal check --template data/example/template.csv \\
-               --observations data/example/observations.csv
+const CHECK_EXAMPLES: &str = include_str!("../help/check.txt");
 
-  validates the data set and prints the number of LEDs, images and points, a
-  table of the points of each image with their x and y ranges, what was
-  dropped and why, and how much of the sensor the points cover (a 10 x 10 grid
-  over the active area). With electrode amplitudes instead of impact points:
+const CALIBRATE_EXAMPLES: &str = include_str!("../help/calibrate.txt");
 
-  psdcal check -t template.csv --signals signals.csv --lx 9 --ly 9 --strict
-
-Files:
-  template.csv      led, X_mm, Y_mm[, lines]   (lines: ';'-separated group labels)
-  observations.csv  image, led, x_mm, y_mm
-  signals.csv       image, led, vx1, vx2, vy1, vy2
-Columns are found by name; '#' lines and blank lines are ignored.";
-
-const CALIBRATE_EXAMPLES: &str = "\
-Examples:
-  psdcal calibrate --template data/example/template.csv \\
-                   --observations data/example/observations.csv --out calibration.json
-
-  fits f, cx, cy, k1, k2 (the paper's set) from automatic initialisation and
-  prints each parameter with its standard deviation, the residual (sum of
-  squared template-plane errors, mm^2), RMS errors and iterations.
-
-  psdcal calibrate -t template.csv -o observations.csv --fit f,cx,cy,skew,k1,k2,k3,p1,p2 \\
-                   --focal-guess 8 --robust huber:0.1 --residuals residuals.csv --out cal.json
-  psdcal calibrate -t template.csv -o observations.csv --fit f,cx,cy,k1,k2,l1 --out cal.json
-  psdcal calibrate -t template.csv -o observations.csv --set l1=-1.3058e-3 --out cal.json
-  psdcal calibrate -t template.csv -s signals.csv --fit f,cx,cy,k1,k2,gains --out cal.json
-
-Parameters: f cx cy skew k1 k2 k3 p1 p2 l1 l2 (MODEL.md). Freeing l1 with k1 runs a
-global search over l1 (the cost has several minima). A calibration that does not
-converge, or degenerate data, exits 1 with the reason.";
-
-const CORRECT_EXAMPLES: &str = "\
-Example:
-  psdcal correct --calibration calibration.json --points points.csv --out ideal.csv
-
-  reads points.csv (columns x_mm, y_mm, or vx1, vx2, vy1, vy2, plus any
-  others) and writes every input column unchanged followed by x_ideal_mm,
-  y_ideal_mm (and, for amplitudes, the measured x_mm, y_mm first, computed on
-  the calibration's sensor size with its channel gains divided out). Without
-  --out the table goes to standard output:
-
-  psdcal correct -c calibration.json -p points.csv > ideal.csv";
+const CORRECT_EXAMPLES: &str = include_str!("../help/correct.txt");
 
 /// psdcal: calibrate infrared position-sensitive-device (PSD) sensors.
 #[derive(Debug, Parser)]
@@ -169,19 +118,19 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "MM", value_parser = positive_mm)]
     pub focal_guess: Option<f64>,
     /// Cost to minimise: template (the paper's template-plane error) or image
-    #[arg(long, value_name = "KIND", default_value = "template", value_parser = ["template", "image"])]
-    pub cost: String,
+    #[arg(long, value_name = "KIND", value_enum, default_value_t = CostArg::Template)]
+    pub cost: CostArg,
     /// Noise weighting of the cost: uniform (unweighted, the paper's),
     /// channel-snr (the same SNR on every electrode channel: points near the
     /// electrodes weigh more) or channel-floor (the same absolute noise on
     /// every channel: brighter spots weigh more)
-    #[arg(long, value_name = "MODEL", default_value = "uniform", value_parser = ["uniform", "channel-snr", "channel-floor"])]
-    pub noise: String,
+    #[arg(long, value_name = "MODEL", value_enum, default_value_t = NoiseArg::Uniform)]
+    pub noise: NoiseArg,
     /// Preliminary distortion correction before the linear stage: auto (line
     /// straightness when the template declares lines, else homography
     /// consistency), straightness, homography, or off
-    #[arg(long, value_name = "METHOD", default_value = "auto", value_parser = ["auto", "straightness", "homography", "off"])]
-    pub preliminary: String,
+    #[arg(long, value_name = "METHOD", value_enum, default_value_t = PreliminaryArg::Auto)]
+    pub preliminary: PreliminaryArg,
     /// Skip the preliminary distortion correction (same as --preliminary off)
     #[arg(long, conflicts_with = "preliminary")]
     pub no_preliminary: bool,
@@ -190,7 +139,7 @@ pub struct CalibrateArgs {
     pub no_normalize: bool,
     /// Robust loss: huber:SCALE or cauchy:SCALE (SCALE in mm of the cost)
     #[arg(long, value_name = "LOSS:SCALE", value_parser = parse_robust)]
-    pub robust: Option<RobustLoss>,
+    pub robust: Option<Robust>,
     /// Value of a fixed parameter, NAME=VALUE (repeatable), e.g. l1=-1.3058e-3
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment, allow_negative_numbers = true)]
     pub set: Vec<(Param, f64)>,
@@ -241,15 +190,6 @@ pub enum Output {
     Json,
 }
 
-/// Where `check` takes its points from.
-#[derive(Debug, Clone, PartialEq)]
-pub enum PointSource {
-    /// observations.csv.
-    Observations(PathBuf),
-    /// signals.csv.
-    Signals(PathBuf),
-}
-
 /// Validated configuration of `psdcal check`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CheckConfig {
@@ -276,16 +216,8 @@ pub struct CalibrateConfig {
     pub strict: bool,
     pub out: PathBuf,
     pub residuals: Option<PathBuf>,
-    pub free: Vec<Param>,
-    pub fit_gains: bool,
     pub gains_file: Option<PathBuf>,
-    pub fixed_values: Vec<(Param, f64)>,
-    pub focal_guess: Option<f64>,
-    pub cost: CostKind,
-    pub noise: NoiseModel,
-    pub preliminary: Preliminary,
-    pub normalize: bool,
-    pub robust: Option<RobustLoss>,
+    pub options: CalibrationOptions,
 }
 
 /// What to run.
@@ -370,33 +302,22 @@ impl Cli {
                     strict: args.strict,
                     out: args.out,
                     residuals: args.residuals,
-                    free,
-                    fit_gains,
                     gains_file: args.gains,
-                    fixed_values: args.set,
-                    focal_guess: args.focal_guess,
-                    cost: if args.cost == "image" {
-                        CostKind::Image
-                    } else {
-                        CostKind::Template
+                    options: CalibrationOptions {
+                        free,
+                        fit_gains,
+                        fixed: args.set,
+                        focal_guess: args.focal_guess,
+                        cost: args.cost.into(),
+                        noise: args.noise.into(),
+                        preliminary: if args.no_preliminary {
+                            psdcal::Preliminary::Off
+                        } else {
+                            args.preliminary.into()
+                        },
+                        normalize: !args.no_normalize,
+                        robust: args.robust,
                     },
-                    noise: match args.noise.as_str() {
-                        "channel-snr" => NoiseModel::ChannelSnr,
-                        "channel-floor" => NoiseModel::ChannelFloor,
-                        _ => NoiseModel::Uniform,
-                    },
-                    preliminary: if args.no_preliminary {
-                        Preliminary::Off
-                    } else {
-                        match args.preliminary.as_str() {
-                            "straightness" => Preliminary::Straightness,
-                            "homography" => Preliminary::HomographyConsistency,
-                            "off" => Preliminary::Off,
-                            _ => Preliminary::Auto,
-                        }
-                    },
-                    normalize: !args.no_normalize,
-                    robust: args.robust,
                 })
             }
             Command::Correct(args) => {
@@ -430,9 +351,7 @@ fn parse_fit(text: &str) -> Result<FitList, String> {
             gains = true;
             continue;
         }
-        let p: Param = name
-            .parse()
-            .map_err(|e: psdcal_model::UnknownParam| e.to_string())?;
+        let p: Param = name.parse().map_err(|e: UnknownParam| e.to_string())?;
         if out.contains(&p) {
             return Err(format!("'{p}' is listed twice"));
         }
@@ -445,14 +364,14 @@ fn parse_fit(text: &str) -> Result<FitList, String> {
 }
 
 /// `--robust huber:0.1` or `cauchy:0.1`.
-fn parse_robust(text: &str) -> Result<RobustLoss, String> {
+fn parse_robust(text: &str) -> Result<Robust, String> {
     let (kind, scale) = text
         .split_once(':')
         .ok_or_else(|| format!("expected LOSS:SCALE such as huber:0.1, found '{text}'"))?;
     let scale = positive_mm(scale)?;
     match kind.trim().to_ascii_lowercase().as_str() {
-        "huber" => Ok(RobustLoss::Huber { scale }),
-        "cauchy" => Ok(RobustLoss::Cauchy { scale }),
+        "huber" => Ok(Robust::Huber { scale }),
+        "cauchy" => Ok(Robust::Cauchy { scale }),
         other => Err(format!("unknown loss '{other}' (expected huber or cauchy)")),
     }
 }
@@ -462,9 +381,7 @@ fn parse_assignment(text: &str) -> Result<(Param, f64), String> {
     let (name, value) = text
         .split_once('=')
         .ok_or_else(|| format!("expected NAME=VALUE such as l1=-1.3e-3, found '{text}'"))?;
-    let p: Param = name
-        .parse()
-        .map_err(|e: psdcal_model::UnknownParam| e.to_string())?;
+    let p: Param = name.parse().map_err(|e: UnknownParam| e.to_string())?;
     match value.trim().parse::<f64>() {
         Ok(v) if v.is_finite() => Ok((p, v)),
         _ => Err(format!("expected a finite number for {p}, found '{value}'")),
@@ -492,111 +409,5 @@ pub(crate) fn positive_mm(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         _ => Err(format!("expected a positive length in mm, found '{text}'")),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn parse(args: &[&str]) -> Result<(Output, Job), clap::Error> {
-        Cli::try_parse_from(args)?.into_job()
-    }
-
-    #[test]
-    fn the_command_definition_is_consistent() {
-        Cli::command().debug_assert();
-    }
-
-    #[test]
-    fn check_with_observations_and_defaults() {
-        let (output, job) = parse(&["psdcal", "check", "-t", "t.csv", "-o", "o.csv"]).unwrap();
-        assert_eq!(output, Output::Text);
-        assert_eq!(
-            job,
-            Job::Check(CheckConfig {
-                template: "t.csv".into(),
-                points: PointSource::Observations("o.csv".into()),
-                geometry: PsdGeometry { lx: 9.0, ly: 9.0 },
-                strict: false,
-            })
-        );
-    }
-
-    #[test]
-    fn check_with_signals_geometry_strict_and_json_after_the_subcommand() {
-        let (output, job) = parse(&[
-            "psdcal",
-            "check",
-            "--template",
-            "t.csv",
-            "--signals",
-            "s.csv",
-            "--lx",
-            "10",
-            "--ly",
-            "8.5",
-            "--strict",
-            "--json",
-        ])
-        .unwrap();
-        assert_eq!(output, Output::Json);
-        let Job::Check(config) = job else {
-            panic!("expected check")
-        };
-        assert_eq!(config.points, PointSource::Signals("s.csv".into()));
-        assert_eq!(config.geometry, PsdGeometry { lx: 10.0, ly: 8.5 });
-        assert!(config.strict);
-    }
-
-    #[test]
-    fn usage_errors() {
-        use clap::error::ErrorKind;
-        let kind = |args: &[&str]| parse(args).unwrap_err().kind();
-        assert_eq!(
-            kind(&["psdcal", "check", "-t", "t.csv"]),
-            ErrorKind::MissingRequiredArgument
-        );
-        assert_eq!(
-            kind(&["psdcal", "check", "-t", "t", "-o", "o", "-s", "s"]),
-            ErrorKind::ArgumentConflict
-        );
-        assert_eq!(
-            kind(&["psdcal", "check", "-t", "t", "-o", "o", "--lx", "-1"]),
-            ErrorKind::ValueValidation
-        );
-        assert_eq!(
-            kind(&["psdcal", "check", "-t", "t", "-o", "o", "--ly", "nan"]),
-            ErrorKind::ValueValidation
-        );
-        assert_eq!(
-            kind(&["psdcal", "--quiet", "--json", "check", "-t", "t", "-o", "o"]),
-            ErrorKind::ArgumentConflict
-        );
-        assert_eq!(
-            kind(&["psdcal", "--json", "correct", "-c", "c", "-p", "p"]),
-            ErrorKind::MissingRequiredArgument
-        );
-        assert_eq!(
-            kind(&["psdcal", "frobnicate"]),
-            ErrorKind::InvalidSubcommand
-        );
-    }
-
-    #[test]
-    fn correct_config() {
-        let (output, job) = parse(&[
-            "psdcal", "-q", "correct", "-c", "c.json", "-p", "p.csv", "--out", "o.csv",
-        ])
-        .unwrap();
-        assert_eq!(output, Output::Quiet);
-        assert_eq!(
-            job,
-            Job::Correct(CorrectConfig {
-                calibration: "c.json".into(),
-                points: "p.csv".into(),
-                out: Some("o.csv".into()),
-            })
-        );
     }
 }

@@ -5,16 +5,9 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-pub const GAINS_EXAMPLES: &str = "\
-Example:
-  psdcal gains --signals equal.csv --method equal-current --out gains.json
-  psdcal calibrate -t template.csv -s signals.csv --gains gains.json --out cal.json
+use crate::choice::GainsMethodArg;
 
-  equal.csv holds records (columns vx1, vx2, vy1, vy2; image and led optional) in which
-  all four channels carry the same current: a test current injected into every
-  channel, or a light spot centred on the PSD. Each gain relative to x1 is the mean
-  of its amplitude ratio, with its standard deviation. calibrate --gains divides them
-  out of the amplitudes and keeps them fixed (--fit ...,gains estimates them instead).";
+pub const GAINS_EXAMPLES: &str = include_str!("../help/gains.txt");
 
 /// Arguments of `psdcal gains`.
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -23,8 +16,8 @@ pub struct GainsArgs {
     #[arg(long, short = 's', value_name = "FILE")]
     pub signals: PathBuf,
     /// Estimation method (equal-current: all four channels carry the same current)
-    #[arg(long, value_name = "METHOD", default_value = "equal-current", value_parser = ["equal-current"])]
-    pub method: String,
+    #[arg(long, value_name = "METHOD", value_enum, default_value_t = GainsMethodArg::EqualCurrent)]
+    pub method: GainsMethodArg,
     /// Where to write gains.json (atomically); standard output when absent
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,

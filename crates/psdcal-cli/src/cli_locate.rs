@@ -5,80 +5,18 @@ use std::path::PathBuf;
 
 use clap::{ArgGroup, Args, CommandFactory};
 use nalgebra::Vector3;
-use psdcal_locate::{LocateOptions, Plane, MAX_GRID};
-use psdcal_model::Param;
+use psdcal::{LocateOptions, Param, Plane, MAX_GRID};
+pub use psdcal::{LocateTarget, MapModel, MapSource};
+use psdcal_model::UnknownParam;
 
+use crate::choice::LensArg;
 use crate::cli::{positive_mm, Cli, Output};
 
-pub const AOA_EXAMPLES: &str = "\
-Example:
-  psdcal aoa --calibration calibration.json --points points.csv --point-sigma 0.001 --out aoa.csv
+pub const AOA_EXAMPLES: &str = include_str!("../help/aoa.txt");
 
-  reads points.csv (x_mm, y_mm, or vx1, vx2, vy1, vy2, plus any other columns,
-  which are kept) and adds, per row: x_ideal_mm, y_ideal_mm (the corrected
-  point), alpha_x_deg, alpha_y_deg (MODEL.md §5: atan of the normalised ray),
-  ray_x, ray_y, ray_z (unit ray towards the emitter, sensor frame),
-  sigma_alpha_x_deg, sigma_alpha_y_deg, rho_alpha_xy (1-σ uncertainty and
-  correlation), sigma_alpha_x_cal_deg, sigma_alpha_y_cal_deg (the
-  calibration's covariance alone) and, with --point-sigma, the point noise's
-  part sigma_alpha_x_point_deg, sigma_alpha_y_point_deg; then status.
-  Amplitude rows first get x_mm, y_mm (MODEL.md §1, the calibration's gains
-  divided out).
+pub const LOCATE_EXAMPLES: &str = include_str!("../help/locate.txt");
 
-Status: ok | off_active_area (answered; the model was not fitted there) |
-  outside_valid_region, no_light, non_finite_input (no answer: empty values).
-  A summary line counts them; the batch never stops for one row.";
-
-pub const LOCATE_EXAMPLES: &str = "\
-Examples:
-  psdcal locate -c calibration.json -p points.csv --distance 5000 --out positions.csv
-
-  emitters on the plane parallel to the sensor 5 m in front of it:
-  x = S tan(alpha_x), y = S tan(alpha_y), z = S (sensor frame, mm).
-
-  psdcal locate -c calibration.json -p points.csv --plane 0,-1,0,2500 --out floor.csv
-
-  emitters on the plane n.P = d given in the sensor frame (here the floor
-  2.5 m below a sensor whose y axis points up): NX,NY,NZ,D_MM.
-
-  psdcal locate --rig rig.json --points rig_points.csv --point-sigma 0.001 --out emitters.csv
-
-  emitters seen by two or more sensors of a rig (README 'Rig files'): rows
-  emitter, sensor, x_mm, y_mm (or amplitudes); one output row per emitter, in
-  the world frame, by least-squares intersection of the rays weighted by their
-  covariances.
-
-Columns added, F = sensor (plane: input columns kept, then alpha_x_deg,
-  alpha_y_deg, x_F_mm, y_F_mm, z_F_mm, range_mm) or F = world (rig: emitter,
-  sensors, x_F_mm, y_F_mm, z_F_mm), then sigma_x_F_mm, sigma_y_F_mm,
-  sigma_z_F_mm, cov_xy_F_mm2, cov_xz_F_mm2, cov_yz_F_mm2, sigma_position_mm
-  (sqrt of the trace), (rig) max_miss_mm, ray_angle_deg, and status. The
-  covariance is the calibration's (and, with --point-sigma, the
-  measurement's), linearised.
-
-Status: ok | off_active_area, grazing_plane, nearly_parallel_rays (answered,
-  with care) | outside_valid_region, parallel_to_plane, points_away_from_plane,
-  too_few_sensors, parallel_rays, behind_sensor, no_shared_view, no_light
-  (no answer: empty values).";
-
-pub const MAP_EXAMPLES: &str = "\
-Examples:
-  psdcal map --lens 1 --error f=0.05 --error cx=0.02,cy=0.02 --error k1=1e-4 --out map_lens1.csv
-
-  the paper's Figure 9 for given parameter errors (e.g. |mean - ideal| + 2 std):
-  at every point of a 41 x 41 grid over the 9 x 9 mm active area, the AoA
-  error |alpha(theta + d) - alpha(theta)| with the full model and the position
-  error on the plane parallel to the sensor at --distance (default 5000 mm).
-
-  psdcal map --calibration calibration.json --k-sigma 2 --grid 61 --out map.csv
-
-  the same from a calibration's covariance: k times the propagated sigma.
-
-Columns: x_mm, y_mm, alpha_x_deg, alpha_y_deg, aoa_error_x_deg,
-  aoa_error_y_deg, aoa_error_deg (angle between the rays, or k sqrt(sx^2 + sy^2)),
-  position_error_x_mm, position_error_y_mm, position_error_mm, with --paper also
-  paper_aoa_error_x_deg, paper_aoa_error_y_deg (the small-angle form P42),
-  status (ok, or why a grid point has no values, e.g. outside_valid_region).";
+pub const MAP_EXAMPLES: &str = include_str!("../help/map.txt");
 
 /// Arguments of `psdcal aoa`.
 #[derive(Debug, Args)]
@@ -148,8 +86,8 @@ pub struct MapArgs {
     #[arg(long, short = 'c', value_name = "FILE")]
     pub calibration: Option<PathBuf>,
     /// The paper's simulated lens instead of a calibration: 1 (f = 25 mm) or 2 (f = 8 mm), 9 x 9 mm PSD
-    #[arg(long, value_name = "N", value_parser = ["1", "2"])]
-    pub lens: Option<String>,
+    #[arg(long, value_name = "N", value_enum)]
+    pub lens: Option<LensArg>,
     /// Parameter error NAME=VALUE (repeatable or comma-separated), e.g. f=0.05,cx=0.02,k1=1e-4
     #[arg(long = "error", value_name = "NAME=VALUE", value_parser = parse_error_list, allow_hyphen_values = true)]
     pub errors: Vec<Vec<(Param, f64)>>,
@@ -186,15 +124,6 @@ pub struct AoaConfig {
     pub point_sigma_mm: Option<f64>,
 }
 
-/// Where `locate` puts the emitters.
-#[derive(Debug, Clone, PartialEq)]
-pub enum LocateTarget {
-    /// A plane in the sensor frame (`--distance` or `--plane`), with the calibration.
-    Plane { calibration: PathBuf, plane: Plane },
-    /// A rig file.
-    Rig(PathBuf),
-}
-
 /// Validated configuration of `psdcal locate`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LocateConfig {
@@ -203,20 +132,6 @@ pub struct LocateConfig {
     pub out: Option<PathBuf>,
     pub options: LocateOptions,
     pub point_sigma_given: bool,
-}
-
-/// Which model `map` evaluates.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MapModel {
-    Calibration(PathBuf),
-    PaperLens(u8),
-}
-
-/// Where the map's errors come from.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MapSource {
-    Errors(Vec<(Param, f64)>),
-    KSigma(f64),
 }
 
 /// Validated configuration of `psdcal map`.
@@ -311,7 +226,7 @@ impl MapArgs {
         }
         let model = match (self.calibration, self.lens) {
             (Some(path), None) => MapModel::Calibration(path),
-            (None, Some(lens)) => MapModel::PaperLens(if lens == "1" { 1 } else { 2 }),
+            (None, Some(lens)) => MapModel::PaperLens(if lens == LensArg::One { 1 } else { 2 }),
             _ => {
                 return Err(usage(
                     clap::error::ErrorKind::ArgumentConflict,
@@ -413,9 +328,7 @@ fn parse_error_list(text: &str) -> Result<Vec<(Param, f64)>, String> {
         let (name, value) = item
             .split_once('=')
             .ok_or_else(|| format!("expected NAME=VALUE such as f=0.05, found '{item}'"))?;
-        let p: Param = name
-            .parse()
-            .map_err(|e: psdcal_model::UnknownParam| e.to_string())?;
+        let p: Param = name.parse().map_err(|e: UnknownParam| e.to_string())?;
         let v = number(value)
             .ok_or_else(|| format!("expected a finite number for {p}, found '{value}'"))?;
         out.push((p, v));
@@ -424,228 +337,4 @@ fn parse_error_list(text: &str) -> Result<Vec<(Param, f64)>, String> {
         return Err("expected NAME=VALUE such as f=0.05".into());
     }
     Ok(out)
-}
-
-#[cfg(test)]
-mod tests {
-    use clap::Parser;
-
-    use super::*;
-    use crate::cli::Job;
-
-    fn parse(args: &[&str]) -> Result<(Output, Job), clap::Error> {
-        Cli::try_parse_from(args)?.into_job()
-    }
-
-    #[test]
-    fn aoa_config() {
-        let (_, job) = parse(&[
-            "psdcal",
-            "aoa",
-            "-c",
-            "c.json",
-            "-p",
-            "p.csv",
-            "--point-sigma",
-            "0.001",
-        ])
-        .unwrap();
-        assert_eq!(
-            job,
-            Job::Aoa(AoaConfig {
-                calibration: "c.json".into(),
-                points: "p.csv".into(),
-                out: None,
-                point_sigma_mm: Some(0.001),
-            })
-        );
-    }
-
-    #[test]
-    fn locate_targets() {
-        let (_, job) = parse(&[
-            "psdcal",
-            "locate",
-            "-c",
-            "c",
-            "-p",
-            "p",
-            "--distance",
-            "5000",
-        ])
-        .unwrap();
-        let Job::Locate(config) = job else { panic!() };
-        assert_eq!(
-            config.target,
-            LocateTarget::Plane {
-                calibration: "c".into(),
-                plane: Plane::parallel(5000.0).unwrap()
-            }
-        );
-        assert_eq!(config.options.point_sigma_mm, 0.0);
-        let (_, job) = parse(&[
-            "psdcal",
-            "locate",
-            "-c",
-            "c",
-            "-p",
-            "p",
-            "--plane",
-            "0,-2,0,-2500",
-        ])
-        .unwrap();
-        let Job::Locate(config) = job else { panic!() };
-        // -2y = -2500 is the plane y = 1250 mm.
-        let LocateTarget::Plane { plane, .. } = config.target else {
-            panic!()
-        };
-        assert_eq!(plane.offset_mm(), 1250.0);
-        let (_, job) = parse(&[
-            "psdcal",
-            "locate",
-            "--rig",
-            "r.json",
-            "-p",
-            "p",
-            "--unweighted",
-            "--point-sigma",
-            "0",
-        ])
-        .unwrap();
-        let Job::Locate(config) = job else { panic!() };
-        assert_eq!(config.target, LocateTarget::Rig("r.json".into()));
-        assert!(!config.options.weight_rays);
-        assert!(config.point_sigma_given);
-    }
-
-    #[test]
-    fn map_config() {
-        let (_, job) = parse(&[
-            "psdcal",
-            "map",
-            "--lens",
-            "1",
-            "--error",
-            "f=0.05,cx=-0.02",
-            "--error",
-            "k1=1e-4",
-            "--paper",
-        ])
-        .unwrap();
-        let Job::Map(config) = job else { panic!() };
-        assert_eq!(config.model, MapModel::PaperLens(1));
-        assert_eq!(
-            config.source,
-            MapSource::Errors(vec![
-                (Param::F, 0.05),
-                (Param::Cx, -0.02),
-                (Param::K1, 1e-4)
-            ])
-        );
-        assert_eq!((config.grid, config.distance_mm), (41, 5000.0));
-        let (_, job) = parse(&[
-            "psdcal",
-            "map",
-            "-c",
-            "c.json",
-            "--k-sigma",
-            "2",
-            "--grid",
-            "5",
-        ])
-        .unwrap();
-        let Job::Map(config) = job else { panic!() };
-        assert_eq!(config.source, MapSource::KSigma(2.0));
-    }
-
-    #[test]
-    fn usage_errors() {
-        use clap::error::ErrorKind;
-        let kind = |args: &[&str]| parse(args).unwrap_err().kind();
-        assert_eq!(
-            kind(&["psdcal", "aoa", "-c", "c"]),
-            ErrorKind::MissingRequiredArgument
-        );
-        assert_eq!(
-            kind(&["psdcal", "aoa", "-c", "c", "-p", "p", "--point-sigma", "-1"]),
-            ErrorKind::ValueValidation
-        );
-        assert_eq!(
-            kind(&["psdcal", "--json", "aoa", "-c", "c", "-p", "p"]),
-            ErrorKind::MissingRequiredArgument
-        );
-        assert_eq!(
-            kind(&["psdcal", "locate", "-c", "c", "-p", "p"]),
-            ErrorKind::MissingRequiredArgument
-        );
-        assert_eq!(
-            kind(&[
-                "psdcal",
-                "locate",
-                "-c",
-                "c",
-                "-p",
-                "p",
-                "--distance",
-                "1",
-                "--rig",
-                "r"
-            ]),
-            ErrorKind::ArgumentConflict
-        );
-        assert_eq!(
-            kind(&["psdcal", "locate", "-p", "p", "--distance", "1"]),
-            ErrorKind::MissingRequiredArgument
-        );
-        assert_eq!(
-            kind(&["psdcal", "locate", "-c", "c", "-p", "p", "--distance", "0"]),
-            ErrorKind::ValueValidation
-        );
-        assert_eq!(
-            kind(&["psdcal", "locate", "-c", "c", "-p", "p", "--plane", "0,0,0,5"]),
-            ErrorKind::ValueValidation
-        );
-        assert_eq!(
-            kind(&["psdcal", "locate", "-c", "c", "-p", "p", "--plane", "0,0,1,0"]),
-            ErrorKind::ValueValidation
-        );
-        assert_eq!(
-            kind(&[
-                "psdcal",
-                "locate",
-                "-c",
-                "c",
-                "-p",
-                "p",
-                "--distance",
-                "5",
-                "--unweighted"
-            ]),
-            ErrorKind::ArgumentConflict
-        );
-        assert_eq!(
-            kind(&["psdcal", "map", "--lens", "1"]),
-            ErrorKind::MissingRequiredArgument
-        );
-        assert_eq!(
-            kind(&["psdcal", "map", "--lens", "3", "--error", "f=1"]),
-            ErrorKind::InvalidValue
-        );
-        assert_eq!(
-            kind(&["psdcal", "map", "--lens", "1", "--error", "zoom=1"]),
-            ErrorKind::ValueValidation
-        );
-        assert_eq!(
-            kind(&["psdcal", "map", "--lens", "1", "--k-sigma", "2"]),
-            ErrorKind::ArgumentConflict
-        );
-        assert_eq!(
-            kind(&["psdcal", "map", "--lens", "1", "--error", "f=1", "--error", "f=2"]),
-            ErrorKind::ValueValidation
-        );
-        assert_eq!(
-            kind(&["psdcal", "map", "--lens", "1", "--error", "f=1", "--grid", "1"]),
-            ErrorKind::ValueValidation
-        );
-    }
 }

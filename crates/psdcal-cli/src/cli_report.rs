@@ -4,18 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-pub const REPORT_EXAMPLES: &str = "\
-Examples:
-  psdcal report --calibration calibration.json --out report
-  psdcal report -c calibration.json -t template.csv -o observations.csv --out report
-
-  writes report/report.html: one self-contained page (inline SVG, no script,
-  nothing loaded from the network, printable) with the parameters and their
-  standard deviations, the fit summary, the per-image table and the plots:
-  distortion field and corrected spiral, AoA sensitivity, AoA and position
-  error maps at 2 sigma of the covariance, and, with the data, the coverage of
-  the sensor and the residual vectors per image. Each plot is also written as
-  report/NAME.svg and report/NAME.png.";
+pub const REPORT_EXAMPLES: &str = include_str!("../help/report.txt");
 
 /// Arguments of `psdcal report`.
 #[derive(Debug, Args)]

@@ -4,43 +4,22 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use psdcal_sim::{Lens, TemplateKind, TABLE_IDS};
+use psdcal::MAX_RECORD_CYCLES;
 
-pub const SIMULATE_EXAMPLES: &str = "\
-Examples:
-  psdcal simulate --lens 2 --snr 40 --out sim
-  psdcal simulate --lens 1 --snr 50 --imbalance --psd-distortion --images 12 --template grid --seed 7 --out sim
+use crate::choice::{choice, name, LensArg, TableArg, TemplateArg};
 
-  writes sim/template.csv, sim/observations.csv, sim/signals.csv and sim/truth.json
-  (every true parameter, pose and gain). Without --snr the data are noise-free.
-  Then: psdcal calibrate -t sim/template.csv -o sim/observations.csv --out sim/calibration.json";
+pub const SIMULATE_EXAMPLES: &str = include_str!("../help/simulate.txt");
 
-pub const STUDY_EXAMPLES: &str = "\
-Examples:
-  psdcal study table3 table4 --trials 200
-  psdcal study all --trials 200 --threads 2 --seed 1 --out study
+pub const STUDY_EXAMPLES: &str = include_str!("../help/study.txt");
 
-  runs the paper's conditions (Tables 1-10, Figure 9) over seeded trials in parallel
-  and prints each table, psdcal's mean (std) next to the paper's numbers; writes
-  study.md, study.csv and study.json into --out (and, with --report DIR, the
-  page DIR/study.html: tables, Figure 9 heat maps, histograms). The same seed
-  gives the same tables whatever the number of threads. Tables: table1 ...
-  table10, fig9, all.";
-
-pub const DEMO_EXAMPLES: &str = "\
-Example:
-  psdcal demo
-
-  simulates the paper's lens 2 at 40 dB (nine template poses, the 14-LED template),
-  calibrates it from automatic initialisation and prints the recovered parameters
-  against the truth, with their standard deviations and the angle-of-arrival error.";
+pub const DEMO_EXAMPLES: &str = include_str!("../help/demo.txt");
 
 /// Arguments of `psdcal simulate`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct SimulateArgs {
     /// The paper's lens: 1 (f = 25 mm) or 2 (f = 8 mm)
-    #[arg(long, value_name = "1|2", default_value = "2", value_parser = parse_lens)]
-    pub lens: Lens,
+    #[arg(long, value_name = "1|2", default_value = "2", value_parser = choice::<LensArg>)]
+    pub lens: LensArg,
     /// Per-channel SNR in dB (no noise when absent)
     #[arg(long, value_name = "DB", value_parser = parse_snr, allow_negative_numbers = true)]
     pub snr: Option<f64>,
@@ -54,8 +33,8 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "N", default_value = "9", value_parser = parse_images)]
     pub images: usize,
     /// Template: scatter14 (14 unaligned LEDs) or grid (5 x 5 with lines)
-    #[arg(long, value_name = "NAME", default_value = "scatter14", value_parser = parse_template)]
-    pub template: TemplateKind,
+    #[arg(long, value_name = "NAME", default_value = "scatter14", value_parser = choice::<TemplateArg>)]
+    pub template: TemplateArg,
     /// Length of each LED's record in modulation cycles (the first 25 are
     /// the filter's transient; the rest are demodulated). Longer records
     /// average more samples: residuals fall in proportion (the paper's
@@ -74,8 +53,8 @@ pub struct SimulateArgs {
 #[derive(Debug, Args)]
 pub struct StudyArgs {
     /// Tables to run: table1 ... table10, fig9, or all
-    #[arg(value_name = "TABLE", default_value = "all", value_parser = parse_table)]
-    pub tables: Vec<String>,
+    #[arg(value_name = "TABLE", default_value = "all", value_parser = choice::<TableArg>)]
+    pub tables: Vec<TableArg>,
     /// Trials per condition
     #[arg(long, value_name = "N", default_value = "200", value_parser = parse_trials)]
     pub trials: usize,
@@ -125,25 +104,9 @@ pub struct StudyConfig {
 impl StudyArgs {
     /// The configuration: `all` expands, duplicates go, the paper's order.
     pub fn into_config(self) -> StudyConfig {
-        let mut wanted: Vec<String> = Vec::new();
-        for t in self.tables {
-            if t == "all" {
-                wanted.extend(TABLE_IDS.iter().map(|s| s.to_string()));
-                wanted.push("fig9".into());
-            } else {
-                wanted.push(t);
-            }
-        }
-        let order = |t: &String| {
-            TABLE_IDS
-                .iter()
-                .position(|x| x == t)
-                .unwrap_or(TABLE_IDS.len())
-        };
-        wanted.sort_by_key(order);
-        wanted.dedup();
+        let ids: Vec<String> = self.tables.iter().map(name).collect();
         StudyConfig {
-            tables: wanted,
+            tables: psdcal::expand_tables(&ids),
             trials: self.trials,
             threads: self.threads,
             seed: self.seed,
@@ -151,16 +114,6 @@ impl StudyArgs {
             out: self.out,
             report: self.report,
         }
-    }
-}
-
-fn parse_lens(text: &str) -> Result<Lens, String> {
-    match text.trim() {
-        "1" => Ok(Lens::One),
-        "2" => Ok(Lens::Two),
-        _ => Err(format!(
-            "expected 1 (f = 25 mm) or 2 (f = 8 mm), found '{text}'"
-        )),
     }
 }
 
@@ -180,25 +133,6 @@ fn parse_images(text: &str) -> Result<usize, String> {
     }
 }
 
-fn parse_template(text: &str) -> Result<TemplateKind, String> {
-    match text.trim() {
-        "scatter14" => Ok(TemplateKind::Scatter14),
-        "grid" => Ok(TemplateKind::Grid),
-        _ => Err(format!("expected scatter14 or grid, found '{text}'")),
-    }
-}
-
-fn parse_table(text: &str) -> Result<String, String> {
-    let t = text.trim().to_ascii_lowercase();
-    if t == "all" || t == "fig9" || TABLE_IDS.contains(&t.as_str()) {
-        Ok(t)
-    } else {
-        Err(format!(
-            "unknown table '{text}'; expected table1 ... table10, fig9 or all"
-        ))
-    }
-}
-
 fn parse_trials(text: &str) -> Result<usize, String> {
     match text.trim().parse::<usize>() {
         Ok(n) if (1..=1_000_000).contains(&n) => Ok(n),
@@ -208,14 +142,8 @@ fn parse_trials(text: &str) -> Result<usize, String> {
     }
 }
 
-/// Default record length, cycles ([`psdcal_sim::ChainConfig`]).
-pub const DEFAULT_RECORD_CYCLES: usize = 65;
-
-/// Longest record accepted, cycles (10 s per LED at 1 kHz).
-const MAX_RECORD_CYCLES: usize = 10_000;
-
 fn parse_record_cycles(text: &str) -> Result<usize, String> {
-    let transient = psdcal_sim::ChainConfig::default().transient_cycles;
+    let transient = psdcal::transient_cycles();
     match text.trim().parse::<usize>() {
         Ok(n) if n > transient && n <= MAX_RECORD_CYCLES => Ok(n),
         _ => Err(format!(
@@ -223,25 +151,6 @@ fn parse_record_cycles(text: &str) -> Result<usize, String> {
              {transient}-cycle filter transient), found '{text}'",
             transient + 1
         )),
-    }
-}
-
-/// The default signal chain with records of `record_cycles` cycles.
-pub fn chain_with_record(record_cycles: usize) -> anyhow::Result<psdcal_sim::SignalChain> {
-    let config = psdcal_sim::ChainConfig {
-        record_cycles,
-        ..psdcal_sim::ChainConfig::default()
-    };
-    psdcal_sim::SignalChain::new(config)
-        .map_err(|e| anyhow::anyhow!("--record-cycles {record_cycles}: {e}"))
-}
-
-/// ` --record-cycles N` when `n` is not the default, for reproduce lines.
-pub fn record_cycles_flag(n: usize) -> String {
-    if n == DEFAULT_RECORD_CYCLES {
-        String::new()
-    } else {
-        format!(" --record-cycles {n}")
     }
 }
 

@@ -2,30 +2,26 @@
 
 use std::fmt::Write as _;
 
-use psdcal_io::{
-    validate_data_set, DataSetSummary, Observations, Signals, Template, ValidationOptions, Warning,
-};
-use psdcal_model::ChannelGains;
+use psdcal::{DataSet, DataSetFiles, LoadOptions};
+use psdcal_io::{DataSetSummary, Warning};
 
-use crate::cli::{CheckConfig, Output, PointSource};
+use crate::cli::{CheckConfig, Output};
 use crate::report::print_warnings;
 
 /// Runs `check`.
 pub fn run(config: &CheckConfig, output: Output) -> anyhow::Result<()> {
-    let template = Template::read(&config.template)?;
-    let observations = match &config.points {
-        PointSource::Observations(path) => Observations::read(path)?,
-        PointSource::Signals(path) => {
-            Signals::read(path)?.to_observations(&config.geometry, &ChannelGains::UNIT)?
-        }
+    let files = DataSetFiles {
+        template: config.template.clone(),
+        points: config.points.clone(),
+        gains: None,
     };
-    let options = ValidationOptions {
+    let options = LoadOptions {
         geometry: config.geometry,
         strict: config.strict,
     };
-    let set = validate_data_set(&template, &observations, &options)?;
-    print_warnings(&set.warnings);
-    let summary = DataSetSummary::new(&template, &observations, &set, &config.geometry);
+    let set = DataSet::from_files(&files, &options)?;
+    print_warnings(set.warnings());
+    let summary = set.summary();
     match output {
         Output::Quiet => {}
         Output::Json => println!("{}", serde_json::to_string_pretty(&summary)?),
@@ -41,7 +37,6 @@ fn render(s: &DataSetSummary) -> String {
     let _ = write_summary(&mut out, s);
     out
 }
-
 fn write_summary(out: &mut String, s: &DataSetSummary) -> std::fmt::Result {
     let lines = if s.template.lines.is_empty() {
         "no declared lines".to_string()

@@ -1,32 +1,17 @@
 //! `psdcal correct`: measured points (or amplitudes) → ideal points.
 
-use std::io::{self, Write};
-
-use psdcal_io::{correct_points, read_calibration, write_atomic, IoError, Points};
-
 use crate::cli::{CorrectConfig, Output};
 use crate::report::print_warnings;
 
 /// Runs `correct`.
 pub fn run(config: &CorrectConfig, output: Output) -> anyhow::Result<()> {
-    let calibration = read_calibration(&config.calibration)?;
-    let points = Points::read(&config.points)?;
-    let correction = correct_points(&points, &calibration)?;
+    let corrected = psdcal::correct(&config.calibration, &config.points)?;
+    let (points, correction) = (&corrected.points, &corrected.correction);
     print_warnings(&correction.warnings);
+    corrected.write_to(config.out.as_deref())?;
     let Some(out) = &config.out else {
-        let mut stdout = io::stdout().lock();
-        return correction
-            .write_csv(&points, &mut stdout)
-            .and_then(|()| stdout.flush())
-            .map_err(|source| {
-                IoError::Write {
-                    file: "standard output".to_string(),
-                    source,
-                }
-                .into()
-            });
+        return Ok(());
     };
-    write_atomic(out, |w| correction.write_csv(&points, w))?;
     let columns = correction.added_columns();
     match output {
         Output::Quiet => {}

@@ -1,57 +1,8 @@
-//! `psdcal`: the command-line tool. Argument parsing and output only; the
-//! work is done by psdcal-io, psdcal-calib and psdcal-model.
+//! `psdcal`: the command-line tool (psdcal-cli's library does the work).
 //!
 //! Exit codes: 0 success, 1 failure (one `error: ...` line on stderr),
 //! 2 usage error (clap).
 
-mod cli;
-mod cli_gains;
-mod cli_locate;
-mod cli_report;
-mod cli_sim;
-mod cmd_aoa;
-mod cmd_calibrate;
-mod cmd_check;
-mod cmd_correct;
-mod cmd_demo;
-mod cmd_gains;
-mod cmd_locate;
-mod cmd_map;
-mod cmd_report;
-mod cmd_simulate;
-mod cmd_study;
-mod locate_output;
-mod report;
-
-use std::process::ExitCode;
-
-use clap::Parser;
-
-use crate::cli::{Cli, Job};
-
-fn main() -> ExitCode {
-    let (output, job) = match Cli::parse().into_job() {
-        Ok(parsed) => parsed,
-        Err(usage) => usage.exit(),
-    };
-    let result = match &job {
-        Job::Check(config) => cmd_check::run(config, output),
-        Job::Calibrate(config) => cmd_calibrate::run(config, output),
-        Job::Gains(args) => cmd_gains::run(args, output),
-        Job::Simulate(args) => cmd_simulate::run(args, output),
-        Job::Study(config) => cmd_study::run(config, output),
-        Job::Demo(args) => cmd_demo::run(args, output),
-        Job::Correct(config) => cmd_correct::run(config, output),
-        Job::Aoa(config) => cmd_aoa::run(config, output),
-        Job::Locate(config) => cmd_locate::run(config, output),
-        Job::Map(config) => cmd_map::run(config, output),
-        Job::Report(config) => cmd_report::run(config, output),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(error) => {
-            report::print_error(&error);
-            ExitCode::FAILURE
-        }
-    }
+fn main() -> std::process::ExitCode {
+    psdcal_cli::main()
 }

@@ -6,6 +6,19 @@ use psdcal_io::{IoError, Warning};
 /// At most this many warnings are printed one by one.
 const MAX_WARNINGS: usize = 50;
 
+/// The error the library wrapped, so that its message and hint are the
+/// lower crate's own.
+pub fn lower(error: anyhow::Error) -> anyhow::Error {
+    match error.downcast::<psdcal::Error>() {
+        Ok(psdcal::Error::Io(e)) => e.into(),
+        Ok(psdcal::Error::Estimate(e)) => e.into(),
+        Ok(psdcal::Error::Locate(e)) => e.into(),
+        Ok(psdcal::Error::Calibrate(e)) => anyhow::Error::new(e).context("calibration failed"),
+        Ok(other) => other.into(),
+        Err(error) => error,
+    }
+}
+
 /// Prints the failure as one line on standard error.
 pub fn print_error(error: &anyhow::Error) {
     // psdcal-io's messages already include their causes; other errors get
@@ -34,19 +47,27 @@ pub fn print_warnings(warnings: &[Warning]) {
 
 /// What the user can do about an error.
 fn hint(error: &anyhow::Error) -> &'static str {
-    if let Some(hint) = crate::locate_output::hint(error) {
-        return hint;
+    if let Some(e) = error.downcast_ref::<psdcal::LocateError>() {
+        return match e {
+            psdcal::LocateError::InvalidInput { .. } | psdcal::LocateError::NonFinite { .. } => {
+                "change the options or the data as the message says"
+            }
+            psdcal::LocateError::InvalidCovariance { .. } => {
+                "write the calibration again with psdcal"
+            }
+            _ => "see 'psdcal locate --help'",
+        };
     }
-    if let Some(calib) = error.downcast_ref::<psdcal_calib::CalibError>() {
+    if let Some(calib) = error.downcast_ref::<psdcal::CalibError>() {
         return match calib {
-            psdcal_calib::CalibError::TooFewImages { .. } | psdcal_calib::CalibError::TooFewPoints { .. } => {
+            psdcal::CalibError::TooFewImages { .. } | psdcal::CalibError::TooFewPoints { .. } => {
                 "add template poses (images) with at least 4 LEDs each"
             }
-            psdcal_calib::CalibError::Degenerate { .. } => {
+            psdcal::CalibError::Degenerate { .. } => {
                 "vary the template's tilt and position between images, or fix the parameters the data cannot determine"
             }
-            psdcal_calib::CalibError::InvalidInput { .. } => "change the options or the data as the message says",
-            psdcal_calib::CalibError::NotConverged { .. } => {
+            psdcal::CalibError::InvalidInput { .. } => "change the options or the data as the message says",
+            psdcal::CalibError::NotConverged { .. } => {
                 "give --focal-guess, free fewer parameters (--fit), or add images"
             }
             _ => "check the data with 'psdcal check', or give --focal-guess",
@@ -56,14 +77,17 @@ fn hint(error: &anyhow::Error) -> &'static str {
         return "see 'psdcal --help'";
     };
     match io {
+        IoError::Field { .. } => {
+            "correct that field of the rig file (format: README, section 'Rig files')"
+        }
         IoError::Read { .. } => "check the path and that the file is readable",
         IoError::Write { .. } => "check that the destination folder exists and is writable",
         IoError::Encoding { .. } => "save the file as UTF-8 text (CSV or JSON)",
-        IoError::Structure { .. } => "fix the file's header or rows (formats: FORMATS.md)",
+        IoError::Structure { .. } => "fix the file's header or rows (formats: docs/formats.md)",
         IoError::Value { .. } => "correct the value on that line",
         IoError::UnknownLed { .. } => "add the LED to the template or correct its identifier",
         IoError::Duplicate { .. } => "keep only one of the two rows",
-        IoError::Invalid { .. } => "correct the data (formats: FORMATS.md)",
+        IoError::Invalid { .. } => "correct the data (formats: docs/formats.md)",
         IoError::Amplitudes { .. } => {
             "check that row's amplitudes (no light reached the sensor, or a channel is broken)"
         }
@@ -71,5 +95,21 @@ fn hint(error: &anyhow::Error) -> &'static str {
         IoError::NewerVersion { .. } => "upgrade psdcal to read this file",
         IoError::Strict { .. } => "fix the data, or run without --strict to drop it with a warning",
         _ => "see 'psdcal --help'",
+    }
+}
+
+/// At most this many per-row warnings are printed.
+const MAX_ROW_WARNINGS: usize = 20;
+
+/// Prints the warnings of table rows that are not `ok` (at most 20).
+pub fn print_row_warnings(warnings: &[String]) {
+    for w in warnings.iter().take(MAX_ROW_WARNINGS) {
+        eprintln!("warning: {w}");
+    }
+    if warnings.len() > MAX_ROW_WARNINGS {
+        eprintln!(
+            "warning: {} more rows with a status other than ok (see the status column)",
+            warnings.len() - MAX_ROW_WARNINGS
+        );
     }
 }

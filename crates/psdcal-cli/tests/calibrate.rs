@@ -37,7 +37,7 @@ fn calibrates_the_example_and_the_result_is_usable() {
     assert!(text.contains("residual:") && text.contains("± "), "{text}");
     let cal = read_calibration(&out).unwrap();
     let model = cal.to_model();
-    // Noise-free data: the truth (lens 2 of MODEL.md §7) to 1e-6.
+    // Noise-free data: the truth (lens 2 of docs/model.md §7) to 1e-6.
     assert!(
         (model.intrinsics.f - 8.0).abs() < 8e-6,
         "f = {}",

@@ -82,7 +82,7 @@ const CASES: &[Case] = &[
     case("points_zero_amplitudes.csv", Role::Points, Some(3), "electrode amplitudes sum to 0"),
     // calibration.json
     case("cal_wrong_format.json", Role::Calibration, Some(2), "\"format\" is \"camera-calibration\"; expected \"psdcal-calibration\""),
-    case("cal_future_version.json", Role::Calibration, Some(3), "format version 2 was written by a newer psdcal"),
+    case("cal_future_version.json", Role::Calibration, Some(3), "format version 3 was written by a newer psdcal"),
     case("cal_negative_f.json", Role::Calibration, Some(13), "expected a positive number of mm, found -1"),
     case("cal_truncated.json", Role::Calibration, Some(102), "EOF while parsing"),
     case("cal_asymmetric_covariance.json", Role::Calibration, Some(101), "covariance.matrix is not symmetric"),

@@ -1,4 +1,9 @@
-//! calibration.json: the result of a calibration (FORMATS.md), version 1.
+//! calibration.json: the result of a calibration (docs/formats.md). Version 2
+//! (module `v2`: stages, flat parameters, diagnostics, provenance) is
+//! written by default; version 1, below, is still read, and written for a
+//! record whose `version` is 1. Both read into the same [`Calibration`].
+//!
+//! Version 1:
 //!
 //! ```text
 //! { "format": "psdcal-calibration", "version": 1,
@@ -18,9 +23,9 @@
 //!               "rms_mm": 0.1, "points": 14}] }
 //! ```
 //!
-//! Units: millimetres; distortion coefficients as in MODEL.md §2 (`k1` in
+//! Units: millimetres; distortion coefficients as in docs/model.md §2 (`k1` in
 //! mm⁻², …); `rvec` is a Rodrigues vector in radians (sensor-from-template
-//! pose); gains are relative channel gains (MODEL.md §1). `std` has one entry
+//! pose); gains are relative channel gains (docs/model.md §1). `std` has one entry
 //! per estimated parameter, named as in `estimated`, plus `g_x2`, `g_y1`,
 //! `g_y2` when the gains were estimated; `covariance.parameters` lists the
 //! same names in the same order and `matrix` is square and symmetric.
@@ -40,11 +45,16 @@ use serde::{Deserialize, Serialize};
 use crate::atomic::write_atomic_bytes;
 use crate::error::{IoError, Location};
 
+mod provenance;
 mod records;
 mod rules;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_v2;
+mod v2;
 
+pub use provenance::{Diagnostic, InputFile, Provenance};
 pub use records::{
     CostKind, Covariance, FitSummary, GainsRecord, ImageFit, IntrinsicsRecord, SensorSize,
     Software, StdDevs,
@@ -53,8 +63,9 @@ use rules::{de_format, de_version};
 
 /// The `format` name of calibration.json.
 pub const CALIBRATION_FORMAT: &str = "psdcal-calibration";
-/// The newest calibration.json version this crate reads, and the one it writes.
-pub const CALIBRATION_VERSION: u32 = 1;
+/// The newest calibration.json version this crate reads, and the one a new
+/// record ([`Calibration::from_model`]) is written in.
+pub const CALIBRATION_VERSION: u32 = 2;
 /// Names of the estimated relative gains in `std` and `covariance`.
 pub const GAIN_NAMES: [&str; 3] = ["g_x2", "g_y1", "g_y2"];
 
@@ -73,7 +84,7 @@ pub struct Calibration {
     pub sensor: SensorSize,
     /// Pinhole intrinsics.
     pub intrinsics: IntrinsicsRecord,
-    /// Distortion coefficients by name (MODEL.md §2).
+    /// Distortion coefficients by name (docs/model.md §2).
     pub distortion: Distortion,
     /// Model parameters the fit estimated.
     pub estimated: Vec<Param>,
@@ -89,6 +100,12 @@ pub struct Calibration {
     pub fit: FitSummary,
     /// Per-image poses and errors.
     pub images: Vec<ImageFit>,
+    /// What the fit noticed (version 2; empty in version 1 files).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub diagnostics: Vec<Diagnostic>,
+    /// Where the calibration came from (version 2; absent in version 1 files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Provenance>,
 }
 
 impl Calibration {
@@ -118,6 +135,8 @@ impl Calibration {
             covariance: Covariance::default(),
             fit: FitSummary::default(),
             images: Vec::new(),
+            diagnostics: Vec::new(),
+            provenance: None,
         }
     }
 
@@ -194,8 +213,19 @@ impl Calibration {
                 None => json_error(source, &e),
             });
         }
-        let calibration: Calibration =
-            serde_json::from_str(text).map_err(|e| json_error(source, &e))?;
+        let version = serde_json::from_str::<Header>(text)
+            .map(|h| h._version)
+            .unwrap_or(CALIBRATION_VERSION);
+        let calibration: Calibration = if version >= 2 {
+            let file: v2::FileV2 =
+                serde_json::from_str(text).map_err(|e| json_error(source, &e))?;
+            file.into_record().map_err(|message| IoError::Invalid {
+                at: Location::file(source),
+                message,
+            })?
+        } else {
+            serde_json::from_str(text).map_err(|e| json_error(source, &e))?
+        };
         calibration.validate(source)?;
         Ok(calibration)
     }
@@ -220,7 +250,12 @@ impl Calibration {
     /// The JSON text (pretty-printed, newline-terminated), after validation.
     pub fn to_json_string(&self, destination: &str) -> Result<String, IoError> {
         self.validate(destination)?;
-        let mut text = serde_json::to_string_pretty(self).map_err(|e| IoError::Invalid {
+        let encoded = if self.version >= 2 {
+            serde_json::to_string_pretty(&v2::FileV2::from_record(self))
+        } else {
+            serde_json::to_string_pretty(self)
+        };
+        let mut text = encoded.map_err(|e| IoError::Invalid {
             at: Location::file(destination),
             message: format!("cannot encode the calibration as JSON: {e}"),
         })?;

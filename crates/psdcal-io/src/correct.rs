@@ -1,7 +1,7 @@
 //! Correction of a points table with a calibration: measured → ideal
-//! impact points (MODEL.md §2, `SensorModel::undistort`).
+//! impact points (docs/model.md §2, `SensorModel::undistort`).
 //!
-//! Amplitude rows are first turned into measured points with MODEL.md §1 on
+//! Amplitude rows are first turned into measured points with docs/model.md §1 on
 //! the calibration's sensor size, dividing out its channel gains if it has
 //! any. The answer is the input table with its columns and text unchanged,
 //! followed by `x_mm`, `y_mm` (amplitude input only) and `x_ideal_mm`,

@@ -1,4 +1,4 @@
-//! Shared CSV reading for every psdcal table (FORMATS.md, "All CSV files").
+//! Shared CSV reading for every psdcal table (docs/formats.md, "All CSV files").
 //!
 //! The format: UTF-8 text (a leading byte-order mark is accepted), fields
 //! separated by commas, one header row naming the columns, then one record

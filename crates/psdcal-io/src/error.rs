@@ -148,7 +148,7 @@ pub enum IoError {
         /// What is wrong and what was expected.
         message: String,
     },
-    /// An amplitude row cannot give an impact point (MODEL.md §1).
+    /// An amplitude row cannot give an impact point (docs/model.md §1).
     #[error("{at}: {source}")]
     Amplitudes {
         /// The row.

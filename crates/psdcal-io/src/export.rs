@@ -1,4 +1,4 @@
-//! Writing the CSV inputs of FORMATS.md — template.csv, observations.csv and
+//! Writing the CSV inputs of docs/formats.md — template.csv, observations.csv and
 //! signals.csv — as psdcal's simulator produces them. Numbers are written in
 //! Rust's shortest round-trip form (reading them back gives the same `f64`),
 //! identifiers as text (quoted when they hold a comma, quote or line break),

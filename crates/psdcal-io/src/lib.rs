@@ -1,11 +1,11 @@
 //! # psdcal-io
 //!
-//! psdcal's file formats (the binding specification is FORMATS.md):
+//! psdcal's file formats (the binding specification is docs/formats.md):
 //!
 //! - [`Template`] — template.csv, the LEDs of the calibration template;
 //! - [`Observations`] — observations.csv, measured impact points per image;
 //! - [`Signals`] — signals.csv, electrode amplitudes, converted to
-//!   observations with the pin-cushion formulas of MODEL.md §1;
+//!   observations with the pin-cushion formulas of docs/model.md §1;
 //! - [`Points`] — points.csv, points to correct, written back with their
 //!   original columns ([`correct_points`]);
 //! - [`Calibration`] — calibration.json, versioned, read with
@@ -47,9 +47,9 @@ mod warning;
 
 pub use atomic::{write_atomic, write_atomic_bytes};
 pub use calibration::{
-    read_calibration, write_calibration, Calibration, CostKind, Covariance, FitSummary,
-    GainsRecord, ImageFit, IntrinsicsRecord, SensorSize, Software, StdDevs, CALIBRATION_FORMAT,
-    CALIBRATION_VERSION, GAIN_NAMES,
+    read_calibration, write_calibration, Calibration, CostKind, Covariance, Diagnostic, FitSummary,
+    GainsRecord, ImageFit, InputFile, IntrinsicsRecord, Provenance, SensorSize, Software, StdDevs,
+    CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
 };
 pub use correct::{correct_points, Correction, IDEAL_COLUMNS, MEASURED_COLUMNS};
 pub use coverage::{Bounds, Coverage};

@@ -1,5 +1,5 @@
 //! observations.csv: measured impact points, one row per LED per image
-//! (FORMATS.md).
+//! (docs/formats.md).
 //!
 //! | column | meaning |
 //! | --- | --- |

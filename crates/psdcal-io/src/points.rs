@@ -1,4 +1,4 @@
-//! points.csv: measured points to convert (FORMATS.md).
+//! points.csv: measured points to convert (docs/formats.md).
 //!
 //! | column | meaning |
 //! | --- | --- |
@@ -27,7 +27,7 @@ const EXPECTED_COLUMNS: &str = "x_mm, y_mm (or vx1, vx2, vy1, vy2)";
 pub enum PointInput {
     /// A measured impact point, mm.
     Position(Vector2<f64>),
-    /// Electrode amplitudes (MODEL.md §1).
+    /// Electrode amplitudes (docs/model.md §1).
     Amplitudes(Amplitudes),
 }
 
@@ -139,7 +139,7 @@ impl Points {
     }
 
     /// The measured point of every row; amplitudes are converted with
-    /// MODEL.md §1 after dividing out `gains` ([`ChannelGains::UNIT`] for
+    /// docs/model.md §1 after dividing out `gains` ([`ChannelGains::UNIT`] for
     /// none). A row whose amplitudes sum to zero or less is an error naming
     /// its line.
     pub fn measured(

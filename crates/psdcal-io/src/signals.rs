@@ -1,5 +1,5 @@
 //! signals.csv: demodulated electrode amplitudes, the alternative to
-//! observations.csv (FORMATS.md).
+//! observations.csv (docs/formats.md).
 //!
 //! | column | meaning |
 //! | --- | --- |
@@ -7,7 +7,7 @@
 //! | `vx1`, `vx2`, `vy1`, `vy2` | amplitude of each electrode channel (volts, or any consistent unit) |
 //!
 //! [`Signals::to_observations`] turns each row into an impact point with the
-//! pin-cushion formulas of MODEL.md §1 (`psdcal_model::sensor`), after
+//! pin-cushion formulas of docs/model.md §1 (`psdcal_model::sensor`), after
 //! dividing out the relative channel gains. A row whose amplitudes sum to zero
 //! or less gives no point and is an error naming its line.
 
@@ -119,7 +119,7 @@ impl Signals {
         })
     }
 
-    /// Impact points of every row (MODEL.md §1), with the relative channel
+    /// Impact points of every row (docs/model.md §1), with the relative channel
     /// `gains` divided out first ([`ChannelGains::UNIT`] when there was no
     /// electrical calibration).
     pub fn to_observations(
@@ -149,7 +149,7 @@ impl Signals {
     }
 }
 
-/// The impact point of one row's amplitudes (MODEL.md §1, gains divided
+/// The impact point of one row's amplitudes (docs/model.md §1, gains divided
 /// out); `at` locates the row for errors. Amplitudes whose total is not
 /// positive, or so large that the point overflows, are an error.
 pub(crate) fn impact_point_at(

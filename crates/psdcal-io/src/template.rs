@@ -1,4 +1,4 @@
-//! template.csv: the calibration template, one row per LED (FORMATS.md).
+//! template.csv: the calibration template, one row per LED (docs/formats.md).
 //!
 //! | column | meaning |
 //! | --- | --- |

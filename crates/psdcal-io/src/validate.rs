@@ -1,5 +1,5 @@
 //! Validation of a calibration data set: a template plus the observations of
-//! several images (FORMATS.md, MODEL.md §4 "Input").
+//! several images (docs/formats.md, docs/model.md §4 "Input").
 //!
 //! Errors (the data set cannot be used as it is):
 //! - an observation names an LED the template does not have;
@@ -27,7 +27,7 @@ use crate::warning::Warning;
 
 /// Fewest points an image needs (a homography has 8 degrees of freedom).
 pub const MIN_POINTS_PER_IMAGE: usize = 4;
-/// Fewest images a calibration needs (MODEL.md §4).
+/// Fewest images a calibration needs (docs/model.md §4).
 pub const MIN_IMAGES: usize = 3;
 
 /// How to validate a data set.

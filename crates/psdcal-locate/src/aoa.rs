@@ -1,11 +1,11 @@
-//! Angle of arrival of a measured impact point (MODEL.md §5, the paper's
+//! Angle of arrival of a measured impact point (docs/model.md §5, the paper's
 //! (P39)), with its Jacobians.
 //!
 //! Sensor frame (CONVENTIONS.md): origin at the PSD's electrical centre, `z`
 //! along the optical axis towards the scene; millimetres, radians.
 //!
 //! A measured point `m = (xd, yd)` is corrected to the ideal pinhole point
-//! `p = (x, y)` (MODEL.md §2), which has the normalised ray `(a, b, 1)`:
+//! `p = (x, y)` (docs/model.md §2), which has the normalised ray `(a, b, 1)`:
 //!
 //! ```text
 //! b = (y − cy) / f,     a = (x − cx − γ b) / f
@@ -162,7 +162,7 @@ pub fn angle_of_arrival_with_jacobians(
 
 /// The measured point whose ray is `(a, b, 1)` (the inverse of
 /// [`angle_of_arrival`]): the pinhole point `x = f a + γ b + cx`,
-/// `y = f b + cy`, distorted by Newton's method (MODEL.md §2) and polished
+/// `y = f b + cy`, distorted by Newton's method (docs/model.md §2) and polished
 /// by one more Newton step.
 ///
 /// ```

@@ -2,7 +2,7 @@
 //!
 //! What a calibrated PSD sensor is for: the **angle of arrival** of an
 //! emitter's light, the emitter's **position**, and how uncertain both are
-//! (MODEL.md §5, after Rodríguez-Navarro et al., *Sensors* 2016, Section
+//! (docs/model.md §5, after Rodríguez-Navarro et al., *Sensors* 2016, Section
 //! 3.4, (P39)–(P42), Figure 9).
 //!
 //! - [`aoa`]: measured point → ideal point → normalised ray `(a, b)` →

@@ -1,4 +1,4 @@
-//! Emitter position on a known plane (MODEL.md §5, the paper's Section 3.4
+//! Emitter position on a known plane (docs/model.md §5, the paper's Section 3.4
 //! and Figure 9): the ray of an angle of arrival intersected with a plane
 //! given in the sensor frame.
 //!

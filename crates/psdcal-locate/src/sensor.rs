@@ -1,10 +1,10 @@
 //! A calibrated sensor: its model, active area, channel gains and the
 //! covariance of its calibration, and what it answers for one measurement —
-//! the angle of arrival with its uncertainty (MODEL.md §5, (P39)) and the
+//! the angle of arrival with its uncertainty (docs/model.md §5, (P39)) and the
 //! emitter position on a plane with its 3-D covariance.
 //!
 //! Amplitude measurements are first turned into impact points with
-//! MODEL.md §1 after dividing out the gains (with `∂m/∂g` for the gains'
+//! docs/model.md §1 after dividing out the gains (with `∂m/∂g` for the gains'
 //! uncertainty). Then, with `J = ∂(a, b)/∂·` from [`crate::aoa`] and
 //! `P = P(a, b)` from [`crate::plane`]:
 //!
@@ -30,7 +30,7 @@ use crate::uncertainty::{point_noise_covariance, ParameterCovariance};
 pub enum Measurement {
     /// A measured impact point, mm, sensor frame.
     Point(Vector2<f64>),
-    /// The four electrode amplitudes (MODEL.md §1).
+    /// The four electrode amplitudes (docs/model.md §1).
     Amplitudes(Amplitudes),
 }
 

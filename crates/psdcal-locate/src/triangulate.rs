@@ -1,5 +1,5 @@
 //! Emitter position from the rays of two or more sensors with known poses
-//! (MODEL.md §5: "for several sensors with known poses, intersect rays (least
+//! (docs/model.md §5: "for several sensors with known poses, intersect rays (least
 //! squares for ≥ 2 sensors)").
 //!
 //! World frame, millimetres. Sensor `i` has the pose `world_from_sensor_i`

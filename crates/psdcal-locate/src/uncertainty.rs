@@ -1,5 +1,5 @@
 //! Uncertainty of a ray from the calibration's covariance and from the
-//! measurement noise (first-order propagation, MODEL.md §5 with §4.6).
+//! measurement noise (first-order propagation, docs/model.md §5 with §4.6).
 //!
 //! With `θ̂` the estimated quantities (a subset of the model parameters of
 //! `Param::ALL` and, when an electrical calibration estimated them, the

@@ -1,5 +1,5 @@
 //! Writes the small example data set shipped in `data/example/`: the paper's
-//! lens 2 (MODEL.md §7) seen through nine noise-free poses of a 14-LED
+//! lens 2 (docs/model.md §7) seen through nine noise-free poses of a 14-LED
 //! template with unaligned LEDs. `psdcal check` on it is the README's first
 //! command until the simulator lands.
 //!

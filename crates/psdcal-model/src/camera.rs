@@ -1,4 +1,4 @@
-//! The pinhole (MODEL.md §3, the paper's (P4)–(P6)) with one focal length and
+//! The pinhole (docs/model.md §3, the paper's (P4)–(P6)) with one focal length and
 //! optional skew.
 //!
 //! A sensor-frame point `P_c = (Xc, Yc, Zc)`, `Zc > 0`, has the ideal image
@@ -11,7 +11,7 @@
 //!
 //! and, conversely, an ideal point `(x, y)` has the *normalised ray*
 //! `(a, b, 1)` with `b = (y − cy)/f`, `a = (x − cx − γ b)/f`, i.e. the
-//! direction `(x − cx − γ(y − cy)/f, y − cy, f)` of MODEL.md §4.6.
+//! direction `(x − cx − γ(y − cy)/f, y − cy, f)` of docs/model.md §4.6.
 
 use nalgebra::{Matrix2, Matrix2x3, SMatrix, Unit, Vector2, Vector3};
 

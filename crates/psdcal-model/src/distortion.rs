@@ -1,5 +1,5 @@
 //! Distortion: measured (distorted) impact point → ideal pinhole point, and
-//! back (MODEL.md §2, the paper's (P7)–(P16)).
+//! back (docs/model.md §2, the paper's (P7)–(P16)).
 //!
 //! For a measured point `(xd, yd)`, in this order:
 //!

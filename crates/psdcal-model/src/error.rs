@@ -10,7 +10,7 @@ use thiserror::Error;
 #[non_exhaustive]
 pub enum ModelError {
     /// The four electrode amplitudes sum to zero or less: no light reached the
-    /// PSD, or a channel is broken (MODEL.md §1).
+    /// PSD, or a channel is broken (docs/model.md §1).
     #[error("electrode amplitudes sum to {total} (must be positive): no usable light spot")]
     NonPositiveTotal {
         /// `Vx1 + Vx2 + Vy1 + Vy2` after dividing out the gains.

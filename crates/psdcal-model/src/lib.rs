@@ -1,7 +1,7 @@
 //! # psdcal-model
 //!
 //! The mathematical model of a pin-cushion position-sensitive device (PSD)
-//! behind a lens, as specified in psdcal's `MODEL.md` §1–3 (after
+//! behind a lens, as specified in psdcal's `docs/model.md` §1–3 (after
 //! Rodríguez-Navarro et al., *Sensors* 2016, 16(9), 1484):
 //!
 //! - [`sensor`]: electrode amplitudes ↔ impact point, channel gains (P1, P2, P43);
@@ -11,7 +11,7 @@
 //! - [`projection`]: template plane ↔ measured point, the maps calibration
 //!   minimises over (P5, P29), with analytic Jacobians;
 //! - [`stage`], [`stages`], [`model`], [`model_projection`]: the model as a
-//!   chain of stages with runtime-sized, named parameter blocks (MODEL.md §8):
+//!   chain of stages with runtime-sized, named parameter blocks (docs/model.md §8):
 //!   what calibration estimates.
 //!
 //! Millimetres everywhere, radians inside. See `CONVENTIONS.md` at the root of

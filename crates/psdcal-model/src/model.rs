@@ -1,5 +1,5 @@
 //! [`Model`]: the sensor model as a chain of stages with one flat, named
-//! parameter vector (MODEL.md §8).
+//! parameter vector (docs/model.md §8).
 //!
 //! ```text
 //! amplitudes ─[gains]─► measured m ─[s₁]─► … ─[s_K]─► ideal x ─[pinhole]─► ray (a, b)

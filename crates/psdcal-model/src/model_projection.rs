@@ -1,4 +1,4 @@
-//! Template plane ↔ measured point through a [`Model`] chain (MODEL.md §3–4,
+//! Template plane ↔ measured point through a [`Model`] chain (docs/model.md §3–4,
 //! the paper's (P5), (P15)–(P16) and the template-plane residual of (P29)),
 //! with Jacobians with respect to the flat parameter vector, the pose and the
 //! point.

@@ -1,16 +1,16 @@
 //! The sensor's parameters and their fixed order in parameter vectors.
 //!
 //! A [`SensorModel`] is everything a calibration estimates about one sensor
-//! besides the poses: the pinhole intrinsics `f, cx, cy, skew` (MODEL.md §3,
+//! besides the poses: the pinhole intrinsics `f, cx, cy, skew` (docs/model.md §3,
 //! (P4)) and the distortion coefficients `k1, k2, k3, p1, p2, l1, l2`
-//! (MODEL.md §2, (P7)–(P16)). Parameter vectors and Jacobian columns always
+//! (docs/model.md §2, (P7)–(P16)). Parameter vectors and Jacobian columns always
 //! follow the order of [`Param::ALL`]:
 //!
 //! ```text
 //! 0 f   1 cx   2 cy   3 skew   4 k1   5 k2   6 k3   7 p1   8 p2   9 l1   10 l2
 //! ```
 //!
-//! `f`, `cx`, `cy` in mm; `skew` in mm (the `γ` of MODEL.md §3, same unit as
+//! `f`, `cx`, `cy` in mm; `skew` in mm (the `γ` of docs/model.md §3, same unit as
 //! `f`); `k1` in mm⁻², `k2` in mm⁻⁴, `k3` in mm⁻⁶, `p1`, `p2` in mm⁻¹,
 //! `l1` in mm⁻², `l2` in mm⁻⁴.
 
@@ -130,7 +130,7 @@ impl FromStr for Param {
     }
 }
 
-/// Pinhole intrinsics (MODEL.md §3, (P4)): one focal length, optical centre,
+/// Pinhole intrinsics (docs/model.md §3, (P4)): one focal length, optical centre,
 /// optional skew. Millimetres.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Intrinsics {
@@ -144,7 +144,7 @@ pub struct Intrinsics {
     pub skew: f64,
 }
 
-/// Distortion coefficients (MODEL.md §2). Lens terms are centred on the
+/// Distortion coefficients (docs/model.md §2). Lens terms are centred on the
 /// optical centre `(cx, cy)`, PSD terms on the electrical centre `(0, 0)`.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Distortion {
@@ -187,7 +187,7 @@ impl SensorModel {
         }
     }
 
-    /// Lens 1 of the paper's simulations (MODEL.md §7): f = 25 mm,
+    /// Lens 1 of the paper's simulations (docs/model.md §7): f = 25 mm,
     /// k1 = 2e-3 mm⁻², centre (0.5, −0.7) mm.
     pub fn paper_lens1() -> Self {
         let mut m = Self::pinhole(25.0, 0.5, -0.7);
@@ -195,7 +195,7 @@ impl SensorModel {
         m
     }
 
-    /// Lens 2 of the paper's simulations (MODEL.md §7): f = 8 mm,
+    /// Lens 2 of the paper's simulations (docs/model.md §7): f = 8 mm,
     /// k1 = 1e-2 mm⁻², k2 = 3e-5 mm⁻⁴, centre (0.5, −0.7) mm.
     pub fn paper_lens2() -> Self {
         let mut m = Self::pinhole(8.0, 0.5, -0.7);

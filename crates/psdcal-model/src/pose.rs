@@ -1,4 +1,4 @@
-//! Rigid poses as a Rodrigues vector plus a translation (MODEL.md §3, (P3)).
+//! Rigid poses as a Rodrigues vector plus a translation (docs/model.md §3, (P3)).
 //!
 //! A [`Pose`] named `sensor_from_template` maps template-frame points to the
 //! sensor frame: `P_c = R(rvec) P_t + t`, millimetres. The rotation is

@@ -1,5 +1,5 @@
 //! The full sensor map between the template plane and measured impact points
-//! (MODEL.md §3–4, the paper's (P5) with distortion (P15)–(P16), and the
+//! (docs/model.md §3–4, the paper's (P5) with distortion (P15)–(P16), and the
 //! template-plane residual of (P29)).
 //!
 //! *Projection* (template → measured): `P_c = R P_t + t` with

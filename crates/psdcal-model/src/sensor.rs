@@ -1,4 +1,4 @@
-//! The pin-cushion PSD: electrode amplitudes ↔ impact point (MODEL.md §1,
+//! The pin-cushion PSD: electrode amplitudes ↔ impact point (docs/model.md §1,
 //! the paper's (P1)–(P2) with the brackets corrected, and (P43)).
 //!
 //! Sensor frame: origin at the electrical centre, `x`, `y` along the sides,
@@ -132,7 +132,7 @@ impl Amplitudes {
         }
     }
 
-    /// Sum of the four amplitudes (`S` of MODEL.md §1).
+    /// Sum of the four amplitudes (`S` of docs/model.md §1).
     pub fn total(&self) -> f64 {
         self.vx1 + self.vx2 + self.vy1 + self.vy2
     }
@@ -161,7 +161,7 @@ pub fn transimpedance_gain(r_ohm: f64, c_farad: f64, f_hz: f64) -> f64 {
 }
 
 /// Impact point (mm, sensor frame) from the four electrode amplitudes,
-/// assuming balanced channels (MODEL.md §1).
+/// assuming balanced channels (docs/model.md §1).
 pub fn impact_point(geometry: &PsdGeometry, amps: &Amplitudes) -> Result<Vector2<f64>, ModelError> {
     amps.check()?;
     let s = amps.total();

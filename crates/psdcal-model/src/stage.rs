@@ -1,4 +1,4 @@
-//! The model as a chain of stages (MODEL.md §8).
+//! The model as a chain of stages (docs/model.md §8).
 //!
 //! The map from a measured impact point to the normalised ray is an ordered
 //! chain `p₀ = m → p₁ = s₁(p₀; θ₁) → … → (a, b) = s_K(p_{K−1}; θ_K)`: the PSD's
@@ -10,7 +10,7 @@
 //!
 //! Parameters are identified by name. Two stages that name the same parameter
 //! share it: the lens's distortion centre and the pinhole's principal point
-//! are both the optical centre `cx, cy` (MODEL.md §2–3).
+//! are both the optical centre `cx, cy` (docs/model.md §2–3).
 //!
 //! Conventions of the chain, checked by [`crate::Model`]: the first stage takes
 //! the measured point (sensor frame, mm); the last stage is the pinhole and

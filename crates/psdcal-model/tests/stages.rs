@@ -1,4 +1,4 @@
-//! The shared stage suite (MODEL.md §8): every stage in [`all_stages`] is
+//! The shared stage suite (docs/model.md §8): every stage in [`all_stages`] is
 //! checked, over each of its example parameter blocks and points across the
 //! active area, for its Jacobians with respect to the input point and to its
 //! parameters against central finite differences; every chain built from

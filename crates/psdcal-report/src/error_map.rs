@@ -110,7 +110,7 @@ impl Figure for HeatMap<'_> {
             .label_style((FAMILY, 11))
             .axis_desc_style((FAMILY, 12))
             .y_labels(6)
-            .y_label_formatter(&|v| psdcal_sim::render::num(*v))
+            .y_label_formatter(&|v| crate::number::num(*v))
             .draw()
             .map_err(draw_err)?;
         let step = (hi - lo) / COLORBAR_STEPS as f64;

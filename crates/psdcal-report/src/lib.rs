@@ -20,6 +20,7 @@
 
 #![warn(missing_docs)]
 
+pub mod calibration;
 pub mod coverage;
 pub mod distortion;
 pub mod error;
@@ -27,11 +28,13 @@ pub mod error_map;
 pub mod escape;
 pub mod histogram;
 pub mod html;
+mod number;
 mod plot;
 pub mod residuals;
 pub mod sensitivity;
 pub mod study;
 
+pub use calibration::{calibration_page, CalibrationReport, Plot, PlotData};
 pub use coverage::{coverage_png, coverage_svg};
 pub use distortion::{distortion_field_png, distortion_field_svg, spiral_png, spiral_svg};
 pub use error::ReportError;
@@ -39,9 +42,12 @@ pub use error_map::{grid_step, heat_map_png, heat_map_svg, HeatCell, COLORBAR_ST
 pub use escape::escape_html;
 pub use histogram::{bin_counts, histogram_png, histogram_svg};
 pub use html::{inline_svg, Block, Page, Table};
+pub use number::num;
 pub use plot::{Arrow, ArrowSet, Frame, PointSet};
 pub use residuals::{residuals_png, residuals_svg};
 pub use sensitivity::{
     aoa_sensitivity_svg, line_plot_png, line_plot_svg, paper_sensitivity_curves,
 };
-pub use study::{fig9_cells, study_page, study_table};
+pub use study::{
+    fig9_cells, study_page, study_table, Fig9Map, StudyColumn, StudyStats, StudyTable,
+};

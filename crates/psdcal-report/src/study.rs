@@ -1,24 +1,14 @@
 //! The page of a Monte Carlo study: its tables, Figure 9 as heat maps and
-//! histograms of the estimated parameters against their truth.
-
-use psdcal_sim::fig9::ErrorMap;
-use psdcal_sim::render::num;
-use psdcal_sim::study::{Quantity, TableResult};
+//! histograms of the estimated parameters against their truth. It takes
+//! plain data ([`StudyTable`], [`Fig9Map`]): the study crate's results are
+//! converted by the caller, so this crate knows nothing of simulation.
 
 use crate::error::ReportError;
 use crate::error_map::{grid_step, heat_map_svg, HeatCell};
 use crate::histogram::histogram_svg;
 use crate::html::{Block, Page, Table};
+use crate::number::num;
 use crate::plot::Frame;
-
-/// Parameters that get histograms.
-const HISTOGRAM_ROWS: [Quantity; 5] = [
-    Quantity::F,
-    Quantity::Cx,
-    Quantity::Cy,
-    Quantity::K1,
-    Quantity::K2,
-];
 
 /// At most this many conditions get histograms (the first ones, by label).
 pub const MAX_HISTOGRAM_CONDITIONS: usize = 6;
@@ -26,17 +16,82 @@ pub const MAX_HISTOGRAM_CONDITIONS: usize = 6;
 /// Bins of the study's histograms.
 const BINS: usize = 20;
 
+/// Mean and standard deviation of a quantity over trials.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StudyStats {
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation.
+    pub std: f64,
+    /// Trials it is over.
+    pub n: usize,
+}
+
+/// One column (condition) of a study table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyColumn {
+    /// The column heading.
+    pub label: String,
+    /// Per row: the true value, if any.
+    pub ideal: Vec<Option<f64>>,
+    /// Per row: statistics over the successful trials.
+    pub stats: Vec<Option<StudyStats>>,
+    /// Trials run.
+    pub trials: usize,
+    /// Failed trials.
+    pub failures: usize,
+    /// The first few failure reasons.
+    pub failure_reasons: Vec<String>,
+    /// Per row: the value of every successful trial (for histograms).
+    pub values: Vec<Vec<f64>>,
+}
+
+/// A study table as plain data.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyTable {
+    /// Title.
+    pub title: String,
+    /// Row headings.
+    pub rows: Vec<String>,
+    /// Rows that get histograms, in the order they are shown.
+    pub histogram_rows: Vec<usize>,
+    /// The columns.
+    pub columns: Vec<StudyColumn>,
+}
+
+/// One map of Figure 9 as plain data.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fig9Map {
+    /// The lens (1 or 2).
+    pub lens: u8,
+    /// The condition.
+    pub condition: String,
+    /// The parameter offsets used, `(name, Δ)`.
+    pub offsets: Vec<(String, f64)>,
+    /// `(x_mm, y_mm, aoa_error_deg, position_error_mm)` per grid point.
+    pub grid: Vec<[f64; 4]>,
+    /// Largest AoA error, degrees.
+    pub max_aoa_deg: f64,
+    /// Largest position error at 5 m, mm.
+    pub max_position_mm: f64,
+    /// Mean AoA error, degrees.
+    pub mean_aoa_deg: f64,
+}
+
 /// A study table as an HTML table: per condition psdcal's `mean (std)`.
-pub fn study_table(table: &TableResult) -> Table {
+pub fn study_table(table: &StudyTable) -> Table {
     let mut headers = vec![String::new(), "Ideal".to_string()];
-    headers.extend(table.columns.iter().map(|c| c.condition.label.clone()));
+    headers.extend(table.columns.iter().map(|c| c.label.clone()));
     let rows = table
         .rows
         .iter()
         .enumerate()
-        .map(|(r, q)| {
-            let ideal = table.columns.first().and_then(|c| c.condition.ideal(*q));
-            let mut row = vec![q.label().to_string(), ideal.map_or("–".into(), num)];
+        .map(|(r, label)| {
+            let ideal = table
+                .columns
+                .first()
+                .and_then(|c| c.ideal.get(r).copied().flatten());
+            let mut row = vec![label.clone(), ideal.map_or("–".into(), num)];
             row.extend(table.columns.iter().map(|c| {
                 c.stats.get(r).copied().flatten().map_or("–".into(), |s| {
                     if s.n > 1 {
@@ -53,7 +108,7 @@ pub fn study_table(table: &TableResult) -> Table {
     Table {
         caption: format!(
             "{} — psdcal mean (std) over {trials} trials per column",
-            table.spec.title
+            table.title
         ),
         headers,
         rows,
@@ -61,7 +116,7 @@ pub fn study_table(table: &TableResult) -> Table {
 }
 
 /// The cells of a Figure 9 map: AoA error (deg) or position error (mm).
-pub fn fig9_cells(map: &ErrorMap, position: bool) -> Vec<HeatCell> {
+pub fn fig9_cells(map: &Fig9Map, position: bool) -> Vec<HeatCell> {
     map.grid
         .iter()
         .map(|g| HeatCell {
@@ -78,8 +133,8 @@ pub fn fig9_cells(map: &ErrorMap, position: bool) -> Vec<HeatCell> {
 pub fn study_page(
     title: &str,
     intro: &str,
-    tables: &[TableResult],
-    maps: &[ErrorMap],
+    tables: &[StudyTable],
+    maps: &[Fig9Map],
 ) -> Result<Page, ReportError> {
     let mut page = Page::new(title);
     page.push(Block::Paragraph(intro.to_string()));
@@ -93,7 +148,7 @@ pub fn study_page(
             .map(|c| {
                 format!(
                     "{}: {} of {} trials failed (e.g. {})",
-                    c.condition.label,
+                    c.label,
                     c.failures,
                     c.trials,
                     c.failure_reasons.first().map_or("", String::as_str)
@@ -165,13 +220,12 @@ pub fn study_page(
     let mut first = true;
     for t in tables {
         for c in &t.columns {
-            if seen.len() >= MAX_HISTOGRAM_CONDITIONS || seen.contains(&c.condition.label.as_str())
-            {
+            if seen.len() >= MAX_HISTOGRAM_CONDITIONS || seen.contains(&c.label.as_str()) {
                 continue;
             }
             let mut figures = Vec::new();
-            for q in HISTOGRAM_ROWS {
-                let Some(r) = t.rows.iter().position(|x| *x == q) else {
+            for &r in &t.histogram_rows {
+                let Some(label) = t.rows.get(r) else {
                     continue;
                 };
                 let Some(values) = c.values.get(r).filter(|v| !v.is_empty()) else {
@@ -179,18 +233,14 @@ pub fn study_page(
                 };
                 let svg = histogram_svg(
                     values,
-                    c.condition.ideal(q),
+                    c.ideal.get(r).copied().flatten(),
                     BINS,
-                    &format!("{}: {}", c.condition.label, q.label()),
-                    q.label(),
+                    &format!("{}: {label}", c.label),
+                    label,
                 )?;
                 figures.push((
                     svg,
-                    format!(
-                        "{} over {} trials; red: the true value",
-                        q.label(),
-                        values.len()
-                    ),
+                    format!("{label} over {} trials; red: the true value", values.len()),
                 ));
             }
             if figures.is_empty() {
@@ -202,11 +252,8 @@ pub fn study_page(
                 ));
                 first = false;
             }
-            seen.push(&c.condition.label);
-            page.push(Block::Paragraph(format!(
-                "{} ({})",
-                c.condition.label, t.spec.title
-            )));
+            seen.push(&c.label);
+            page.push(Block::Paragraph(format!("{} ({})", c.label, t.title)));
             page.push(Block::Figures(figures));
         }
     }

@@ -1,4 +1,4 @@
-//! Timing of the signal chain at its defaults (MODEL.md §6): one channel
+//! Timing of the signal chain at its defaults (docs/model.md §6): one channel
 //! record (1300 samples: synthesis with noise, order-2 band-pass, I/Q
 //! demodulation) and one full point (four channels and the impact point).
 //! A study runs ~10⁴ trials × 126 points × 4 channels of these.

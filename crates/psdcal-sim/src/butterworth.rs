@@ -1,4 +1,4 @@
-//! Digital Butterworth band-pass filters (MODEL.md §6: "Butterworth, 600 Hz
+//! Digital Butterworth band-pass filters (docs/model.md §6: "Butterworth, 600 Hz
 //! bandwidth centred on f0"), designed from the analog prototype and realised
 //! as cascaded second-order sections.
 //!

@@ -1,4 +1,4 @@
-//! Simulated calibration scenarios (MODEL.md §7 and the paper's Section 4.1):
+//! Simulated calibration scenarios (docs/model.md §7 and the paper's Section 4.1):
 //! the lens, the template, the template poses and the electronics, all drawn
 //! from one seed.
 //!

@@ -1,8 +1,8 @@
-//! The electrode signal chain of MODEL.md §6 (the paper's Sections 4.3–4.5):
+//! The electrode signal chain of docs/model.md §6 (the paper's Sections 4.3–4.5):
 //! modulated channel records with white Gaussian noise at a per-channel SNR,
 //! a Butterworth band-pass ([`crate::butterworth`]), amplitude estimation by
 //! synchronous I/Q demodulation over whole cycles (or RMS), and the impact
-//! point of MODEL.md §1.
+//! point of docs/model.md §1.
 //!
 //! # Conventions
 //!
@@ -21,7 +21,7 @@
 //! ```
 //!
 //! i.e. the SNR is the same on every channel, each relative to its own
-//! amplitude `V_k` (MODEL.md §6). The LED is switched on at `t = 0` with the
+//! amplitude `V_k` (docs/model.md §6). The LED is switched on at `t = 0` with the
 //! filter at rest, so the record contains the filter's switch-on transient.
 //! The phase `φ` is drawn uniformly in `[0, 2π)` once per [`SignalChain::measure`]
 //! call and shared by the four channels (they see the same LED); it does not
@@ -254,7 +254,7 @@ pub enum SignalError {
         /// y, mm.
         y_mm: f64,
     },
-    /// The measured amplitudes sum to zero or less: no light (MODEL.md §1).
+    /// The measured amplitudes sum to zero or less: no light (docs/model.md §1).
     #[error("measured amplitudes sum to {total}: no usable light spot")]
     NonPositiveTotal {
         /// `Vx1 + Vx2 + Vy1 + Vy2` as measured.
@@ -906,7 +906,7 @@ impl SignalChain {
     }
 
     /// One LED spot end to end: the electrode currents of a spot of total
-    /// photocurrent `i0` (A) at `point` (mm, sensor frame, MODEL.md §1), times
+    /// photocurrent `i0` (A) at `point` (mm, sensor frame, docs/model.md §1), times
     /// [`ChainConfig::amplifier_gain_v_per_a`] and the relative channel
     /// `gains` (`Amplitudes::apply_gains`) → volts; the chain of
     /// [`SignalChain::measure`]; the impact point of the measured amplitudes

@@ -1,8 +1,8 @@
 //! One simulated calibration data set: the paper's signal chain end to end
-//! (MODEL.md §1, §6, §7).
+//! (docs/model.md §1, §6, §7).
 //!
 //! For every template pose and LED: the LED's ideal image point
-//! (pinhole, MODEL.md §3) is distorted by the lens and — when switched on —
+//! (pinhole, docs/model.md §3) is distorted by the lens and — when switched on —
 //! the PSD (`SensorModel::distort`, §2) into the true impact point; the
 //! pin-cushion forward model gives the four electrode currents for a total
 //! photocurrent `I0` (§1); the amplifiers multiply them by their gains (the
@@ -15,7 +15,6 @@
 //! exactly (its own tests show it), and skipping keeps noise-free studies fast.
 
 use nalgebra::Vector2;
-use psdcal_calib::{CalibrationData, ImageObservations, Observation};
 use psdcal_model::sensor::{electrode_currents, impact_point};
 use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel};
 use rand_chacha::ChaCha8Rng;
@@ -199,37 +198,6 @@ fn scale(a: &Amplitudes, k: f64) -> Amplitudes {
 }
 
 impl Simulation {
-    /// The calibration's input: the measured points of every image, with the
-    /// demodulated amplitudes behind them (for estimating the gains).
-    pub fn calibration_data(&self) -> CalibrationData {
-        CalibrationData {
-            amplitudes: Some(
-                self.images
-                    .iter()
-                    .map(|im| im.points.iter().map(|p| p.amplitudes).collect())
-                    .collect(),
-            ),
-            template: self.template.leds.clone(),
-            lines: self.template.lines.clone(),
-            images: self
-                .images
-                .iter()
-                .map(|im| ImageObservations {
-                    id: im.id.clone(),
-                    points: im
-                        .points
-                        .iter()
-                        .map(|p| Observation {
-                            led: p.led,
-                            measured: p.measured,
-                        })
-                        .collect(),
-                })
-                .collect(),
-            geometry: self.options.geometry,
-        }
-    }
-
     /// RMS angle-of-arrival error (rad) of a calibrated `model` over held-out
     /// directions: a 9 × 9 grid of true ideal points over 80 % of the sensor,
     /// each measured through the true distortion and the true (possibly

@@ -90,7 +90,7 @@ fn noise_free_simulation_is_the_model() {
             );
         }
     }
-    // With imbalance the measured points are biased by the gains, as MODEL.md §1 says.
+    // With imbalance the measured points are biased by the gains, as docs/model.md §1 says.
     let options = SimulationOptions {
         snr_db: None,
         imbalance: true,

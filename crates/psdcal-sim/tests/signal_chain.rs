@@ -1,4 +1,4 @@
-//! The signal chain of MODEL.md §6: Butterworth band-pass design, synthesis at
+//! The signal chain of docs/model.md §6: Butterworth band-pass design, synthesis at
 //! a given SNR, I/Q and RMS demodulation, the theoretical noise of the
 //! estimate, determinism, and the impact point through the chain.
 //!

@@ -43,7 +43,7 @@ pub struct SensorSize {
     pub ly_mm: f64,
 }
 
-/// Pinhole intrinsics with their units in the names (MODEL.md §3).
+/// Pinhole intrinsics with their units in the names (docs/model.md §3).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct IntrinsicsRecord {
     /// Focal length, mm, positive.
@@ -57,7 +57,7 @@ pub struct IntrinsicsRecord {
     pub skew: f64,
 }
 
-/// Channel gains of an electrical calibration (MODEL.md §1). Only the ratios
+/// Channel gains of an electrical calibration (docs/model.md §1). Only the ratios
 /// to `x1` matter.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "GainsFields")]
@@ -265,7 +265,7 @@ impl Covariance {
     }
 }
 
-/// Which error the fit minimised (MODEL.md §4.6).
+/// Which error the fit minimised (docs/model.md §4.6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum CostKind {

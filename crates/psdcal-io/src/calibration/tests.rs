@@ -12,6 +12,8 @@ fn sample() -> Calibration {
     model.intrinsics.f = 8.000123456789;
     model.distortion.l1 = SensorModel::PAPER_L1;
     let mut cal = Calibration::from_model(&model, &PsdGeometry::default());
+    // These tests are of the version 1 layout (version 2: tests_v2.rs).
+    cal.version = 1;
     cal.set_estimated(&[Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2]);
     cal.gains = Some(GainsRecord::new(
         &ChannelGains {
@@ -166,23 +168,23 @@ fn wrong_format_name_is_reported_on_its_line() {
 #[test]
 fn newer_version_is_refused_older_accepted() {
     let text = json(&sample());
-    // A version 2 file whose intrinsics changed shape: the version wins.
+    // A version 3 file whose intrinsics changed shape: the version wins.
     let newer = text
-        .replace("\"version\": 1,", "\"version\": 2,")
+        .replace("\"version\": 1,", "\"version\": 3,")
         .replace("\"f_mm\"", "\"fx_mm\"");
     let e = read(&newer);
     assert!(matches!(
         e,
         IoError::NewerVersion {
-            found: 2,
-            supported: 1,
+            found: 3,
+            supported: 2,
             ..
         }
     ));
     assert_eq!(
         e.to_string(),
-        "calibration.json:3:14: format version 2 was written by a newer psdcal; this psdcal \
-         reads versions up to 1"
+        "calibration.json:3:14: format version 3 was written by a newer psdcal; this psdcal \
+         reads versions up to 2"
     );
     let older = text.replace("\"version\": 1,", "\"version\": 0,");
     assert_eq!(

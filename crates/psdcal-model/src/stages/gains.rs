@@ -1,5 +1,5 @@
 //! The channel gains, the stage that acts first, on the four electrode
-//! amplitudes (MODEL.md §1, the paper's (P1)–(P2) and (P43)).
+//! amplitudes (docs/model.md §1, the paper's (P1)–(P2) and (P43)).
 //!
 //! Amplitudes measured through channels of relative gains `g_k = K_k/K_x1`
 //! are divided by them, `w_k = V_k / g_k`, before the pin-cushion formulas

@@ -1,5 +1,5 @@
 //! The lens's radial and tangential distortion about the optical centre
-//! (MODEL.md §2.2–2.4, the paper's (P7)–(P13)). For the PSD-corrected point
+//! (docs/model.md §2.2–2.4, the paper's (P7)–(P13)). For the PSD-corrected point
 //! `u`:
 //!
 //! ```text

@@ -1,4 +1,4 @@
-//! The stages of the standard model (MODEL.md §2–3, §8), one file each:
+//! The stages of the standard model (docs/model.md §2–3, §8), one file each:
 //! [`PsdRadial`] (P14)–(P16), [`Lens`] (P7)–(P13), [`Pinhole`] (P4), and the
 //! channel gains on the amplitudes (P1)–(P2), (P43) in [`gains`].
 

@@ -1,4 +1,4 @@
-//! The pinhole read backwards (MODEL.md §3, the paper's (P4)): an ideal point
+//! The pinhole read backwards (docs/model.md §3, the paper's (P4)): an ideal point
 //! `(x, y)` has the normalised ray `(a, b, 1)` in the sensor frame with
 //!
 //! ```text

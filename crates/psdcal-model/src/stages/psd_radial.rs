@@ -1,4 +1,4 @@
-//! The PSD's radial distortion about the electrical centre (MODEL.md §2.1,
+//! The PSD's radial distortion about the electrical centre (docs/model.md §2.1,
 //! the paper's (P14)–(P16)):
 //!
 //! ```text

@@ -3,8 +3,8 @@
 
 use std::sync::atomic::AtomicBool;
 
-use psdcal_sim::study::{run_trial, Stats};
-use psdcal_sim::{
+use psdcal_study::study::{run_trial, Stats};
+use psdcal_study::{
     run_tables, table_spec, Condition, Lens, Method, Quantity, StudyOptions, TableResult,
 };
 

@@ -2,7 +2,7 @@
 //! chain and calibrate (Tables 3–10), or compute the closed form (Tables 1–2).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use psdcal_sim::{table_spec, StudyOptions};
+use psdcal_study::{table_spec, StudyOptions};
 use std::hint::black_box;
 
 fn trials(c: &mut Criterion) {
@@ -24,7 +24,7 @@ fn trials(c: &mut Criterion) {
         group.bench_function(name, |b| {
             b.iter(|| {
                 k += 1;
-                psdcal_sim::study::run_trial(black_box(&condition), &options, k)
+                psdcal_study::study::run_trial(black_box(&condition), &options, k)
             })
         });
     }

@@ -5,6 +5,7 @@
 use psdcal_calib::{calibrate, CalibrateOptions, CostKind, InitOptions, NoiseModel, RefineOptions};
 use psdcal_model::ChannelGains;
 use psdcal_sim::{simulate, Lens, SimulationOptions};
+use psdcal_study::SimulationData;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;

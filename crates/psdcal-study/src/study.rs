@@ -27,10 +27,9 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::scenario::{Lens, TemplateKind};
-use crate::signal::SignalChain;
-use crate::simulate::{simulate, SimulationOptions};
-use crate::SimError;
+use psdcal_sim::{simulate, Lens, SignalChain, SimError, SimulationOptions, TemplateKind};
+
+use crate::data::SimulationData;
 
 /// A reported quantity (a row of the paper's tables).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

@@ -1,6 +1,6 @@
 //! The paper's Figure 9: how large the angle-of-arrival and position errors
 //! are across the sensor when the parameters are off by what the Monte Carlo
-//! study found (MODEL.md §5).
+//! study found (docs/model.md §5).
 //!
 //! For each condition of Tables 9–10 the parameters are set to
 //! `θ = θ_ideal + Δθ` with `Δθ = |mean − ideal| + 2·std` for `Cx, Cy, f, k1,

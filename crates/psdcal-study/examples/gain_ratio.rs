@@ -5,7 +5,7 @@
 //! seed's balanced data (same poses, same noise draws).
 //!
 //! ```sh
-//! cargo run --release -p psdcal-sim --example gain_ratio -- [FIRST_SEED] [SEEDS] [template|image] [uniform|channel-snr|channel-floor]
+//! cargo run --release -p psdcal-study --example gain_ratio -- [FIRST_SEED] [SEEDS] [template|image] [uniform|channel-snr|channel-floor]
 //! ```
 //!
 //! Defaults: seeds 100…299 (those of `tests/gains.rs`), template-plane
@@ -16,6 +16,7 @@
 use psdcal_calib::{calibrate, CalibrateOptions, CostKind, NoiseModel, RefineOptions};
 use psdcal_model::ChannelGains;
 use psdcal_sim::{simulate, Lens, SimulationOptions};
+use psdcal_study::SimulationData;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;

@@ -1,0 +1,59 @@
+//! The psdcal command-line tool's library: argument parsing and output
+//! only; the work is done by the `psdcal` library. `src/main.rs` is the
+//! `psdcal` binary.
+//!
+//! Exit codes: 0 success, 1 failure (one `error: ...` line on stderr),
+//! 2 usage error (clap).
+
+pub mod choice;
+pub mod cli;
+pub mod cli_gains;
+pub mod cli_locate;
+pub mod cli_report;
+pub mod cli_sim;
+mod cmd_aoa;
+mod cmd_calibrate;
+mod cmd_check;
+mod cmd_correct;
+mod cmd_demo;
+mod cmd_gains;
+mod cmd_locate;
+mod cmd_map;
+mod cmd_report;
+mod cmd_simulate;
+mod cmd_study;
+mod report;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+use crate::cli::{Cli, Job};
+
+/// Parses the arguments, runs the job and prints; the process's exit code.
+pub fn main() -> ExitCode {
+    let (output, job) = match Cli::parse().into_job() {
+        Ok(parsed) => parsed,
+        Err(usage) => usage.exit(),
+    };
+    let result = match &job {
+        Job::Check(config) => cmd_check::run(config, output),
+        Job::Calibrate(config) => cmd_calibrate::run(config, output),
+        Job::Gains(args) => cmd_gains::run(args, output),
+        Job::Simulate(args) => cmd_simulate::run(args, output),
+        Job::Study(config) => cmd_study::run(config, output),
+        Job::Demo(args) => cmd_demo::run(args, output),
+        Job::Correct(config) => cmd_correct::run(config, output),
+        Job::Aoa(config) => cmd_aoa::run(config, output),
+        Job::Locate(config) => cmd_locate::run(config, output),
+        Job::Map(config) => cmd_map::run(config, output),
+        Job::Report(config) => cmd_report::run(config, output),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            report::print_error(&report::lower(error));
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,141 @@
+//! Tests of calibration.json version 2: the layout, the round trip, the
+//! same record as version 1, and the rules that tie stages to parameters.
+
+use nalgebra::Vector3;
+use psdcal_model::Pose;
+
+use super::*;
+
+/// A fitted calibration with estimated gains and a provenance, version 2.
+fn sample() -> Calibration {
+    let mut model = SensorModel::paper_lens2();
+    model.distortion.l1 = SensorModel::PAPER_L1;
+    let mut cal = Calibration::from_model(&model, &PsdGeometry::default());
+    cal.set_estimated(&[Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2]);
+    cal.gains = Some(GainsRecord::new(
+        &ChannelGains {
+            x2: 1.0123,
+            y1: 0.9876,
+            y2: 1.0 / 3.0,
+        },
+        true,
+    ));
+    let names = cal.estimated_names();
+    cal.std = StdDevs(
+        names
+            .iter()
+            .enumerate()
+            .map(|(k, n)| (n.to_string(), 1e-3 * (k as f64 + 1.0)))
+            .collect(),
+    );
+    let n = names.len();
+    cal.covariance = Covariance {
+        parameters: names.iter().map(|s| s.to_string()).collect(),
+        matrix: (0..n)
+            .map(|i| (0..n).map(|j| if i == j { 1e-6 } else { 1e-9 }).collect())
+            .collect(),
+    };
+    cal.images = vec![ImageFit::new(
+        "1",
+        &Pose::new(Vector3::new(0.1, -0.2, 0.3), Vector3::new(1.0, -2.0, 600.0)),
+        0.01,
+        14,
+    )];
+    cal.provenance = Some(Provenance {
+        psdcal_version: "0.1.0".into(),
+        command: "psdcal calibrate -t t.csv -o o.csv --out c.json".into(),
+        options: serde_json::json!({"cost": "template"}),
+        inputs: vec![InputFile {
+            path: "t.csv".into(),
+            sha256: "00".repeat(32),
+        }],
+        created_utc: "2024-01-02T03:04:05Z".into(),
+    });
+    cal
+}
+
+fn json(cal: &Calibration) -> serde_json::Value {
+    serde_json::from_str(&cal.to_json_string("c.json").unwrap()).unwrap()
+}
+
+#[test]
+fn new_records_are_version_2_with_stages_and_flat_parameters() {
+    let v = json(&sample());
+    assert_eq!(v["version"], 2);
+    assert_eq!(v["parameters"]["f"], 8.0);
+    assert_eq!(v["parameters"]["l1"], -1.3058e-3);
+    assert_eq!(v["parameters"]["g_x2"], 1.0123);
+    let kinds: Vec<&str> = v["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["gains", "psd_radial", "lens", "pinhole"]);
+    assert_eq!(v["stages"][2]["parameters"]["k2"], 3e-5);
+    assert_eq!(
+        v["stages"][2]["estimated"],
+        serde_json::json!(["cx", "cy", "k1", "k2"])
+    );
+    assert_eq!(v["stages"][3]["estimated"], serde_json::json!(["f"]));
+    assert_eq!(
+        v["stages"][0]["estimated"],
+        serde_json::json!(["g_x2", "g_y1", "g_y2"])
+    );
+    assert_eq!(v["covariance"]["parameters"][5], "g_x2");
+    assert_eq!(v["diagnostics"], serde_json::json!([]));
+    assert_eq!(v["provenance"]["inputs"][0]["path"], "t.csv");
+    assert!(v.get("intrinsics").is_none());
+    let plain = json(&Calibration::from_model(
+        &SensorModel::paper_lens1(),
+        &PsdGeometry::default(),
+    ));
+    assert_eq!(plain["stages"].as_array().unwrap().len(), 3);
+    assert!(plain["parameters"].get("g_x2").is_none());
+}
+
+#[test]
+fn version_2_round_trip_is_exact_and_equals_version_1() {
+    let cal = sample();
+    let text = cal.to_json_string("c.json").unwrap();
+    let back = Calibration::from_json_str("c.json", &text).unwrap();
+    assert_eq!(back, cal);
+    let mut v1 = cal.clone();
+    v1.version = 1;
+    let from_v1 =
+        Calibration::from_json_str("c.json", &v1.to_json_string("c.json").unwrap()).unwrap();
+    assert_eq!(from_v1.to_model(), back.to_model());
+    assert_eq!(from_v1.gains(), back.gains());
+    assert_eq!(from_v1.std, back.std);
+    assert_eq!(from_v1.covariance, back.covariance);
+    assert_eq!(from_v1.estimated, back.estimated);
+}
+
+#[test]
+fn stages_and_parameters_must_agree() {
+    let v = json(&sample());
+    let read = |v: &serde_json::Value| {
+        Calibration::from_json_str("c.json", &serde_json::to_string_pretty(v).unwrap())
+            .unwrap_err()
+            .to_string()
+    };
+    let mut bad = v.clone();
+    bad["parameters"]["f"] = serde_json::json!(9.0);
+    assert!(
+        read(&bad).contains("parameters.f is 9 but its stage says 8"),
+        "{}",
+        read(&bad)
+    );
+    let mut bad = v.clone();
+    bad["stages"][2]["parameters"]["zoom"] = serde_json::json!(1.0);
+    assert!(read(&bad).contains("'zoom' is not a parameter of a 'lens' stage"));
+    let mut bad = v.clone();
+    bad["stages"][3]["kind"] = serde_json::json!("fisheye");
+    assert!(read(&bad).contains("unknown variant `fisheye`"));
+    let mut bad = v.clone();
+    bad["stages"].as_array_mut().unwrap().remove(3);
+    assert!(read(&bad).contains("no 'pinhole' stage"));
+    let mut bad = v.clone();
+    bad["stages"][0]["estimated"] = serde_json::json!(["g_x2"]);
+    assert!(read(&bad).contains("estimated together"));
+}

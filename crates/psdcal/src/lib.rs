@@ -1,0 +1,108 @@
+//! # psdcal
+//!
+//! Calibrate position-sensitive-device (PSD) sensors for infrared
+//! positioning, and use them: the library behind the `psdcal` command.
+//! Files in, calibration out, angles of arrival out:
+//!
+//! ```
+//! use std::path::PathBuf;
+//!
+//! use psdcal::{
+//!     calibrate, CalibrationOptions, DataSet, DataSetFiles, LoadOptions, LocateOptions,
+//!     Measurement, PointSource,
+//! };
+//! use nalgebra::Vector2;
+//!
+//! # fn main() -> Result<(), psdcal::Error> {
+//! let example = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../data/example");
+//! // The data set: the template and the measured points of nine images.
+//! let set = DataSet::from_files(
+//!     &DataSetFiles {
+//!         template: example.join("template.csv"),
+//!         points: PointSource::Observations(example.join("observations.csv")),
+//!         gains: None,
+//!     },
+//!     &LoadOptions::default(),
+//! )?;
+//! // Calibrate f, cx, cy, k1, k2 from automatic initialisation.
+//! let calibrated = calibrate(&set, &CalibrationOptions::default())?;
+//! assert!((calibrated.report.parameters[0].value - 8.0).abs() < 1e-6);
+//! // calibrated.write(&set, "calibration.json".as_ref(), None)? writes it.
+//!
+//! // The calibrated sensor turns a measured point into angles of arrival.
+//! let sensor = psdcal::sensor_of(&calibrated.record)?;
+//! let answer = sensor.aoa(
+//!     &Measurement::Point(Vector2::new(1.0, -0.5)),
+//!     &LocateOptions::default(),
+//! )?;
+//! let (ax, ay) = (answer.aoa.alpha.x.to_degrees(), answer.aoa.alpha.y.to_degrees());
+//! println!("alpha_x = {ax:.4}°, alpha_y = {ay:.4}°");
+//! assert!(ax > 0.0 && ay > 0.0);
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! | job | entry point |
+//! | --- | --- |
+//! | read and validate a data set (files or memory) | [`DataSet`] |
+//! | calibrate it, write calibration.json (version 2) and residuals | [`calibrate`], [`Calibrated`] |
+//! | a calibration file (version 1 or 2) as a sensor | [`LoadedSensor`], [`sensor_of`] |
+//! | measured → ideal points, angles of arrival, positions, error maps | [`correct()`], [`aoa_table`], [`locate_table`], [`map_table`] |
+//! | electrical gains | [`estimate_gains`] |
+//! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
+//! | a calibration report (HTML and plots) | [`write_report`] |
+//!
+//! Every failure is an [`Error`]; nothing here prints, and every output
+//! file is written atomically.
+#![warn(missing_docs)]
+
+mod aoa;
+mod calibrate;
+mod convert;
+mod correct;
+mod dataset;
+mod demo;
+mod error;
+mod fit_report;
+mod gains;
+mod locate;
+mod map;
+mod options;
+mod provenance;
+mod report;
+mod report_tables;
+mod residuals;
+mod sensor;
+mod simulate;
+mod study;
+mod study_page;
+mod table;
+
+pub use aoa::{aoa_table, measurement, AoaTable};
+pub use calibrate::{calibrate, Calibrated};
+pub use correct::{correct, Corrected};
+pub use dataset::{source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
+pub use demo::{demo, Demo, DemoParameter};
+pub use error::{Error, Result};
+pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
+pub use gains::{estimate_gains, GainsMethod};
+pub use locate::{locate_table, LocateTable, LocateTarget};
+pub use map::{map_table, MapModel, MapRequest, MapSource, MapTable};
+pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust};
+pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
+pub use report::{report_content, write_report, ReportFiles, ReportRequest};
+pub use residuals::{ImageResiduals, Residual, ResidualTable};
+pub use sensor::{covariance_warning, sensor_of, LoadedSensor};
+pub use simulate::{
+    chain_with_record, record_cycles_flag, simulate_files, transient_cycles, SimulateRequest,
+    SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
+};
+pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
+pub use table::{deg, num, StatusCount, Table};
+
+pub use psdcal_calib::CalibError;
+pub use psdcal_io::{Calibration, IoError, Warning};
+pub use psdcal_locate::LocateError;
+pub use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, Plane, MAX_GRID};
+pub use psdcal_model::{Param, PsdGeometry};
+pub use psdcal_sim::{Lens, TemplateKind};

@@ -1,0 +1,144 @@
+//! The options of a calibration, as enums and values (never strings).
+
+use psdcal_model::Param;
+use serde::Serialize;
+
+/// Which error the fit minimises (docs/model.md §4.6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Cost {
+    /// Template-plane error (P29), the paper's residual.
+    #[default]
+    Template,
+    /// Image-plane reprojection error.
+    Image,
+}
+
+/// How the cost is weighted by the electrode noise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Noise {
+    /// Unweighted, the paper's.
+    #[default]
+    Uniform,
+    /// The same SNR on every electrode channel.
+    ChannelSnr,
+    /// The same absolute noise on every channel.
+    ChannelFloor,
+}
+
+/// The preliminary distortion correction before the linear stage (§4.1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Preliminary {
+    /// Line straightness when the template declares lines, else homography
+    /// consistency.
+    #[default]
+    Auto,
+    /// Line straightness.
+    Straightness,
+    /// Homography consistency.
+    Homography,
+    /// None.
+    Off,
+}
+
+/// A robust loss with its scale (mm of the cost).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "loss", rename_all = "kebab-case")]
+pub enum Robust {
+    /// Huber.
+    Huber {
+        /// Scale, mm.
+        scale: f64,
+    },
+    /// Cauchy.
+    Cauchy {
+        /// Scale, mm.
+        scale: f64,
+    },
+}
+
+/// Everything a calibration can be told.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CalibrationOptions {
+    /// Parameters to estimate (the others stay fixed).
+    pub free: Vec<Param>,
+    /// Also estimate the amplifier gains (needs amplitudes).
+    pub fit_gains: bool,
+    /// Values of fixed parameters.
+    pub fixed: Vec<(Param, f64)>,
+    /// Nominal focal length, mm (narrows the start's search).
+    pub focal_guess: Option<f64>,
+    /// The cost minimised.
+    pub cost: Cost,
+    /// Its noise weighting.
+    pub noise: Noise,
+    /// The preliminary correction.
+    pub preliminary: Preliminary,
+    /// Normalise the data of the homographies.
+    pub normalize: bool,
+    /// A robust loss.
+    pub robust: Option<Robust>,
+}
+
+impl Default for CalibrationOptions {
+    /// The paper's: f, cx, cy, k1, k2 from automatic initialisation.
+    fn default() -> Self {
+        Self {
+            free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2],
+            fit_gains: false,
+            fixed: Vec::new(),
+            focal_guess: None,
+            cost: Cost::Template,
+            noise: Noise::Uniform,
+            preliminary: Preliminary::Auto,
+            normalize: true,
+            robust: None,
+        }
+    }
+}
+
+impl CalibrationOptions {
+    /// The options as JSON, for the provenance of calibration.json.
+    pub fn to_json(&self) -> serde_json::Value {
+        let mut v = serde_json::to_value(self).unwrap_or(serde_json::Value::Null);
+        if let Some(map) = v.as_object_mut() {
+            map.insert(
+                "free".into(),
+                self.free
+                    .iter()
+                    .map(|p| p.name())
+                    .collect::<Vec<_>>()
+                    .into(),
+            );
+            map.insert(
+                "fixed".into(),
+                self.fixed
+                    .iter()
+                    .map(|(p, x)| (p.name().to_string(), serde_json::json!(x)))
+                    .collect::<serde_json::Map<_, _>>()
+                    .into(),
+            );
+        }
+        v
+    }
+
+    /// Checks that the options can work together; `with_amplitudes` says
+    /// whether the data carry electrode amplitudes.
+    pub fn check(&self, with_amplitudes: bool, known_gains: bool) -> Result<(), String> {
+        if self.free.is_empty() {
+            return Err("no parameter to estimate; free at least one, e.g. f,cx,cy,k1,k2".into());
+        }
+        if self.fit_gains && !with_amplitudes {
+            return Err("estimating the gains needs the electrode amplitudes (signals)".into());
+        }
+        if self.fit_gains && known_gains {
+            return Err("known gains are held fixed: they cannot also be estimated".into());
+        }
+        if let Some((p, _)) = self.fixed.iter().find(|(p, _)| self.free.contains(p)) {
+            return Err(format!("{p} is both fixed and estimated; drop one of them"));
+        }
+        Ok(())
+    }
+}

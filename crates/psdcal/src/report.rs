@@ -1,0 +1,374 @@
+//! A calibration report: its content (tables, plot data and captions) from
+//! a calibration and, optionally, its data; psdcal-report draws it; the
+//! page and every plot (SVG and PNG) are written into one folder.
+
+use std::path::PathBuf;
+
+use nalgebra::Vector2;
+use psdcal_io::{write_atomic_bytes, Warning};
+use psdcal_locate::{error_map, ErrorSource, MapOptions};
+use psdcal_model::{Model, SensorModel};
+use psdcal_report::{
+    calibration_page, Arrow, ArrowSet, CalibrationReport, Frame, HeatCell, Plot, PlotData, PointSet,
+};
+
+use crate::dataset::{DataSet, DataSetFiles, LoadOptions, PointSource};
+use crate::error::{Error, Result};
+use crate::report_tables::{residual_rows, tables};
+use crate::residuals::ResidualTable;
+use crate::sensor::LoadedSensor;
+
+/// Grid points per side of the error maps.
+const MAP_GRID: usize = 21;
+/// Standard deviations of the error maps.
+const MAP_K: f64 = 2.0;
+
+/// What to report.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReportRequest {
+    /// calibration.json.
+    pub calibration: PathBuf,
+    /// `(template, observations)` of the calibration data.
+    pub data: Option<(PathBuf, PathBuf)>,
+    /// Output folder.
+    pub out: PathBuf,
+}
+
+/// What a report wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReportFiles {
+    /// report.html.
+    pub html: PathBuf,
+    /// The plots' names.
+    pub plots: Vec<&'static str>,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
+    /// What was dropped from the data.
+    pub warnings: Vec<Warning>,
+}
+
+/// Builds and writes the report.
+pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
+    let loaded = LoadedSensor::read(&request.calibration)?;
+    let geometry = loaded.record.geometry();
+    let data = match &request.data {
+        Some((t, o)) => Some(DataSet::from_files(
+            &DataSetFiles {
+                template: t.clone(),
+                points: PointSource::Observations(o.clone()),
+                gains: None,
+            },
+            &LoadOptions {
+                geometry,
+                strict: false,
+            },
+        )?),
+        None => None,
+    };
+    std::fs::create_dir_all(&request.out).map_err(|e| Error::OutputFolder {
+        path: request.out.clone(),
+        message: format!(
+            "cannot create the output folder {}: {e}",
+            request.out.display()
+        ),
+    })?;
+    let content = report_content(request, &loaded, data.as_ref())?;
+    let svgs: Vec<String> = content
+        .plots
+        .iter()
+        .map(Plot::svg)
+        .collect::<Result<_, _>>()?;
+    let page = calibration_page(&content, &svgs);
+    let html = request.out.join("report.html");
+    write_atomic_bytes(&html, page.render().as_bytes())?;
+    let mut files = vec![html.clone()];
+    for (plot, svg) in content.plots.iter().zip(&svgs) {
+        let svg_path = request.out.join(format!("{}.svg", plot.name));
+        write_atomic_bytes(&svg_path, svg.as_bytes())?;
+        let png_path = request.out.join(format!("{}.png", plot.name));
+        let tmp = request.out.join(format!(".{}.tmp.png", plot.name));
+        plot.png(&tmp)?;
+        std::fs::rename(&tmp, &png_path).map_err(|e| Error::OutputFolder {
+            path: request.out.clone(),
+            message: format!("cannot write {}: {e}", png_path.display()),
+        })?;
+        files.push(svg_path);
+        files.push(png_path);
+    }
+    Ok(ReportFiles {
+        html,
+        plots: content.plots.iter().map(|p| p.name).collect(),
+        files,
+        warnings: data.map(|d| d.validated.warnings).unwrap_or_default(),
+    })
+}
+
+/// The report's content.
+pub fn report_content(
+    request: &ReportRequest,
+    loaded: &LoadedSensor,
+    data: Option<&DataSet>,
+) -> Result<CalibrationReport> {
+    let calibration = &loaded.record;
+    let model = &loaded.sensor.model;
+    let geometry = loaded.record.geometry();
+    let (lx, ly) = (geometry.lx, geometry.ly);
+    let mut plots = Vec::new();
+    let mut recomputed = None;
+    if let Some(set) = data {
+        let poses: Vec<(&str, psdcal_model::Pose)> = calibration
+            .images
+            .iter()
+            .map(|i| (i.id.as_str(), i.pose()))
+            .collect();
+        let table =
+            ResidualTable::compute(&Model::from(model), &poses, &set.template, &set.validated);
+        recomputed = Some(residual_rows(&table));
+        data_plots(&mut plots, set, &table, lx, ly);
+    }
+    model_plots(&mut plots, model, lx, ly);
+    if !loaded.sensor.covariance.is_empty() {
+        let map = error_map(
+            model,
+            &geometry,
+            &ErrorSource::Covariance {
+                covariance: loaded.sensor.covariance.clone(),
+                k: MAP_K,
+            },
+            &MapOptions {
+                grid: MAP_GRID,
+                ..MapOptions::default()
+            },
+        )?;
+        let step = (lx / (MAP_GRID - 1) as f64, ly / (MAP_GRID - 1) as f64);
+        for (name, title, label, position) in [
+            ("aoa_error_map", "AoA error, 2σ", "AoA error (deg)", false),
+            (
+                "position_error_map",
+                "Position error at 5 m, 2σ",
+                "position error (mm)",
+                true,
+            ),
+        ] {
+            let cells: Vec<HeatCell> = map
+                .cells
+                .iter()
+                .filter_map(|c| {
+                    let v = c.values.as_ref().ok()?;
+                    Some(HeatCell {
+                        x: c.measured.x,
+                        y: c.measured.y,
+                        value: if position {
+                            v.position_error_total
+                        } else {
+                            v.aoa_error_total.to_degrees()
+                        },
+                    })
+                })
+                .collect();
+            if cells.is_empty() {
+                continue;
+            }
+            let max = cells.iter().map(|c| c.value).fold(0.0, f64::max);
+            plots.push(Plot {
+                name,
+                caption: format!(
+                    "{title} from the calibration's covariance over the active area, largest {max:.4} {} (paper Figure 9)",
+                    if position { "mm" } else { "deg" }
+                ),
+                data: PlotData::HeatMap {
+                    cells,
+                    step,
+                    frame: Frame::sensor(title, lx, ly),
+                    label: label.to_string(),
+                },
+            });
+        }
+    }
+    Ok(tables(request, calibration, model, plots, recomputed))
+}
+
+/// Coverage and residual plots of the data.
+fn data_plots(plots: &mut Vec<Plot>, set: &DataSet, table: &ResidualTable, lx: f64, ly: f64) {
+    let coverage: Vec<PointSet> = set
+        .validated
+        .images
+        .iter()
+        .map(|image| PointSet {
+            label: image.id.clone(),
+            points: image.points.iter().map(|(_, m)| (m.x, m.y)).collect(),
+        })
+        .collect();
+    plots.push(Plot {
+        name: "coverage",
+        caption: format!(
+            "{} measured points of {} images on the {lx} × {ly} mm active area (paper Figure 8)",
+            set.validated.total_points(),
+            set.validated.images.len()
+        ),
+        data: PlotData::Coverage {
+            sets: coverage,
+            lx,
+            ly,
+            frame: Frame::sensor("Coverage of the sensor by the images", lx, ly),
+        },
+    });
+    let arrows = |sensor: bool| -> Vec<ArrowSet> {
+        table
+            .images
+            .iter()
+            .filter_map(|image| {
+                let r = image.residuals.as_ref()?;
+                Some(ArrowSet {
+                    label: image.id.clone(),
+                    arrows: r
+                        .iter()
+                        .filter_map(|p| {
+                            let (at, e) = if sensor {
+                                (p.measured, p.on_sensor?)
+                            } else {
+                                (p.template, p.on_template?)
+                            };
+                            Some(Arrow {
+                                at: (at.x, at.y),
+                                delta: (e.x, e.y),
+                            })
+                        })
+                        .collect(),
+                })
+            })
+            .collect()
+    };
+    let leds = set.template.leds.iter().map(|l| (l.x_mm, l.y_mm));
+    for (name, sets, frame0, what) in [
+        (
+            "residuals_template",
+            arrows(false),
+            Frame::fit("Template-plane residuals", "X (mm)", "Y (mm)", leds),
+            "template plane (back-projected point − LED)",
+        ),
+        (
+            "residuals_sensor",
+            arrows(true),
+            Frame::sensor("Sensor residuals", lx, ly),
+            "sensor (projected LED − measured point)",
+        ),
+    ] {
+        let span = (frame0.x_range.1 - frame0.x_range.0).max(frame0.y_range.1 - frame0.y_range.0);
+        let scale = arrow_scale(sets.iter().flat_map(|s| &s.arrows), span);
+        let mut frame = frame0;
+        frame.title = format!("{} × {}", frame.title, round_scale(scale));
+        plots.push(Plot {
+            name,
+            caption: format!(
+                "Residual vectors per image on the {what}, arrows scaled × {} (paper Figure 13)",
+                round_scale(scale)
+            ),
+            data: PlotData::Residuals { sets, scale, frame },
+        });
+    }
+}
+
+/// The distortion field, the corrected spiral and the AoA sensitivity.
+fn model_plots(plots: &mut Vec<Plot>, model: &SensorModel, lx: f64, ly: f64) {
+    let n = 11;
+    let field: Vec<Arrow> = (0..n * n)
+        .map(|k| {
+            let m = Vector2::new(
+                lx * (-0.45 + 0.9 * (k % n) as f64 / (n - 1) as f64),
+                ly * (-0.45 + 0.9 * (k / n) as f64 / (n - 1) as f64),
+            );
+            let i = model.undistort(&m);
+            Arrow {
+                at: (m.x, m.y),
+                delta: (i.x - m.x, i.y - m.y),
+            }
+        })
+        .collect();
+    let scale = arrow_scale(field.iter(), lx.max(ly) * 1.1);
+    plots.push(Plot {
+        name: "distortion_field",
+        caption: format!(
+            "Correction of the calibrated model, measured → ideal point, arrows scaled × {} (paper Figure 16)",
+            round_scale(scale)
+        ),
+        data: PlotData::DistortionField {
+            arrows: field,
+            scale,
+            frame: Frame::sensor(
+                &format!("Distortion correction × {}", round_scale(scale)),
+                lx,
+                ly,
+            ),
+        },
+    });
+    let (measured, corrected) = spiral(model, 0.45 * lx.min(ly));
+    let frame = Frame::fit(
+        "A measured spiral and its correction",
+        "x (mm)",
+        "y (mm)",
+        measured.iter().chain(&corrected).copied(),
+    );
+    plots.push(Plot {
+        name: "spiral",
+        caption: "A spiral of measured points and the same points corrected by the model (paper Figure 16)".into(),
+        data: PlotData::Spiral {
+            measured,
+            corrected,
+            frame,
+        },
+    });
+    let f = model.intrinsics.f;
+    plots.push(Plot {
+        name: "aoa_sensitivity",
+        caption: format!(
+            "Change of the angle of arrival per mm of error in x and in f, f = {f:.3} mm (paper Figure 6, P40–P41)"
+        ),
+        data: PlotData::Sensitivity {
+            f,
+            half_width: 0.5 * lx,
+        },
+    });
+}
+
+/// A scale that makes the longest arrow 8 % of `span`.
+fn arrow_scale<'a>(arrows: impl Iterator<Item = &'a Arrow>, span: f64) -> f64 {
+    let longest = arrows
+        .map(|a| a.delta.0.hypot(a.delta.1))
+        .filter(|l| l.is_finite())
+        .fold(0.0, f64::max);
+    if longest > 0.0 {
+        let s = 0.08 * span / longest;
+        // One significant digit, so the caption's factor is the exact one.
+        let p = 10f64.powf(s.log10().floor());
+        (s / p).floor().max(1.0) * p
+    } else {
+        1.0
+    }
+}
+
+fn round_scale(scale: f64) -> String {
+    if scale >= 1.0 {
+        format!("{scale:.0}")
+    } else {
+        format!("{scale}")
+    }
+}
+
+/// Points on the sensor, mm.
+type Points = Vec<(f64, f64)>;
+
+/// A spiral of measured points of radius up to `radius` and its correction.
+fn spiral(model: &SensorModel, radius: f64) -> (Points, Points) {
+    let n = 120;
+    let turns = 4.0;
+    (0..n)
+        .map(|k| {
+            let u = k as f64 / (n - 1) as f64;
+            let t = u * turns * std::f64::consts::TAU;
+            let m = Vector2::new(radius * u * t.cos(), radius * u * t.sin());
+            let i = model.undistort(&m);
+            ((m.x, m.y), (i.x, i.y))
+        })
+        .unzip()
+}

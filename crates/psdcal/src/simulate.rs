@@ -1,0 +1,247 @@
+//! One simulated data set written as psdcal's input files plus truth.json
+//! (template.csv, observations.csv, signals.csv, truth.json).
+
+use std::path::PathBuf;
+
+use psdcal_io::{
+    write_observations, write_signals, write_template, write_truth, IntrinsicsRecord,
+    ObservationRow, SensorSize, SignalRowOut, SimulationSettings, TemplateLed, TrueGains, TruePose,
+    Truth, TRUTH_FORMAT, TRUTH_VERSION,
+};
+use psdcal_sim::{
+    simulate, ChainConfig, Lens, SignalChain, Simulation, SimulationOptions, TemplateKind,
+};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::error::{Error, Result};
+
+/// Default record length of the signal chain, cycles.
+pub const DEFAULT_RECORD_CYCLES: usize = 65;
+
+/// Longest record accepted, cycles (10 s per LED at 1 kHz).
+pub const MAX_RECORD_CYCLES: usize = 10_000;
+
+/// Cycles at the start of a record that the filter's transient spoils
+/// (a record must be longer).
+pub fn transient_cycles() -> usize {
+    ChainConfig::default().transient_cycles
+}
+
+/// The default signal chain with records of `record_cycles` cycles.
+pub fn chain_with_record(record_cycles: usize) -> Result<SignalChain> {
+    let config = ChainConfig {
+        record_cycles,
+        ..ChainConfig::default()
+    };
+    SignalChain::new(config)
+        .map_err(|e| Error::Options(format!("record length {record_cycles} cycles: {e}")))
+}
+
+/// ` --record-cycles N` when `n` is not the default, for reproduce lines.
+pub fn record_cycles_flag(n: usize) -> String {
+    if n == DEFAULT_RECORD_CYCLES {
+        String::new()
+    } else {
+        format!(" --record-cycles {n}")
+    }
+}
+
+/// What to simulate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulateRequest {
+    /// The paper's lens.
+    pub lens: Lens,
+    /// Per-channel SNR, dB (no noise when absent).
+    pub snr_db: Option<f64>,
+    /// Unequal amplifier gains.
+    pub imbalance: bool,
+    /// The PSD's own distortion.
+    pub psd_distortion: bool,
+    /// Images (template poses).
+    pub images: usize,
+    /// The template.
+    pub template: TemplateKind,
+    /// Record length, cycles.
+    pub record_cycles: usize,
+    /// Seed of every random draw.
+    pub seed: u64,
+    /// Output folder (created if missing).
+    pub out: PathBuf,
+}
+
+/// What was written.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulatedFiles {
+    /// One line describing the simulation.
+    pub description: String,
+    /// Images written.
+    pub images: usize,
+    /// Points written.
+    pub points: usize,
+}
+
+/// Simulates and writes the data set.
+pub fn simulate_files(request: &SimulateRequest) -> Result<SimulatedFiles> {
+    let out = &request.out;
+    std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
+        path: out.clone(),
+        message: format!("cannot create the output folder {}: {e}", out.display()),
+    })?;
+    let options = SimulationOptions {
+        lens: request.lens,
+        snr_db: request.snr_db,
+        imbalance: request.imbalance,
+        psd_distortion: request.psd_distortion,
+        images: request.images,
+        template: request.template,
+        chain: chain_with_record(request.record_cycles)?,
+        ..SimulationOptions::default()
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(request.seed);
+    let sim = simulate(&options, &mut rng)?;
+    let what = describe(request);
+    write_template(
+        out.join("template.csv"),
+        &format!("{what}\nTemplate {} (mm).", request.template.name()),
+        &template_leds(&sim),
+    )?;
+    let observations: Vec<ObservationRow> = sim
+        .images
+        .iter()
+        .flat_map(|im| {
+            im.points.iter().map(|p| ObservationRow {
+                image: im.id.clone(),
+                led: led_id(p.led),
+                x_mm: p.measured.x,
+                y_mm: p.measured.y,
+            })
+        })
+        .collect();
+    write_observations(
+        out.join("observations.csv"),
+        &format!("{what}\nImpact points from the demodulated amplitudes (balanced formula)."),
+        &observations,
+    )?;
+    let signals: Vec<SignalRowOut> = sim
+        .images
+        .iter()
+        .flat_map(|im| {
+            im.points.iter().map(|p| SignalRowOut {
+                image: im.id.clone(),
+                led: led_id(p.led),
+                amplitudes: p.amplitudes,
+            })
+        })
+        .collect();
+    write_signals(
+        out.join("signals.csv"),
+        &format!("{what}\nDemodulated electrode amplitudes (V)."),
+        &signals,
+    )?;
+    write_truth(out.join("truth.json"), &truth(&sim, request))?;
+    Ok(SimulatedFiles {
+        description: what,
+        images: sim.images.len(),
+        points: observations.len(),
+    })
+}
+
+fn led_id(index: usize) -> String {
+    format!("{}", index + 1)
+}
+
+fn describe(r: &SimulateRequest) -> String {
+    format!(
+        "Simulated by psdcal {}: lens {}, {}{}{}, {} images, seed {}.",
+        env!("CARGO_PKG_VERSION"),
+        r.lens.number(),
+        r.snr_db
+            .map_or("no noise".to_string(), |s| format!("{s} dB SNR")),
+        if r.imbalance { ", gain imbalance" } else { "" },
+        if r.psd_distortion {
+            ", PSD distortion"
+        } else {
+            ""
+        },
+        r.images,
+        r.seed
+    ) + &if r.record_cycles == DEFAULT_RECORD_CYCLES {
+        String::new()
+    } else {
+        format!(" Records of {} cycles.", r.record_cycles)
+    }
+}
+
+fn template_leds(sim: &Simulation) -> Vec<TemplateLed> {
+    sim.template
+        .leds
+        .iter()
+        .enumerate()
+        .map(|(i, p)| TemplateLed {
+            id: led_id(i),
+            x_mm: p.x,
+            y_mm: p.y,
+            lines: sim
+                .template
+                .lines
+                .iter()
+                .zip(&sim.template.line_names)
+                .filter(|(leds, _)| leds.contains(&i))
+                .map(|(_, name)| name.clone())
+                .collect(),
+        })
+        .collect()
+}
+
+fn truth(sim: &Simulation, r: &SimulateRequest) -> Truth {
+    let chain = sim.options.chain.config();
+    let m = &sim.truth;
+    Truth {
+        format: TRUTH_FORMAT.into(),
+        version: TRUTH_VERSION,
+        simulation: SimulationSettings {
+            seed: r.seed,
+            lens: r.lens.number(),
+            snr_db: r.snr_db,
+            imbalance: r.imbalance,
+            psd_distortion: r.psd_distortion,
+            template: r.template.name().into(),
+            images: r.images,
+            photocurrent_a: sim.options.photocurrent_a,
+            f0_hz: chain.f0_hz,
+            sample_rate_hz: chain.sample_rate_hz,
+            bandwidth_hz: chain.bandwidth_hz,
+            filter_order: chain.filter_order,
+            record_s: chain.record_cycles as f64 / chain.f0_hz,
+            demodulation: format!("{:?}", chain.demodulation),
+        },
+        sensor: SensorSize {
+            lx_mm: sim.options.geometry.lx,
+            ly_mm: sim.options.geometry.ly,
+        },
+        intrinsics: IntrinsicsRecord {
+            f_mm: m.intrinsics.f,
+            cx_mm: m.intrinsics.cx,
+            cy_mm: m.intrinsics.cy,
+            skew: m.intrinsics.skew,
+        },
+        distortion: m.distortion,
+        gains: TrueGains {
+            x1_v_per_a: sim.gain_x1,
+            x2: sim.gains.x2,
+            y1: sim.gains.y1,
+            y2: sim.gains.y2,
+        },
+        images: sim
+            .images
+            .iter()
+            .zip(&sim.poses)
+            .map(|(im, p)| TruePose {
+                id: im.id.clone(),
+                rvec: [p.rvec.x, p.rvec.y, p.rvec.z],
+                t_mm: [p.t.x, p.t.y, p.t.z],
+            })
+            .collect(),
+    }
+}

@@ -1,0 +1,299 @@
+//! The paper's Monte Carlo evaluation from one request: the rules that
+//! choose the tables, the checks before any work, the run (progress and
+//! cancellation through a callback and a flag), and the files (study.md,
+//! study.csv, study.json, fig9_*.csv and, if asked for, study.html), each
+//! written atomically after the whole study succeeded.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use psdcal_io::{write_atomic, write_atomic_bytes};
+use psdcal_model::PsdGeometry;
+use psdcal_study::fig9::{figure9, ErrorMap};
+use psdcal_study::render::{csv_rows, markdown, num, CSV_HEADER};
+use psdcal_study::{run_tables, table_spec, StudyOptions, TableResult, TableSpec, TABLE_IDS};
+
+use crate::error::{Error, Result};
+use crate::simulate::{chain_with_record, record_cycles_flag};
+use crate::study_page::study_page;
+
+/// Whether `id` names something `study` runs: `table1` … `table10`, `fig9`
+/// or `all`.
+pub fn is_study_id(id: &str) -> bool {
+    id == "all" || id == "fig9" || TABLE_IDS.contains(&id)
+}
+
+/// The tables asked for: `all` expands to every table and `fig9`,
+/// duplicates go, the paper's order (`fig9` last).
+pub fn expand_tables(ids: &[String]) -> Vec<String> {
+    let mut wanted: Vec<String> = Vec::new();
+    for t in ids {
+        if t == "all" {
+            wanted.extend(TABLE_IDS.iter().map(|s| s.to_string()));
+            wanted.push("fig9".into());
+        } else {
+            wanted.push(t.clone());
+        }
+    }
+    let order = |t: &String| {
+        TABLE_IDS
+            .iter()
+            .position(|x| x == t)
+            .unwrap_or(TABLE_IDS.len())
+    };
+    wanted.sort_by_key(order);
+    wanted.dedup();
+    wanted
+}
+
+/// What to run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyRequest {
+    /// Table ids in order, each once (`fig9` last when asked for).
+    pub tables: Vec<String>,
+    /// Trials per condition.
+    pub trials: usize,
+    /// Worker threads (default: every core).
+    pub threads: Option<usize>,
+    /// The study's seed.
+    pub seed: u64,
+    /// Record length of the signal chain, cycles.
+    pub record_cycles: usize,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Folder of study.html, if asked for.
+    pub report: Option<PathBuf>,
+}
+
+/// A checked study, ready to run.
+#[derive(Debug, Clone)]
+pub struct StudyPlan {
+    request: StudyRequest,
+    specs: Vec<TableSpec>,
+    want_fig9: bool,
+    options: StudyOptions,
+}
+
+/// What a study wrote.
+#[derive(Debug, Clone)]
+pub struct StudyOutcome {
+    /// study.md's text.
+    pub markdown: String,
+    /// study.json's content.
+    pub json: serde_json::Value,
+    /// study.html, if written.
+    pub page: Option<PathBuf>,
+}
+
+/// Checks everything before the work starts: the tables, the signal chain,
+/// that the output folders can be written.
+pub fn plan_study(request: &StudyRequest) -> Result<StudyPlan> {
+    let want_fig9 = request.tables.iter().any(|t| t == "fig9");
+    let mut ids: Vec<String> = request
+        .tables
+        .iter()
+        .filter(|t| *t != "fig9")
+        .cloned()
+        .collect();
+    if want_fig9 {
+        for t in ["table9", "table10"] {
+            if !ids.iter().any(|x| x == t) {
+                ids.push(t.into());
+            }
+        }
+    }
+    let specs: Vec<TableSpec> = ids
+        .iter()
+        .map(|id| table_spec(id).ok_or_else(|| Error::Options(format!("unknown table '{id}'"))))
+        .collect::<Result<_>>()?;
+    check_output_folder(&request.out)?;
+    if let Some(dir) = &request.report {
+        check_output_folder(dir)?;
+    }
+    let options = StudyOptions {
+        trials: request.trials,
+        seed: request.seed,
+        chain: chain_with_record(request.record_cycles)?,
+        ..StudyOptions::default()
+    };
+    Ok(StudyPlan {
+        request: request.clone(),
+        specs,
+        want_fig9,
+        options,
+    })
+}
+
+/// Creates the folder and proves it can be written, before any work.
+fn check_output_folder(dir: &Path) -> Result<()> {
+    let folder = |message: String| Error::OutputFolder {
+        path: dir.to_path_buf(),
+        message,
+    };
+    std::fs::create_dir_all(dir).map_err(|e| {
+        folder(format!(
+            "cannot create the output folder {}: {e}",
+            dir.display()
+        ))
+    })?;
+    let probe = dir.join(".psdcal-write-test");
+    write_atomic_bytes(&probe, b"").map_err(|e| {
+        folder(format!(
+            "the output folder {} cannot be written: {e}",
+            dir.display()
+        ))
+    })?;
+    let _ = std::fs::remove_file(probe);
+    Ok(())
+}
+
+impl StudyPlan {
+    /// Trials to run in all.
+    pub fn trial_count(&self) -> u64 {
+        psdcal_study::study::trial_count(&self.specs, self.request.trials) as u64
+    }
+
+    /// Runs the study on the current rayon pool (`tick` after each trial;
+    /// `cancel` stops it and nothing is written) and writes the files.
+    pub fn run(&self, tick: &(dyn Fn() + Sync), cancel: &AtomicBool) -> Result<StudyOutcome> {
+        let mut pool = rayon::ThreadPoolBuilder::new();
+        if let Some(n) = self.request.threads {
+            pool = pool.num_threads(n);
+        }
+        let pool = pool
+            .build()
+            .map_err(|e| Error::Options(format!("cannot start the worker threads: {e}")))?;
+        let started = Instant::now();
+        let result = pool.install(|| run_tables(&self.specs, &self.options, &tick, cancel));
+        let tables = match result {
+            Err(psdcal_sim::SimError::Cancelled) => return Err(Error::Interrupted),
+            other => other?,
+        };
+        let elapsed = started.elapsed().as_secs_f64();
+        let maps = if self.want_fig9 {
+            figure9(&tables, &PsdGeometry::default())
+        } else {
+            Vec::new()
+        };
+        self.write(&tables, &maps, elapsed)
+    }
+
+    fn write(
+        &self,
+        tables: &[TableResult],
+        maps: &[ErrorMap],
+        elapsed: f64,
+    ) -> Result<StudyOutcome> {
+        let r = &self.request;
+        let report = self.markdown(tables, maps, elapsed);
+        write_atomic_bytes(r.out.join("study.md"), report.as_bytes())?;
+        write_atomic(r.out.join("study.csv"), |w| {
+            writeln!(w, "{CSV_HEADER}")?;
+            for t in tables {
+                w.write_all(csv_rows(t).as_bytes())?;
+            }
+            Ok(())
+        })?;
+        let json = serde_json::json!({
+            "seed": r.seed,
+            "trials": r.trials,
+            "tables": tables,
+            "fig9": maps.iter().map(|m| serde_json::json!({
+                "lens": m.lens, "condition": m.condition, "offsets": m.offsets,
+                "max_aoa_deg": m.max_aoa_deg, "mean_aoa_deg": m.mean_aoa_deg, "max_position_mm": m.max_position_mm,
+            })).collect::<Vec<_>>(),
+            "elapsed_s": elapsed,
+        });
+        let text = serde_json::to_string_pretty(&json)
+            .map_err(|e| Error::Input(format!("cannot encode study.json: {e}")))?;
+        write_atomic_bytes(r.out.join("study.json"), text.as_bytes())?;
+        for (k, m) in maps.iter().enumerate() {
+            write_atomic(
+                r.out.join(format!("fig9_lens{}_{}.csv", m.lens, k + 1)),
+                |w| {
+                    writeln!(
+                        w,
+                        "# Figure 9, lens {}, {}: offsets {:?}",
+                        m.lens, m.condition, m.offsets
+                    )?;
+                    writeln!(w, "x_mm,y_mm,aoa_error_deg,position_error_mm")?;
+                    for g in &m.grid {
+                        writeln!(w, "{},{},{},{}", g[0], g[1], g[2], g[3])?;
+                    }
+                    Ok(())
+                },
+            )?;
+        }
+        let page = match &r.report {
+            Some(dir) => {
+                let intro = format!(
+                    "{} trials per condition, seed {} ({:.1} s). Reproduce with: {}",
+                    r.trials,
+                    r.seed,
+                    elapsed,
+                    self.reproduce()
+                );
+                let page = study_page("psdcal study", &intro, tables, maps)?;
+                let path = dir.join("study.html");
+                write_atomic_bytes(&path, page.render().as_bytes())?;
+                Some(path)
+            }
+            None => None,
+        };
+        Ok(StudyOutcome {
+            markdown: report,
+            json,
+            page,
+        })
+    }
+
+    /// The command that reproduces this study.
+    fn reproduce(&self) -> String {
+        let r = &self.request;
+        format!(
+            "psdcal study {} --trials {} --seed {}{}",
+            r.tables.join(" "),
+            r.trials,
+            r.seed,
+            record_cycles_flag(r.record_cycles)
+        )
+    }
+
+    fn markdown(&self, tables: &[TableResult], maps: &[ErrorMap], elapsed: f64) -> String {
+        let r = &self.request;
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "## psdcal study: {} trials per condition, seed {} ({:.1} s)\n",
+            r.trials, r.seed, elapsed
+        );
+        let _ = writeln!(out, "Reproduce with `{}`.\n", self.reproduce());
+        for t in tables {
+            out.push_str(&markdown(t));
+        }
+        if !maps.is_empty() {
+            let _ = writeln!(out, "### Figure 9: AoA and position errors at 5 m, parameters off by |mean − ideal| + 2·std\n");
+            let _ = writeln!(out, "| lens | condition | max AoA error (deg) | mean AoA error (deg) | max position error at 5 m (mm) |");
+            let _ = writeln!(out, "|---|---|---|---|---|");
+            for m in maps {
+                let _ = writeln!(
+                    out,
+                    "| {} | {} | {} | {} | {} |",
+                    m.lens,
+                    m.condition,
+                    num(m.max_aoa_deg),
+                    num(m.mean_aoa_deg),
+                    num(m.max_position_mm)
+                );
+            }
+            let _ = writeln!(
+                out,
+                "\nGrids: fig9_lens*_*.csv (x_mm, y_mm, aoa_error_deg, position_error_mm).\n"
+            );
+        }
+        out
+    }
+}

@@ -1,0 +1,164 @@
+//! The tables `aoa`, `locate` and `map` answer with: CSV rows whose
+//! unanswered rows carry a `status` and empty values, and the count of
+//! each status with a warning per row that is not `ok`.
+
+use std::collections::BTreeMap;
+use std::io::{self, Write};
+use std::path::Path;
+
+use psdcal_io::{write_atomic, IoError, Location, Points};
+use psdcal_locate::LocateError;
+
+use crate::error::Result;
+
+/// A CSV table.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Table {
+    /// Column names.
+    pub header: Vec<String>,
+    /// Rows of fields.
+    pub rows: Vec<Vec<String>>,
+}
+
+impl Table {
+    /// The rows of `points` (every input column, text unchanged) followed
+    /// by the added columns and their values.
+    pub fn extending(points: &Points, added: &[String], values: Vec<Vec<String>>) -> Self {
+        let header = points.header.iter().chain(added).cloned().collect();
+        let rows = points
+            .rows
+            .iter()
+            .zip(values)
+            .map(|(row, extra)| row.fields.iter().cloned().chain(extra).collect())
+            .collect();
+        Self { header, rows }
+    }
+
+    /// Writes the table as CSV.
+    pub fn write_csv<W: Write>(&self, out: W) -> io::Result<()> {
+        let mut writer = csv::WriterBuilder::new().flexible(true).from_writer(out);
+        writer.write_record(&self.header)?;
+        for row in &self.rows {
+            writer.write_record(row)?;
+        }
+        writer.flush()
+    }
+
+    /// Writes the table to `out` atomically, or to standard output.
+    pub fn write_to(&self, out: Option<&Path>) -> Result<()> {
+        match out {
+            Some(path) => Ok(write_atomic(path, |w| self.write_csv(w))?),
+            None => {
+                let mut stdout = io::stdout().lock();
+                self.write_csv(&mut stdout)
+                    .and_then(|()| stdout.flush())
+                    .map_err(|source| {
+                        IoError::Write {
+                            file: "standard output".to_string(),
+                            source,
+                        }
+                        .into()
+                    })
+            }
+        }
+    }
+}
+
+/// A number for a CSV field (shortest round-trip form; a non-finite value
+/// is written empty, never NaN).
+pub fn num(v: f64) -> String {
+    if v.is_finite() {
+        v.to_string()
+    } else {
+        String::new()
+    }
+}
+
+/// Degrees of an angle in radians, for a CSV field.
+pub fn deg(rad: f64) -> String {
+    num(rad.to_degrees())
+}
+
+/// `n` empty fields.
+pub fn empty(n: usize) -> Vec<String> {
+    vec![String::new(); n]
+}
+
+/// Refuses input that already has a column the answer adds.
+pub fn refuse_existing_columns(points: &Points, added: &[String]) -> Result<(), IoError> {
+    if let Some(name) = added.iter().find(|name| points.has_column(name)) {
+        return Err(IoError::Structure {
+            at: Location::line(&points.source, points.header_line),
+            message: format!(
+                "the input already has a column '{name}', which the answer adds; expected input \
+                 without the columns {}",
+                added.join(", ")
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Counts of each status, and the warnings of the rows that are not `ok`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StatusCount {
+    counts: BTreeMap<String, usize>,
+    rows: usize,
+    answered: usize,
+    /// One line per row that is not `ok`.
+    pub warnings: Vec<String>,
+}
+
+impl StatusCount {
+    /// Records an answered row (`status` is `ok` or caution codes).
+    pub fn answered(&mut self, status: &str, warning: Option<String>) {
+        self.rows += 1;
+        self.answered += 1;
+        for code in status.split(';') {
+            *self.counts.entry(code.to_string()).or_default() += 1;
+        }
+        if let Some(w) = warning {
+            self.warnings.push(w);
+        }
+    }
+
+    /// Records a row without an answer.
+    pub fn failed(&mut self, error: &LocateError, at: &str) {
+        self.rows += 1;
+        *self.counts.entry(error.status().to_string()).or_default() += 1;
+        self.warnings.push(format!("{at}: {error}; no answer"));
+    }
+
+    /// Rows without an answer.
+    pub fn unanswered(&self) -> usize {
+        self.rows - self.answered
+    }
+
+    /// `12 ok, 1 off_active_area, 2 outside_valid_region (2 not answered)`.
+    pub fn summary(&self) -> String {
+        let mut parts: Vec<String> = Vec::new();
+        if let Some(ok) = self.counts.get("ok") {
+            parts.push(format!("{ok} ok"));
+        }
+        for (code, n) in &self.counts {
+            if code != "ok" {
+                parts.push(format!("{n} {code}"));
+            }
+        }
+        let mut text = parts.join(", ");
+        if self.unanswered() > 0 {
+            text.push_str(&format!(" ({} not answered)", self.unanswered()));
+        }
+        text
+    }
+
+    /// The counts as JSON.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "rows": self.rows,
+            "answered": self.answered,
+            "not_answered": self.unanswered(),
+            "status": self.counts,
+        })
+    }
+}
