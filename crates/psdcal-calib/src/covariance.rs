@@ -8,7 +8,7 @@
 //!
 //! `(JᵀJ)⁻¹` is never formed whole: the sensor-parameter block is the inverse
 //! of the Schur complement `S⁻¹`, and each pose's 6 × 6 block is
-//! `V_i⁻¹ + V_i⁻¹ W_iᵀ S⁻¹ W_i V_i⁻¹` ([`crate::normal_equations`]).
+//! `V_i⁻¹ + V_i⁻¹ W_iᵀ S⁻¹ W_i V_i⁻¹` ([`psdcal_solver::normal_equations`]).
 //!
 //! Identifiability: a parameter whose information is (nearly) explained by
 //! the others has a huge variance inflation `S⁻¹_kk · S_kk`; such parameters,
@@ -19,8 +19,8 @@ use nalgebra::{DMatrix, Matrix6};
 
 use crate::data::CalibrationData;
 use crate::refine::{CalibrationProblem, FitState, RefineOptions, Refined};
-use crate::solver;
 use crate::CalibError;
+use psdcal_solver::solver;
 
 pub use psdcal_model::stages::gains::GAIN_NAMES;
 

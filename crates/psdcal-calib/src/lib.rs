@@ -24,7 +24,6 @@ pub use zhang::{closed_form, pose_from_homography, ClosedFormSolution};
 pub mod covariance;
 pub mod electrical;
 pub mod global;
-pub mod normal_equations;
 pub mod refine;
 pub mod report;
 pub mod weighting;
@@ -32,13 +31,13 @@ pub mod weighting;
 pub use covariance::{covariance, Covariance, GAIN_NAMES};
 pub use electrical::{equal_current_gains, GainEstimate};
 pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
+pub use psdcal_solver::{self as solver, normal_equations};
+pub use psdcal_solver::{Problem, Solution, SolverOptions, SolverReport};
 pub use refine::{
     refine, CalibrationProblem, CostKind, FitState, RefineOptions, RefineReport, Refined,
     RobustLoss, Termination,
 };
 pub use report::{fit_statistics, FitStatistics, ImageStats, PointError};
-pub mod solver;
-pub use solver::{Problem, Solution, SolverOptions, SolverReport};
 pub use weighting::{point_covariance, NoiseModel, PointWeights};
 pub mod calibrate;
 pub use calibrate::{

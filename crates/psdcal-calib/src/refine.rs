@@ -1,6 +1,6 @@
 //! Levenberg–Marquardt refinement of the model's freed parameters and every
 //! pose (docs/model.md §4.6, the paper's (P29)), as a [`Problem`] for the one
-//! solver ([`crate::solver`]).
+//! solver ([`psdcal_solver::solver`]).
 //!
 //! Cost (template plane, the default): for every observed point `m_ij` of LED
 //! `j` in image `i`,
@@ -36,12 +36,12 @@ use psdcal_model::{ChainJacobian, Model, ModelError, Param, Pose, SensorModel};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::normal_equations::{ResidualTerm, Step};
-use crate::solver::{self, Problem, SolverOptions};
 use crate::weighting::{NoiseModel, PointWeights};
 use crate::CalibError;
+use psdcal_solver::normal_equations::{ResidualTerm, Step};
+use psdcal_solver::solver::{self, Problem, SolverOptions};
 
-pub use crate::solver::{RobustLoss, SolverReport as RefineReport, Termination};
+pub use psdcal_solver::solver::{RobustLoss, SolverReport as RefineReport, Termination};
 
 /// Mean squared residual per point below which the fit is exact (RMS 1e-10).
 const EXACT_FIT_MS: f64 = 1e-20;
