@@ -63,13 +63,15 @@
 //! `(cx, cy)`, consistent with the returned poses and the measured points);
 //! `k2` the preliminary estimate (0 when off); `k3, p1, p2, l1, l2, skew` zero.
 
-use nalgebra::{Matrix6, Vector2, Vector6};
-use psdcal_model::{Param, Pose, SensorModel};
+use nalgebra::Vector2;
+use psdcal_model::{Model, Pose, SensorModel};
+use psdcal_solver::{solver, SolverOptions};
 
 use crate::homography::{fit_homography, Homography, HomographyOptions};
 use crate::preliminary::{
     check_data, estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport,
 };
+use crate::refine::{CalibrationProblem, CostKind, FitState};
 use crate::zhang::{closed_form, pose_from_homography, ClosedFormSolution};
 use crate::{CalibError, CalibrationData};
 
@@ -87,8 +89,17 @@ const NEIGHBOUR_FACTORS: [f64; 4] = [0.5, 0.7, 1.4, 2.0];
 /// Most images the focal search evaluates.
 pub const SEARCH_IMAGES: usize = 24;
 
-/// Levenberg–Marquardt iterations of one evaluation of `J`.
-const PROFILE_ITERATIONS: usize = 25;
+/// Solver iterations of one precise evaluation of `J`.
+const PROFILE_ITERATIONS: usize = 40;
+/// Solver iterations and relative cost tolerance of a coarse evaluation of
+/// `J` (comparisons with a factor-two margin, the search's grid).
+const COARSE_ITERATIONS: usize = 12;
+const COARSE_TOLERANCE: f64 = 1e-4;
+/// Solver iterations of the refined closed form.
+const REFINED_ITERATIONS: usize = 100;
+/// Width in `ln f` at which the golden-section search stops (0.1 % in `f`;
+/// the refinement that follows settles `f`).
+const GOLDEN_TOLERANCE: f64 = 1e-3;
 
 /// Options of [`initialize`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -203,10 +214,10 @@ pub struct Initialization {
     pub report: InitReport,
 }
 
-/// Everything `J` is computed from.
+/// Everything `J` is computed from: the data (or a subset of its images),
+/// their homographies and the preliminary distortion.
 struct Problem {
-    template: Vec<Vec<Vector2<f64>>>,
-    measured: Vec<Vec<Vector2<f64>>>,
+    data: CalibrationData,
     homographies: Vec<Homography>,
     k1_start: f64,
     k2: f64,
@@ -214,37 +225,31 @@ struct Problem {
     floor: f64,
 }
 
-/// `J` and its minimiser.
+/// `J` (or a refined start) and its minimiser.
 struct Profile {
     cost: f64,
     model: SensorModel,
     poses: Vec<Pose>,
+    converged: bool,
+}
+
+/// How precisely a profile value is needed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Precision {
+    /// To compare values a factor two apart (checks, the search's grid).
+    Coarse,
+    /// The start handed on.
+    Fine,
 }
 
 impl Problem {
-    fn sum_squares(&self, model: &SensorModel, poses: &[Pose]) -> f64 {
-        let mut sum = 0.0;
-        for ((pose, tpl), img) in poses.iter().zip(&self.template).zip(&self.measured) {
-            for (p, m) in tpl.iter().zip(img) {
-                match model.back_project(pose, m) {
-                    Ok(b) => sum += (b - p).norm_squared(),
-                    Err(_) => return f64::INFINITY,
-                }
-            }
-        }
-        if sum.is_finite() {
-            sum
-        } else {
-            f64::INFINITY
-        }
-    }
-
-    /// `J(f, cx, cy)`: Levenberg–Marquardt over `k1` and the poses.
-    fn profile(&self, f: f64, cx: f64, cy: f64) -> Result<Profile, CalibError> {
+    /// The start at `(f, cx, cy)`: the preliminary `k1, k2` and the poses of
+    /// the homographies (`k1 = 0` when the preliminary one folds a point).
+    fn plain_start(&self, f: f64, cx: f64, cy: f64) -> Result<Profile, CalibError> {
         let mut model = SensorModel::pinhole(f, cx, cy);
         model.distortion.k1 = self.k1_start;
         model.distortion.k2 = self.k2;
-        let mut poses = self
+        let poses = self
             .homographies
             .iter()
             .map(|h| pose_from_homography(h, f, cx, cy))
@@ -255,87 +260,98 @@ impl Problem {
             model.distortion.k1 = 0.0;
             cost = self.sum_squares(&model, &poses);
         }
-        if !cost.is_finite() {
+        Ok(Profile {
+            cost,
+            model,
+            poses,
+            converged: false,
+        })
+    }
+
+    fn sum_squares(&self, model: &SensorModel, poses: &[Pose]) -> f64 {
+        crate::refine::total_cost(&self.data, CostKind::Template, None, &model.into(), poses)
+            .ok()
+            .filter(|c| c.is_finite())
+            .unwrap_or(f64::INFINITY)
+    }
+
+    /// Minimises the template-plane error over the `free` parameters and
+    /// every pose from the plain start at `(f, cx, cy)`, with the one solver.
+    fn minimise(
+        &self,
+        f: f64,
+        cx: f64,
+        cy: f64,
+        free: &[&str],
+        settings: &SolverOptions,
+    ) -> Result<Profile, CalibError> {
+        let start = self.plain_start(f, cx, cy)?;
+        if !start.cost.is_finite() {
             return Err(CalibError::Numerical {
                 stage: "initialisation",
                 reason: format!("a template point does not back-project at f = {f:.4} mm"),
             });
         }
-        let k1 = Param::K1.index();
-        let mut lambda = 1e-4;
-        for _ in 0..PROFILE_ITERATIONS {
-            // Normal equations: U, g_a (k1); V_i, W_i, g_i (poses).
-            let (mut u, mut ga) = (0.0, 0.0);
-            let n = poses.len();
-            let (mut v, mut w, mut gb) = (
-                vec![Matrix6::zeros(); n],
-                vec![Vector6::zeros(); n],
-                vec![Vector6::zeros(); n],
-            );
-            for i in 0..n {
-                for (p, m) in self.template[i].iter().zip(&self.measured[i]) {
-                    let (b, jac) = model.back_project_with_jacobians(&poses[i], m)?;
-                    let r = b - p;
-                    let a = jac.wrt_model.column(k1).into_owned();
-                    let bj = jac.wrt_pose;
-                    u += a.norm_squared();
-                    ga += a.dot(&r);
-                    v[i] += bj.transpose() * bj;
-                    w[i] += bj.transpose() * a;
-                    gb[i] += bj.transpose() * r;
-                }
-            }
-            let mut improved = false;
-            while lambda < 1e10 {
-                if let Some((da, db)) = damped_step(u, ga, &v, &w, &gb, lambda) {
-                    let mut trial_model = model;
-                    trial_model.distortion.k1 += da;
-                    let trial: Vec<Pose> = poses
-                        .iter()
-                        .zip(&db)
-                        .map(|(p, d)| {
-                            Pose::new(p.rvec + d.fixed_rows::<3>(0), p.t + d.fixed_rows::<3>(3))
-                        })
-                        .collect();
-                    let c = self.sum_squares(&trial_model, &trial);
-                    if c < cost {
-                        let decrease = cost - c;
-                        model = trial_model;
-                        poses = trial;
-                        cost = c;
-                        lambda = (lambda * 0.1).max(1e-12);
-                        improved = decrease > 1e-10 * (cost + decrease) + 1e-3 * self.floor;
-                        break;
-                    }
-                }
-                lambda *= 10.0;
-            }
-            if !improved {
-                break;
-            }
-        }
-        Ok(Profile { cost, model, poses })
+        let names: Vec<String> = free.iter().map(|n| n.to_string()).collect();
+        let model = Model::standard(&start.model);
+        let problem =
+            CalibrationProblem::new(&self.data, CostKind::Template, &model, &names, None)?;
+        let state = FitState {
+            model,
+            poses: start.poses,
+        };
+        let solution = solver::solve(&problem, state, settings)?;
+        Ok(Profile {
+            cost: solution.cost,
+            model: solution.state.model.sensor_model(),
+            poses: solution.state.poses,
+            converged: solution.report.termination.converged(),
+        })
     }
 
-    /// The paper's start at `(f, cx, cy)`: the preliminary `k1, k2` and the
-    /// poses of the homographies, unrefined.
-    fn plain_start(&self, f: f64, cx: f64, cy: f64) -> Result<Profile, CalibError> {
-        let mut model = SensorModel::pinhole(f, cx, cy);
-        model.distortion.k1 = self.k1_start;
-        model.distortion.k2 = self.k2;
-        let poses = self
-            .homographies
-            .iter()
-            .map(|h| pose_from_homography(h, f, cx, cy))
-            .collect::<Result<Vec<_>, _>>()?;
-        let cost = self.sum_squares(&model, &poses);
-        Ok(Profile { cost, model, poses })
+    /// `J(f, cx, cy)`: the minimum over `k1` and the poses.
+    fn profile(
+        &self,
+        f: f64,
+        cx: f64,
+        cy: f64,
+        precision: Precision,
+    ) -> Result<Profile, CalibError> {
+        let (cost_tolerance, max_iterations) = match precision {
+            Precision::Coarse => (COARSE_TOLERANCE, COARSE_ITERATIONS),
+            Precision::Fine => (1e-10, PROFILE_ITERATIONS),
+        };
+        let settings = SolverOptions {
+            max_iterations,
+            cost_tolerance,
+            step_tolerance: 1e-10,
+            initial_lambda: 1e-4,
+            exact_cost: 1e-3 * self.floor,
+            step_floor: 1e-3 * self.floor,
+            robust: None,
+        };
+        self.minimise(f, cx, cy, &["k1"], &settings)
+    }
+
+    /// The closed form refined: `f, cx, cy, k1` and the poses from the plain
+    /// start at `(f, cx, cy)` (`k2` stays the preliminary one).
+    fn refined(&self, f: f64, cx: f64, cy: f64) -> Result<Profile, CalibError> {
+        let settings = SolverOptions {
+            max_iterations: REFINED_ITERATIONS,
+            cost_tolerance: 1e-8,
+            step_tolerance: 1e-8,
+            initial_lambda: 1e-3,
+            exact_cost: 1e-3 * self.floor,
+            step_floor: 1e-3 * self.floor,
+            robust: None,
+        };
+        self.minimise(f, cx, cy, &["f", "cx", "cy", "k1"], &settings)
     }
 
     /// The same problem on at most `max_images` images spread evenly over
     /// the set (all of them when there are no more).
     fn subset(&self, max_images: usize) -> Problem {
-        let n = self.template.len();
+        let n = self.data.images.len();
         let keep: Vec<usize> = if n <= max_images {
             (0..n).collect()
         } else {
@@ -343,8 +359,11 @@ impl Problem {
         };
         let scale = keep.len() as f64 / n as f64;
         Problem {
-            template: keep.iter().map(|&i| self.template[i].clone()).collect(),
-            measured: keep.iter().map(|&i| self.measured[i].clone()).collect(),
+            data: CalibrationData {
+                images: keep.iter().map(|&i| self.data.images[i].clone()).collect(),
+                amplitudes: None,
+                ..self.data.clone()
+            },
             homographies: keep.iter().map(|&i| self.homographies[i]).collect(),
             k1_start: self.k1_start,
             k2: self.k2,
@@ -353,7 +372,7 @@ impl Problem {
     }
 
     fn cost_or_inf(&self, f: f64, cx: f64, cy: f64) -> f64 {
-        self.profile(f, cx, cy)
+        self.profile(f, cx, cy, Precision::Coarse)
             .map(|p| p.cost)
             .unwrap_or(f64::INFINITY)
     }
@@ -378,7 +397,7 @@ impl Problem {
         let mut c1 = self.cost_or_inf(x1.exp(), cx, cy);
         let mut c2 = self.cost_or_inf(x2.exp(), cx, cy);
         let mut iterations = 0;
-        while x3 - x0 > 1e-6 && iterations < 100 {
+        while x3 - x0 > GOLDEN_TOLERANCE && iterations < 100 {
             iterations += 1;
             if c1 <= c2 {
                 (x3, x2, c2) = (x2, x1, c1);
@@ -407,41 +426,6 @@ impl Problem {
             centre_from_closed_form: false,
         })
     }
-}
-
-/// Solves the damped normal equations with the poses eliminated:
-/// `S = U' − Σ W_iᵀ V_i'⁻¹ W_i` (a scalar), `δk1 = (−g_a + Σ W_iᵀ V_i'⁻¹ g_i)/S`,
-/// `δb_i = V_i'⁻¹(−g_i − W_i δk1)`; `'` marks Marquardt damping of the diagonal.
-fn damped_step(
-    u: f64,
-    ga: f64,
-    v: &[Matrix6<f64>],
-    w: &[Vector6<f64>],
-    gb: &[Vector6<f64>],
-    lambda: f64,
-) -> Option<(f64, Vec<Vector6<f64>>)> {
-    let mut s = u * (1.0 + lambda) + 1e-300;
-    let mut rhs = -ga;
-    let mut inverses = Vec::with_capacity(v.len());
-    for i in 0..v.len() {
-        let mut vi = v[i];
-        for k in 0..6 {
-            vi[(k, k)] = vi[(k, k)] * (1.0 + lambda) + 1e-12 * (1.0 + vi[(k, k)]);
-        }
-        let inv = vi.cholesky()?.inverse();
-        s -= w[i].dot(&(inv * w[i]));
-        rhs += w[i].dot(&(inv * gb[i]));
-        inverses.push(inv);
-    }
-    let da = if s > 1e-14 * (u + 1e-300) {
-        rhs / s
-    } else {
-        0.0
-    };
-    let db: Vec<_> = (0..v.len())
-        .map(|i| inverses[i] * (-gb[i] - w[i] * da))
-        .collect();
-    (da.is_finite() && db.iter().all(|d| d.iter().all(|x| x.is_finite()))).then_some((da, db))
 }
 
 /// Names the image in a homography error.
@@ -530,12 +514,10 @@ pub fn initialize(
     let n_points = data.point_count() as f64;
     let tpl_scale = data.template.iter().map(|p| p.norm()).fold(1.0, f64::max);
     let problem = Problem {
-        template,
-        measured: data
-            .images
-            .iter()
-            .map(|im| im.points.iter().map(|o| o.measured).collect())
-            .collect(),
+        data: CalibrationData {
+            amplitudes: None,
+            ..data.clone()
+        },
         homographies,
         k1_start: preliminary.k1,
         k2: preliminary.k2,
@@ -572,12 +554,28 @@ pub fn initialize(
                             sol.cx, sol.cy
                         ))
                     }
-                    Ok(f) => match problem.profile(f, sol.cx, sol.cy) {
+                    Ok(f) if !options.refine_start => {
+                        candidate = Some((f, sol.cx, sol.cy, f64::NAN));
+                    }
+                    // The closed form refined over f, cx, cy, k1 and the poses.
+                    Ok(f) => match problem.refined(f, sol.cx, sol.cy) {
                         Err(e) => rejection = Some(format!("closed-form poses fail: {e}")),
                         Ok(p) => {
-                            closed_cost = Some(p.cost);
-                            candidate = Some((f, sol.cx, sol.cy, p.cost));
-                            closed_profile = Some(p);
+                            let k = &p.model.intrinsics;
+                            if !(p.converged && k.f >= f_lo && k.f <= f_hi && on_area(k.cx, k.cy)) {
+                                rejection = Some(format!(
+                                    "the closed form (f = {f:.4} mm) refines to f = {:.4} mm, centre \
+                                     ({:.3}, {:.3}) mm{}",
+                                    k.f,
+                                    k.cx,
+                                    k.cy,
+                                    if p.converged { "" } else { " without converging" }
+                                ));
+                            } else {
+                                closed_cost = Some(p.cost);
+                                candidate = Some((k.f, k.cx, k.cy, p.cost));
+                                closed_profile = Some(p);
+                            }
                         }
                     },
                 }
@@ -595,30 +593,29 @@ pub fn initialize(
         Some(g) => (0.5 * g, 2.0 * g, 13),
         None => (1.0, 1000.0, 41),
     };
-    // The closed form must also be a local minimum of the profile at the
-    // scale of its own error: J at 0.5, 0.7, 1.4 and 2 × f, with its centre
-    // and with the centre at (0, 0) (where the search starts), on the subset.
-    if let Some((f, cx, cy, _)) = candidate.filter(|_| options.refine_start) {
+    // The refined closed form must also be the lowest basin at the scale of
+    // its own error: J at 0.5, 0.7, 1.4 and 2 × its f (its centre) and at its
+    // f with the centre at (0, 0), on the subset, none below half its cost.
+    if let Some((f, cx, cy, here)) = candidate.filter(|_| options.refine_start) {
         let subset = problem.subset(SEARCH_IMAGES);
-        let here = subset.cost_or_inf(f, cx, cy);
+        let scale = subset.data.point_count() as f64 / problem.data.point_count() as f64;
+        let here = here * scale;
         let mut best = (f, (cx, cy), f64::INFINITY);
-        for &k in &NEIGHBOUR_FACTORS {
-            for (x, y) in [(cx, cy), (0.0, 0.0)] {
-                let c = subset.cost_or_inf(k * f, x, y);
-                if c < best.2 {
-                    best = (k * f, (x, y), c);
-                }
+        let trials = NEIGHBOUR_FACTORS
+            .iter()
+            .map(|k| (k * f, cx, cy))
+            .chain([(f, 0.0, 0.0)]);
+        for (ft, x, y) in trials {
+            let c = subset.cost_or_inf(ft, x, y);
+            if c < best.2 {
+                best = (ft, (x, y), c);
             }
-        }
-        let at_origin = subset.cost_or_inf(f, 0.0, 0.0);
-        if at_origin < best.2 {
-            best = (f, (0.0, 0.0), at_origin);
         }
         if best.2 < 0.5 * here {
             rejection = Some(format!(
-                "closed-form f = {f:.4} mm, centre ({cx:.3}, {cy:.3}) mm is not a minimum of the \
-                 template-plane error: f = {:.4} mm, centre ({:.3}, {:.3}) mm lowers it from \
-                 {here:.4e} to {:.4e} mm²",
+                "closed-form start f = {f:.4} mm, centre ({cx:.3}, {cy:.3}) mm is not the lowest \
+                 basin of the template-plane error: f = {:.4} mm, centre ({:.3}, {:.3}) mm lowers \
+                 it from {here:.4e} to {:.4e} mm²",
                 best.0, best.1 .0, best.1 .1, best.2
             ));
             candidate = None;
@@ -683,7 +680,7 @@ pub fn initialize(
     };
     let start = match start {
         Some(p) => p,
-        None => problem.profile(f, cx, cy)?,
+        None => problem.profile(f, cx, cy, Precision::Fine)?,
     };
     let mut focal_sensitivity = f64::NAN;
     if route != InitRoute::ClosedForm {

@@ -34,7 +34,8 @@
 //! (analytic Jacobian for straightness, central differences for homography
 //! consistency).
 
-use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+use nalgebra::{DMatrix, DVector, Vector2};
+use psdcal_solver::{solver, Problem, ResidualTerm, SolverOptions, Step, Termination};
 
 use crate::homography::{fit_homography, normalizing_transform, HomographyOptions};
 use crate::{CalibError, CalibrationData};
@@ -253,87 +254,106 @@ pub(crate) struct Minimum {
     pub termination: PreliminaryTermination,
 }
 
-/// Levenberg–Marquardt (Marquardt's diagonal damping) from `u = 0`.
+/// A [`TwoParameterCost`] as a problem for the one solver: two global
+/// parameters, no blocks, one-row residuals; steps that make the correction
+/// non-monotone over the data are rejected.
+struct TwoParameterProblem<'a> {
+    cost: &'a dyn TwoParameterCost,
+    evaluations: std::cell::Cell<usize>,
+}
+
+impl Problem for TwoParameterProblem<'_> {
+    type State = [f64; 2];
+    type Error = CalibError;
+
+    fn global_len(&self) -> usize {
+        2
+    }
+
+    fn block_count(&self) -> usize {
+        0
+    }
+
+    fn evaluate(
+        &self,
+        u: &[f64; 2],
+        jacobians: bool,
+        visit: &mut dyn FnMut(&ResidualTerm<'_>),
+    ) -> Result<(), CalibError> {
+        let r = self.cost.residuals(*u)?;
+        self.evaluations.set(self.evaluations.get() + 1);
+        if jacobians {
+            let j = self.cost.jacobian(*u, &r)?;
+            self.evaluations.set(self.evaluations.get() + 4);
+            if j.iter().any(|v| !v.is_finite()) {
+                return Err(CalibError::Numerical {
+                    stage: "preliminary correction",
+                    reason: "non-finite Jacobian".into(),
+                });
+            }
+            for i in 0..r.len() {
+                visit(&ResidualTerm {
+                    r: &[r[i]],
+                    a: &[j[(i, 0)], j[(i, 1)]],
+                    block: None,
+                });
+            }
+        } else {
+            for v in r.iter() {
+                visit(&ResidualTerm {
+                    r: std::slice::from_ref(v),
+                    a: &[],
+                    block: None,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn apply_step(&self, u: &[f64; 2], step: &Step) -> Option<[f64; 2]> {
+        let trial = [u[0] + step.da[0], u[1] + step.da[1]];
+        is_monotone(trial).then_some(trial)
+    }
+}
+
+/// Levenberg–Marquardt from `u = 0` with the one solver.
 pub(crate) fn minimise(
     cost: &dyn TwoParameterCost,
     max_iterations: usize,
 ) -> Result<Minimum, CalibError> {
-    let mut u = [0.0, 0.0];
-    let mut r = cost.residuals(u)?;
-    let mut evaluations = 1;
-    let mut c = r.norm_squared();
-    let cost_before = c;
-    if !c.is_finite() {
+    let problem = TwoParameterProblem {
+        cost,
+        evaluations: std::cell::Cell::new(0),
+    };
+    let cost_before = solver::cost(&problem, &[0.0, 0.0], None)?;
+    if !cost_before.is_finite() {
         return Err(CalibError::Numerical {
             stage: "preliminary correction",
             reason: "non-finite cost at k = 0".into(),
         });
     }
-    let mut lambda = 1e-3;
-    let mut iterations = 0;
-    let mut termination = PreliminaryTermination::MaxIterations;
-    'outer: while iterations < max_iterations {
-        if c <= 1e-30 {
-            termination = PreliminaryTermination::Converged;
-            break;
-        }
-        let j = cost.jacobian(u, &r)?;
-        let g = j.transpose() * &r;
-        let h = j.transpose() * &j;
-        let h = Matrix2::new(h[(0, 0)], h[(0, 1)], h[(1, 0)], h[(1, 1)]);
-        let g = Vector2::new(g[0], g[1]);
-        if !(h.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
-            return Err(CalibError::Numerical {
-                stage: "preliminary correction",
-                reason: "non-finite Jacobian".into(),
-            });
-        }
-        let floor = 1e-12 * (h[(0, 0)] + h[(1, 1)]).max(1e-300);
-        loop {
-            let damped = Matrix2::new(
-                h[(0, 0)] * (1.0 + lambda) + floor,
-                h[(0, 1)],
-                h[(1, 0)],
-                h[(1, 1)] * (1.0 + lambda) + floor,
-            );
-            let step = damped.try_inverse().map(|inv| -(inv * g));
-            if let Some(step) = step.filter(|s| s.iter().all(|v| v.is_finite())) {
-                let trial = [u[0] + step.x, u[1] + step.y];
-                if is_monotone(trial) {
-                    evaluations += 1;
-                    if let Ok(rt) = cost.residuals(trial) {
-                        let ct = rt.norm_squared();
-                        if ct.is_finite() && ct < c {
-                            let decrease = c - ct;
-                            u = trial;
-                            r = rt;
-                            c = ct;
-                            iterations += 1;
-                            lambda = (lambda / 10.0).max(1e-12);
-                            let small_step = step.norm() <= 1e-12 * (1.0 + u[0].abs() + u[1].abs());
-                            if decrease <= 1e-14 * (c + decrease) || small_step {
-                                termination = PreliminaryTermination::Converged;
-                                break 'outer;
-                            }
-                            continue 'outer;
-                        }
-                    }
-                }
-            }
-            lambda *= 10.0;
-            if lambda > 1e12 {
-                // No descent even for tiny steps: at a minimum to rounding.
-                termination = PreliminaryTermination::Stalled;
-                break 'outer;
-            }
-        }
-    }
+    let settings = SolverOptions {
+        // Accepted and rejected steps both count for the solver.
+        max_iterations: 3 * max_iterations,
+        cost_tolerance: 1e-14,
+        step_tolerance: 1e-12,
+        initial_lambda: 1e-3,
+        exact_cost: 1e-30,
+        step_floor: 0.0,
+        robust: None,
+    };
+    let solution = solver::solve(&problem, [0.0, 0.0], &settings)?;
+    let termination = match solution.report.termination {
+        Termination::MaxIterations => PreliminaryTermination::MaxIterations,
+        Termination::DampingSaturated => PreliminaryTermination::Stalled,
+        _ => PreliminaryTermination::Converged,
+    };
     Ok(Minimum {
-        u,
+        u: solution.state,
         cost_before,
-        cost_after: c,
-        iterations,
-        evaluations,
+        cost_after: solution.cost,
+        iterations: solution.report.accepted,
+        evaluations: problem.evaluations.get(),
         termination,
     })
 }

@@ -240,12 +240,23 @@ impl<'a> CalibrationProblem<'a> {
         i: usize,
         k: usize,
     ) -> Result<Vector2<f64>, ModelError> {
+        self.residual_using(state, i, k, &state.poses[i].rotation())
+    }
+
+    /// [`Self::residual`] with image `i`'s rotation matrix computed once.
+    fn residual_using(
+        &self,
+        state: &FitState,
+        i: usize,
+        k: usize,
+        rotation: &nalgebra::Matrix3<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
         let obs = &self.data.images[i].points[k];
         let xy = self.data.template[obs.led];
         let (m, _) = self.measured(&state.model, i, k)?;
         let pose = &state.poses[i];
         Ok(match self.cost {
-            CostKind::Template => state.model.back_project(pose, &m)? - xy,
+            CostKind::Template => state.model.back_project_using(rotation, &pose.t, &m)? - xy,
             CostKind::Image => state.model.project(pose, &xy)? - m,
         })
     }
@@ -319,6 +330,7 @@ impl Problem for CalibrationProblem<'_> {
         let mut a = vec![0.0; 2 * p];
         for (i, image) in self.data.images.iter().enumerate() {
             let rotation = jacobians.then(|| state.poses[i].rotation_jacobian());
+            let plain_rotation = state.poses[i].rotation();
             for k in 0..image.points.len() {
                 let w = self.weights.map(|w| *w.get(i, k));
                 if let Some(rotation) = &rotation {
@@ -340,7 +352,7 @@ impl Problem for CalibrationProblem<'_> {
                     });
                 } else {
                     let mut r = self
-                        .residual(state, i, k)
+                        .residual_using(state, i, k, &plain_rotation)
                         .map_err(|e| self.point_error(i, k, e))?;
                     if let Some(w) = w {
                         r = w * r;

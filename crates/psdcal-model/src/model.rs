@@ -21,6 +21,8 @@
 //! step halving, to 1e-12 mm, as for [`crate::SensorModel::distort`]; it fails
 //! with a typed error where the map folds (`det ≤ 0`) or does not converge.
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix2, Vector2};
 
 use crate::distortion::{INVERSE_MAX_ITERATIONS, INVERSE_TOLERANCE_MM};
@@ -34,12 +36,12 @@ use crate::{ModelError, PsdGeometry};
 #[derive(Debug, Clone)]
 pub struct Model {
     gains: Option<Gains>,
-    stages: Vec<Box<dyn Stage>>,
-    pinhole: Pinhole,
-    info: Vec<ParameterInfo>,
+    stages: Arc<[Box<dyn Stage>]>,
+    pinhole: Arc<Pinhole>,
+    info: Arc<[ParameterInfo]>,
     values: Vec<f64>,
     /// Per distortion stage, the flat index of each of its parameters.
-    columns: Vec<Vec<usize>>,
+    columns: Arc<[Vec<usize>]>,
     pinhole_columns: [usize; 4],
     gain_columns: Option<[usize; 3]>,
     /// Per distortion stage, its block gathered from `values`.
@@ -150,10 +152,10 @@ impl Model {
                 .map(|s| vec![0.0; s.parameters().len()])
                 .collect(),
             gains,
-            stages,
-            pinhole,
-            info,
-            columns,
+            stages: stages.into(),
+            pinhole: Arc::new(pinhole),
+            info: info.into(),
+            columns: columns.into(),
             pinhole_columns,
             gain_columns,
         };
@@ -199,14 +201,14 @@ impl Model {
             .filter(|(p, _)| gains.is_some() || !GAIN_NAMES.contains(&p.name.as_str()))
             .map(|(p, v)| (p.name.as_str(), *v))
             .collect();
-        Self::new(self.stages.clone(), gains, &values).unwrap_or_else(|_| unreachable!())
+        Self::new(self.stages.to_vec(), gains, &values).unwrap_or_else(|_| unreachable!())
     }
 
     /// A copy with `stage` inserted before the distortion stage at `position`
     /// (0: first, acting on the measured point); its parameters keep their
     /// neutral values unless set later.
     pub fn with_stage(&self, position: usize, stage: Box<dyn Stage>) -> Result<Self, ModelError> {
-        let mut stages = self.stages.clone();
+        let mut stages = self.stages.to_vec();
         stages.insert(position.min(stages.len()), stage);
         let values: Vec<(&str, f64)> = self
             .info
@@ -336,7 +338,7 @@ impl Model {
     }
 
     fn gather(&mut self) {
-        for (block, cols) in self.blocks.iter_mut().zip(&self.columns) {
+        for (block, cols) in self.blocks.iter_mut().zip(self.columns.iter()) {
             for (b, c) in block.iter_mut().zip(cols) {
                 *b = self.values[*c];
             }

@@ -15,12 +15,12 @@
 //! `∂m/∂θ = −R_m⁻¹ ∂ray/∂θ`, `∂m/∂pose = R_m⁻¹ ∂n/∂pose`,
 //! `∂m/∂P_t = R_m⁻¹ ∂n/∂P_t`.
 
-use nalgebra::{Matrix2, Matrix2x3, SMatrix, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, SMatrix, Vector2, Vector3};
 
 use crate::camera::MIN_DEPTH_MM;
 use crate::model::{ChainJacobian, Model};
 use crate::pose::{Pose, RotationJacobian, N_POSE};
-use crate::projection::plane_intersection_with_jacobians;
+use crate::projection::{intersect_template_plane, plane_intersection_with_jacobians};
 use crate::ModelError;
 
 /// Jacobians of a point computed through the chain with a pose. The flat
@@ -41,9 +41,19 @@ impl Model {
         sensor_from_template: &Pose,
         measured: &Vector2<f64>,
     ) -> Result<Vector2<f64>, ModelError> {
-        let ab = self.ray(measured);
-        let rotation = sensor_from_template.rotation_jacobian();
-        plane_intersection_with_jacobians(&rotation, &sensor_from_template.t, &ab).map(|r| r.0)
+        let rotation = sensor_from_template.rotation();
+        self.back_project_using(&rotation, &sensor_from_template.t, measured)
+    }
+
+    /// [`Self::back_project`] with the pose's rotation matrix `R` computed
+    /// once (for many points of one image).
+    pub fn back_project_using(
+        &self,
+        rotation: &Matrix3<f64>,
+        t: &Vector3<f64>,
+        measured: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
+        intersect_template_plane(rotation, t, &self.ray(measured)).map(|r| r.0)
     }
 
     /// Back-projection with its Jacobians: `jac.wrt_params` becomes

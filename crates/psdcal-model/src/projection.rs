@@ -236,7 +236,7 @@ pub fn plane_intersection_with_jacobians(
 /// Intersects the ray `s (a, b, 1)` (sensor frame) with the template plane
 /// `Z_t = 0` of pose `(rot, t)`; returns the template `(X, Y)`, the ray
 /// parameter `s` (the depth) and `q = r3·n`.
-fn intersect_template_plane(
+pub(crate) fn intersect_template_plane(
     rot: &Matrix3<f64>,
     t: &Vector3<f64>,
     ab: &Vector2<f64>,
