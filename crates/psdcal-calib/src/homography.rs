@@ -203,10 +203,18 @@ pub(crate) fn null_vector(a: &DMatrix<f64>, stage: &'static str) -> Result<NullV
         });
     }
     let n = a.ncols();
-    let rows = a.nrows().max(n);
-    let mut padded = DMatrix::zeros(rows, n);
-    padded.view_mut((0, 0), (a.nrows(), n)).copy_from(a);
-    let svd = nalgebra::linalg::SVD::try_new(padded, false, true, f64::EPSILON, SVD_MAX_ITERATIONS)
+    // A tall system is first reduced to its n × n triangular factor R
+    // (A = QR): R has A's singular values and right singular vectors, and its
+    // SVD is much cheaper. A wide one (8 × 9) is padded with zero rows, since
+    // the thin SVD of a wide matrix drops the null vector.
+    let square = if a.nrows() > n {
+        a.clone().qr().r()
+    } else {
+        let mut padded = DMatrix::zeros(n, n);
+        padded.view_mut((0, 0), (a.nrows(), n)).copy_from(a);
+        padded
+    };
+    let svd = nalgebra::linalg::SVD::try_new(square, false, true, f64::EPSILON, SVD_MAX_ITERATIONS)
         .ok_or_else(|| CalibError::Numerical {
             stage,
             reason: "SVD did not converge".into(),
@@ -418,6 +426,56 @@ pub fn fit_homography(
         singular_values: normalized_solution.singular_values,
         conditioning,
     })
+}
+
+/// The normalised DLT homography of an image whose points have already
+/// passed [`fit_homography`]'s checks, for inner loops (the preliminary
+/// correction's consistency cost evaluates it dozens of times per image).
+/// The same system (P17)–(P18), (P36)–(P38); its null vector is found by
+/// inverse iteration on the triangular factor `R` of `A = QR` (`RᵀR = AᵀA`)
+/// instead of an SVD: each step `x ← (RᵀR)⁻¹ x` shrinks the other directions
+/// by `(σ_min/σ_k)²`.
+pub(crate) fn fast_homography(
+    template: &[Vector2<f64>],
+    image: &[Vector2<f64>],
+) -> Result<Homography, CalibError> {
+    check_pairs(template, image, 4)?;
+    let t_p = normalizing_transform(template)?;
+    let t_q = normalizing_transform(image)?;
+    let a = dlt_system(&transform_points(&t_p, template), &transform_points(&t_q, image));
+    let r = a.qr().r();
+    let n = r.ncols();
+    let scale = r.diagonal().amax().max(f64::MIN_POSITIVE);
+    let mut r = r;
+    for k in 0..n {
+        // A zero pivot (an exact null direction) would stop the solves.
+        if r[(k, k)].abs() < 1e-14 * scale {
+            r[(k, k)] = 1e-14 * scale;
+        }
+    }
+    let mut x = DVector::from_element(n, 1.0 / (n as f64).sqrt());
+    for _ in 0..4 {
+        let y = r
+            .tr_solve_upper_triangular(&x)
+            .and_then(|y| r.solve_upper_triangular(&y))
+            .ok_or_else(|| CalibError::Numerical {
+                stage: "homography",
+                reason: "singular triangular factor".into(),
+            })?;
+        let norm = y.norm();
+        if !(norm.is_finite() && norm > 0.0) {
+            return Err(CalibError::Numerical {
+                stage: "homography",
+                reason: "inverse iteration failed".into(),
+            });
+        }
+        x = y / norm;
+    }
+    let t_q_inv = t_q.try_inverse().ok_or_else(|| CalibError::Numerical {
+        stage: "homography",
+        reason: "image normalisation is singular".into(),
+    })?;
+    Homography::from_matrix(t_q_inv * matrix_of(&x) * t_p)
 }
 
 fn rename_degenerate(e: CalibError, what: &str) -> CalibError {

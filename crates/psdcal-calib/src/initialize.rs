@@ -93,7 +93,7 @@ pub const SEARCH_IMAGES: usize = 24;
 const PROFILE_ITERATIONS: usize = 40;
 /// Solver iterations and relative cost tolerance of a coarse evaluation of
 /// `J` (comparisons with a factor-two margin, the search's grid).
-const COARSE_ITERATIONS: usize = 12;
+const COARSE_ITERATIONS: usize = 10;
 const COARSE_TOLERANCE: f64 = 1e-4;
 /// Solver iterations of the refined closed form.
 const REFINED_ITERATIONS: usize = 100;
@@ -333,8 +333,8 @@ impl Problem {
         self.minimise(f, cx, cy, &["k1"], &settings)
     }
 
-    /// The closed form refined: `f, cx, cy, k1` and the poses from the plain
-    /// start at `(f, cx, cy)` (`k2` stays the preliminary one).
+    /// The closed form refined: `f, cx, cy, k1, k2` (the parameters the start
+    /// provides) and the poses, from the plain start at `(f, cx, cy)`.
     fn refined(&self, f: f64, cx: f64, cy: f64) -> Result<Profile, CalibError> {
         let settings = SolverOptions {
             max_iterations: REFINED_ITERATIONS,
@@ -345,7 +345,7 @@ impl Problem {
             step_floor: 1e-3 * self.floor,
             robust: None,
         };
-        self.minimise(f, cx, cy, &["f", "cx", "cy", "k1"], &settings)
+        self.minimise(f, cx, cy, &["f", "cx", "cy", "k1", "k2"], &settings)
     }
 
     /// The same problem on at most `max_images` images spread evenly over

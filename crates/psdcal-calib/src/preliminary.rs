@@ -37,7 +37,7 @@
 use nalgebra::{DMatrix, DVector, Vector2};
 use psdcal_solver::{solver, Problem, ResidualTerm, SolverOptions, Step, Termination};
 
-use crate::homography::{fit_homography, normalizing_transform, HomographyOptions};
+use crate::homography::{fast_homography, normalizing_transform};
 use crate::{CalibError, CalibrationData};
 
 /// Which preliminary correction to run.
@@ -384,16 +384,15 @@ impl TwoParameterCost for Consistency {
         let n: usize = self.images.iter().map(|(t, _)| 2 * t.len()).sum();
         let mut r = DVector::zeros(n);
         let mut row = 0;
-        let options = HomographyOptions { normalize: true };
         for (template, measured) in &self.images {
             let corrected: Vec<_> = measured
                 .iter()
                 .map(|m| radial_correct(m, &self.centre, k1, k2))
                 .collect();
-            let fit = fit_homography(template, &corrected, &options)?;
+            let homography = fast_homography(template, &corrected)?;
             let s = normalizing_transform(&corrected)?[(0, 0)];
             for (p, q) in template.iter().zip(&corrected) {
-                let e = (fit.homography.apply(p)? - q) * s;
+                let e = (homography.apply(p)? - q) * s;
                 r[row] = e.x;
                 r[row + 1] = e.y;
                 row += 2;
