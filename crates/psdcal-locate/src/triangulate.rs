@@ -279,14 +279,20 @@ pub fn triangulate(
     Ok(t)
 }
 
-/// Solver options of the refinement: the iteration budget, and tolerances
-/// tight enough that the solver stops on a negligible step or when no lower
-/// cost exists to machine precision.
+/// Solver options of the refinement: the iteration budget, tolerances tight
+/// enough that the solver stops on a negligible step or when no lower cost
+/// exists to machine precision, and a negligible starting damping. The
+/// problem is nearly linear near the nearest point, so the first step is
+/// (almost) Gauss–Newton's and lands on the minimum to rounding; a damped
+/// first step would leave the rest of the way to steps whose cost decrease
+/// is below the cost's rounding (residuals of 1e-8 rad are rounded at
+/// 1e-16), which are rejected.
 fn solver_options() -> SolverOptions {
     SolverOptions {
         max_iterations: MAX_ITERATIONS,
         cost_tolerance: 0.0,
         step_tolerance: 1e-12,
+        initial_lambda: 1e-12,
         ..SolverOptions::default()
     }
 }
