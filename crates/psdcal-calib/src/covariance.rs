@@ -15,28 +15,30 @@
 //! and pairs whose correlation exceeds 0.98 in magnitude (p1/p2 with cx/cy,
 //! k1 with l1 when the centres nearly coincide), are reported as warnings.
 
-use nalgebra::{DMatrix, Matrix6};
+use nalgebra::Matrix6;
+use psdcal_model::ParameterCovariance;
 
 use crate::data::CalibrationData;
 use crate::refine::{CalibrationProblem, FitState, RefineOptions, Refined};
 use crate::CalibError;
 use psdcal_solver::solver;
 
-pub use psdcal_model::stages::gains::GAIN_NAMES;
+use psdcal_model::stages::gains::GAIN_NAMES;
 
 /// Correlation magnitude above which a pair of parameters is flagged.
 pub const CORRELATION_WARNING: f64 = 0.98;
 /// Variance inflation above which a parameter is flagged as poorly determined.
 pub const INFLATION_WARNING: f64 = 1e4;
 
-/// The covariance of a calibration's estimate.
+/// The covariance of a calibration's estimate: psdcal-model's
+/// [`ParameterCovariance`] of the freed parameters (dereferenced to, for
+/// `std`, `correlation`, `names`, …) with what only a fit has.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Covariance {
-    /// Names of every row of `matrix`: the freed parameters in the order
-    /// of [`RefineOptions::free_names`] (standard ones, gains, other stages').
-    pub names: Vec<String>,
-    /// Their covariance (σ² S⁻¹), in their units squared.
-    pub matrix: DMatrix<f64>,
+    /// The freed parameters, in the order of [`RefineOptions::free_names`]
+    /// (standard ones, gains, other stages'), and their covariance σ² S⁻¹
+    /// in their units squared.
+    pub parameters: ParameterCovariance,
     /// Per image, the 6 × 6 covariance of `(rvec, t)`.
     pub pose_blocks: Vec<Matrix6<f64>>,
     /// The residual variance σ² per coordinate (cost units: mm²).
@@ -47,14 +49,14 @@ pub struct Covariance {
     pub warnings: Vec<String>,
 }
 
-impl Covariance {
-    /// Standard deviation of an estimated parameter by name (`None` when it
-    /// was fixed).
-    pub fn std(&self, name: impl AsRef<str>) -> Option<f64> {
-        let k = self.names.iter().position(|q| q == name.as_ref())?;
-        Some(self.matrix[(k, k)].max(0.0).sqrt())
+impl std::ops::Deref for Covariance {
+    type Target = ParameterCovariance;
+    fn deref(&self) -> &ParameterCovariance {
+        &self.parameters
     }
+}
 
+impl Covariance {
     /// Standard deviations of the relative gains `(g_x2, g_y1, g_y2)`, when
     /// they were estimated.
     pub fn gain_std(&self) -> Option<[f64; 3]> {
@@ -62,19 +64,6 @@ impl Covariance {
         sd.iter()
             .all(Option::is_some)
             .then(|| sd.map(|s| s.unwrap_or(0.0)))
-    }
-
-    /// Correlation matrix of the estimated parameters.
-    pub fn correlation(&self) -> DMatrix<f64> {
-        let n = self.matrix.nrows();
-        DMatrix::from_fn(n, n, |i, j| {
-            let d = (self.matrix[(i, i)] * self.matrix[(j, j)]).sqrt();
-            if d > 0.0 {
-                self.matrix[(i, j)] / d
-            } else {
-                0.0
-            }
-        })
     }
 }
 
@@ -127,17 +116,15 @@ pub fn covariance(
             }
         }
     }
+    // S⁻¹ is symmetric up to rounding: store it exactly symmetric.
     let matrix = s_inv * sigma2;
-    let cov = Covariance {
-        names: names.clone(),
-        matrix,
-        pose_blocks: pose_inv.into_iter().map(|b| b * sigma2).collect(),
-        sigma2,
-        dof,
-        warnings,
-    };
-    let corr = cov.correlation();
-    let mut warnings = cov.warnings.clone();
+    let matrix = (&matrix + matrix.transpose()) * 0.5;
+    let estimated =
+        ParameterCovariance::new(names.clone(), matrix).map_err(|e| CalibError::Numerical {
+            stage: "covariance",
+            reason: e.to_string(),
+        })?;
+    let corr = estimated.correlation();
     for i in 0..names.len() {
         for j in (i + 1)..names.len() {
             if corr[(i, j)].abs() > CORRELATION_WARNING {
@@ -150,5 +137,12 @@ pub fn covariance(
             }
         }
     }
-    Ok(Covariance { warnings, ..cov })
+    let cov = Covariance {
+        parameters: estimated,
+        pose_blocks: pose_inv.into_iter().map(|b| b * sigma2).collect(),
+        sigma2,
+        dof,
+        warnings,
+    };
+    Ok(cov)
 }

@@ -28,7 +28,7 @@ pub mod refine;
 pub mod report;
 pub mod weighting;
 
-pub use covariance::{covariance, Covariance, GAIN_NAMES};
+pub use covariance::{covariance, Covariance};
 pub use electrical::{equal_current_gains, GainEstimate};
 pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
 pub use psdcal_solver::{self as solver, normal_equations};

@@ -33,7 +33,6 @@ use nalgebra::{Matrix2, Matrix2x3, SMatrix, Vector2};
 use psdcal_model::stages::gains::GAIN_NAMES;
 use psdcal_model::stages::Gains;
 use psdcal_model::{ChainJacobian, Model, ModelError, Param, Pose, SensorModel};
-use serde::Serialize;
 
 use crate::data::CalibrationData;
 use crate::weighting::{NoiseModel, PointWeights};
@@ -46,15 +45,9 @@ pub use psdcal_solver::solver::{RobustLoss, SolverReport as RefineReport, Termin
 /// Mean squared residual per point below which the fit is exact (RMS 1e-10).
 const EXACT_FIT_MS: f64 = 1e-20;
 
-/// Which error the refinement minimises.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CostKind {
-    /// Template-plane error (P29), mm on the template: the paper's choice.
-    Template,
-    /// Image-plane reprojection error, mm on the sensor.
-    Image,
-}
+/// Which error the refinement minimises (defined once, in psdcal-model: the
+/// same enum is calibration.json's `fit.cost`).
+pub use psdcal_model::CostKind;
 
 /// Options of [`refine`].
 #[derive(Debug, Clone, PartialEq)]

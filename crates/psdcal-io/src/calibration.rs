@@ -66,8 +66,9 @@ pub const CALIBRATION_FORMAT: &str = "psdcal-calibration";
 /// The newest calibration.json version this crate reads, and the one a new
 /// record ([`Calibration::from_model`]) is written in.
 pub const CALIBRATION_VERSION: u32 = 2;
-/// Names of the estimated relative gains in `std` and `covariance`.
-pub const GAIN_NAMES: [&str; 3] = ["g_x2", "g_y1", "g_y2"];
+/// Names of the estimated relative gains in `std` and `covariance` (the
+/// gains stage's parameter names, defined in psdcal-model).
+pub use psdcal_model::stages::gains::GAIN_NAMES;
 
 /// A calibration result, as stored in calibration.json.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -25,10 +25,7 @@ use crate::observations::Observations;
 use crate::template::Template;
 use crate::warning::Warning;
 
-/// Fewest points an image needs (a homography has 8 degrees of freedom).
-pub const MIN_POINTS_PER_IMAGE: usize = 4;
-/// Fewest images a calibration needs (docs/model.md §4).
-pub const MIN_IMAGES: usize = 3;
+pub use psdcal_model::fit::{MIN_IMAGES, MIN_POINTS_PER_IMAGE};
 
 /// How to validate a data set.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -71,5 +71,5 @@ pub use sensor::{
 };
 pub use triangulate::{triangulate, Triangulation, WorldRay};
 pub use uncertainty::{
-    point_noise_covariance, sigmas_and_correlation, Estimated, ParameterCovariance, GAIN_NAMES,
+    point_noise_covariance, propagate, sigmas_and_correlation, CovarianceError, ParameterCovariance,
 };

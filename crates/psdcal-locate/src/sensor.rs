@@ -13,17 +13,17 @@
 //! Σ_P  = (∂P/∂(a,b)) Σ_ab (∂P/∂(a,b))ᵀ   3×3, sensor frame, mm²
 //! ```
 
-use nalgebra::{Matrix2, Matrix2x3, Matrix3, Vector2};
+use nalgebra::{DMatrix, Matrix2, Matrix2x3, Matrix3, Vector2};
 use psdcal_model::sensor::{
     impact_point_gain_jacobian, impact_point_with_gains, is_on_active_area,
 };
-use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry, SensorModel};
+use psdcal_model::{Amplitudes, ChannelGains, Model, Param, PsdGeometry, SensorModel};
 
 use crate::aoa::{alpha_wrt_ray, angle_of_arrival_with_jacobians, AngleOfArrival, AoaJacobians};
 use crate::caution::Caution;
 use crate::error::{finite, LocateError};
 use crate::plane::{intersect_plane, Plane, PlaneIntersection};
-use crate::uncertainty::{point_noise_covariance, ParameterCovariance};
+use crate::uncertainty::{point_noise_covariance, propagate, ParameterCovariance};
 
 /// What a sensor measured for one emitter.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,7 +88,9 @@ pub struct CalibratedSensor {
     pub geometry: PsdGeometry,
     /// Relative channel gains to divide out of amplitudes (`None`: balanced).
     pub gains: Option<ChannelGains>,
-    /// Covariance of the calibration's estimated quantities.
+    /// Covariance of the calibration's estimated quantities, over names of
+    /// [`Self::chain`]'s parameters (an unknown name makes `aoa` fail with
+    /// `invalid_covariance`).
     pub covariance: ParameterCovariance,
 }
 
@@ -200,6 +202,17 @@ impl CalibratedSensor {
         self
     }
 
+    /// The sensor's model as a chain of stages (psdcal-model's `Model`: the
+    /// standard chain and its gains stage, unit gains when the sensor has
+    /// none): the flat parameter names its covariance is resolved against.
+    pub fn chain(&self) -> Model {
+        Model::standard_with_gains(
+            &self.model,
+            self.geometry,
+            &self.gains.unwrap_or(ChannelGains::UNIT),
+        )
+    }
+
     /// The measured impact point of a measurement.
     pub fn measured_point(&self, measurement: &Measurement) -> Result<MeasuredPoint, LocateError> {
         match measurement {
@@ -247,9 +260,25 @@ impl CalibratedSensor {
         let measured = self.measured_point(measurement)?;
         let (aoa, jacobians) = angle_of_arrival_with_jacobians(&self.model, &measured.point)?;
         let wrt_gains = measured.wrt_gains.map(|g| jacobians.ray_wrt_measured * g);
-        let ray_covariance_calibration = self
-            .covariance
-            .propagate(&jacobians.ray_wrt_model, wrt_gains.as_ref());
+        let ray_covariance_calibration = if self.covariance.is_empty() {
+            Matrix2::zeros()
+        } else {
+            // ∂(a, b)/∂θ over the chain's flat parameters: the model's
+            // columns, and the gains' for amplitudes through gains.
+            let chain = self.chain();
+            let mut wrt_params = DMatrix::zeros(2, chain.len());
+            for (k, p) in Param::ALL.iter().enumerate() {
+                if let Some(c) = chain.index(p.name()) {
+                    wrt_params.set_column(c, &jacobians.ray_wrt_model.column(k));
+                }
+            }
+            if let (Some(g), Some(columns)) = (wrt_gains, chain.gain_columns()) {
+                for (k, c) in columns.into_iter().enumerate() {
+                    wrt_params.set_column(c, &g.column(k));
+                }
+            }
+            propagate(&self.covariance, &chain, &wrt_params)?
+        };
         let ray_covariance_measurement =
             point_noise_covariance(&jacobians.ray_wrt_measured, options.point_sigma_mm);
         Ok(AoaEstimate {

@@ -9,14 +9,20 @@
 //! 1. Start: the point nearest to all rays (sum of squared perpendicular
 //!    distances), `[Σ (I − u_i u_iᵀ)] P = Σ (I − u_i u_iᵀ) o_i` with
 //!    `u_i = R_i (a_i, b_i, 1)/‖·‖`.
-//! 2. Refinement (Gauss–Newton, exact for consistent rays): minimise
+//! 2. Refinement, by psdcal's one least-squares solver
+//!    ([`psdcal_solver::solve`], Levenberg–Marquardt; the global block is
+//!    the point `P`, there are no pose blocks): minimise
 //!    `Σ (h_i(P) − z_i)ᵀ W_i (h_i(P) − z_i)` where
 //!    `h_i(P) = (x/z, y/z)` of `P_s = R_iᵀ (P − o_i)` is the ray through `P`
 //!    as sensor `i` would measure it; `W_i = C_i⁻¹` when every `C_i` is
 //!    positive definite (maximum likelihood for Gaussian ray noise: each
 //!    perpendicular miss is weighted by its angular covariance and range),
 //!    otherwise, or when [`LocateOptions::weight_rays`] is off, `W_i = I`
-//!    (unweighted angular misses).
+//!    (unweighted angular misses). Each miss is whitened, `r_i = L_i (h_i(P)
+//!    − z_i)` with `L_iᵀ L_i = W_i` (`L_i = G_i⁻¹` for `C_i = G_i G_iᵀ`), so
+//!    the solver's cost `Σ ‖r_i‖²` is the weighted one. A point at a depth
+//!    below [`MIN_DEPTH_MM`] in front of a sensor is outside the problem's
+//!    domain (the step is rejected).
 //! 3. Covariance, to first order (the sandwich form, valid for any `W_i`):
 //!
 //! ```text
@@ -33,6 +39,7 @@
 
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x2, Vector2, Vector3};
 use psdcal_model::Pose;
+use psdcal_solver::{linearize, solve, Problem, ResidualTerm, SolverOptions, Step};
 
 use crate::caution::Caution;
 use crate::error::{exceeds, LocateError};
@@ -42,7 +49,7 @@ use crate::sensor::LocateOptions;
 pub const PARALLEL_RAYS_RAD: f64 = 1e-9;
 /// Smallest depth accepted in front of a sensor, mm.
 pub const MIN_DEPTH_MM: f64 = 1e-9;
-/// Iteration budget of the refinement.
+/// Iteration budget of the refinement (solver iterations, accepted or not).
 pub const MAX_ITERATIONS: usize = 100;
 
 /// One sensor's ray in the world.
@@ -75,7 +82,7 @@ pub struct Triangulation {
     pub max_ray_angle: f64,
     /// Whether the rays were weighted by their inverse covariances.
     pub weighted: bool,
-    /// Gauss–Newton iterations.
+    /// Iterations of the solver (accepted and rejected steps).
     pub iterations: usize,
     /// Reasons for care.
     pub cautions: Vec<Caution>,
@@ -197,74 +204,39 @@ pub fn triangulate(
     // 2. Weighted refinement.
     let weighted =
         options.weight_rays && rays.iter().all(|r| is_positive_definite(&r.covariance_ab));
-    let weights: Vec<Matrix2<f64>> = rays
+    let (weights, whitening): (Vec<Matrix2<f64>>, Vec<Matrix2<f64>>) = rays
         .iter()
         .map(|r| {
-            if weighted {
-                r.covariance_ab
-                    .try_inverse()
-                    .unwrap_or_else(Matrix2::identity)
-            } else {
-                Matrix2::identity()
+            let identity = (Matrix2::identity(), Matrix2::identity());
+            if !weighted {
+                return identity;
+            }
+            // C = G Gᵀ: W = C⁻¹ = G⁻ᵀ G⁻¹, whitening L = G⁻¹.
+            let w = r.covariance_ab.try_inverse();
+            let l = r.covariance_ab.cholesky().and_then(|c| c.l().try_inverse());
+            match (w, l) {
+                (Some(w), Some(l)) => (w, l),
+                _ => identity,
             }
         })
-        .collect();
-    let cost = |p: &Vector3<f64>| -> Option<f64> {
-        let mut c = 0.0;
-        for ((f, ray), w) in frames.iter().zip(rays).zip(&weights) {
-            if !exceeds(f.sensor_point(p).z, MIN_DEPTH_MM) {
-                return None;
-            }
-            let r = f.predict(p).0 - ray.ray_ab;
-            c += (r.transpose() * w * r)[(0, 0)];
-        }
-        Some(c)
+        .unzip();
+    let problem = RayIntersection {
+        frames: &frames,
+        rays,
+        whitening: &whitening,
     };
-    let mut current = cost(&p).ok_or_else(parallel)?;
-    let mut iterations = 0;
-    let mut converged = false;
-    while iterations < MAX_ITERATIONS {
-        iterations += 1;
-        let (h, g) = normal_equations(&frames, rays, &weights, &p);
-        let Some(h_inv) = h.try_inverse() else {
-            return Err(parallel());
-        };
-        let step = -(h_inv * g);
-        let scale = 1.0 + p.norm();
-        if !step.iter().all(|v| v.is_finite()) {
-            return Err(parallel());
-        }
-        if step.norm() <= 1e-15 * scale {
-            converged = true;
-            break;
-        }
-        let mut alpha = 1.0;
-        let mut accepted = false;
-        for _ in 0..60 {
-            let candidate = p + step * alpha;
-            if let Some(c) = cost(&candidate) {
-                if c <= current {
-                    p = candidate;
-                    current = c;
-                    accepted = true;
-                    break;
-                }
-            }
-            alpha *= 0.5;
-        }
-        // No decrease along a tiny step: the cost is at its rounding floor.
-        if !accepted || (step * alpha).norm() <= 1e-13 * scale {
-            converged = accepted || step.norm() <= 1e-7 * scale;
-            break;
-        }
-    }
-    if !converged {
+    let solution = solve(&problem, p, &solver_options()).map_err(|_| parallel())?;
+    let iterations = solution.report.iterations;
+    if !solution.report.termination.converged() {
         return Err(LocateError::NotConverged { iterations });
     }
+    p = solution.state;
     check_depths(rays, &frames, &p)?;
-    // 3. Covariance.
-    let (h, _) = normal_equations(&frames, rays, &weights, &p);
-    let h_inv = h.try_inverse().ok_or_else(parallel)?;
+    // 3. Covariance: H = Σ J_iᵀ W_i J_i from the solver's normal equations.
+    let h = linearize(&problem, &p, None).map_err(|_| parallel())?.u;
+    let h_inv = Matrix3::from_iterator(h.iter().copied())
+        .try_inverse()
+        .ok_or_else(parallel)?;
     let wrt_rays: Vec<Matrix3x2<f64>> = frames
         .iter()
         .zip(&weights)
@@ -307,21 +279,75 @@ pub fn triangulate(
     Ok(t)
 }
 
-fn normal_equations(
-    frames: &[Frame],
-    rays: &[WorldRay],
-    weights: &[Matrix2<f64>],
-    p: &Vector3<f64>,
-) -> (Matrix3<f64>, Vector3<f64>) {
-    let mut h = Matrix3::zeros();
-    let mut g = Vector3::zeros();
-    for ((f, ray), w) in frames.iter().zip(rays).zip(weights) {
-        let (pred, j) = f.predict(p);
-        let jt_w = j.transpose() * w;
-        h += jt_w * j;
-        g += jt_w * (pred - ray.ray_ab);
+/// Solver options of the refinement: the iteration budget, tolerances tight
+/// enough that the solver stops on a negligible step or when no lower cost
+/// exists to machine precision, and a negligible starting damping. The
+/// problem is nearly linear near the nearest point, so the first step is
+/// (almost) Gauss–Newton's and lands on the minimum to rounding; a damped
+/// first step would leave the rest of the way to steps whose cost decrease
+/// is below the cost's rounding (residuals of 1e-8 rad are rounded at
+/// 1e-16), which are rejected.
+fn solver_options() -> SolverOptions {
+    SolverOptions {
+        max_iterations: MAX_ITERATIONS,
+        cost_tolerance: 0.0,
+        step_tolerance: 1e-12,
+        initial_lambda: 1e-12,
+        ..SolverOptions::default()
     }
-    (h, g)
+}
+
+/// The refinement as a problem for the solver: the global block is the
+/// point `P` (3 parameters), one two-row residual per ray (its whitened
+/// angular miss), no pose blocks.
+struct RayIntersection<'a> {
+    frames: &'a [Frame],
+    rays: &'a [WorldRay],
+    whitening: &'a [Matrix2<f64>],
+}
+
+/// A point at which some sensor sees nothing (behind it or at its centre).
+struct OutOfDomain;
+
+impl Problem for RayIntersection<'_> {
+    type State = Vector3<f64>;
+    type Error = OutOfDomain;
+
+    fn global_len(&self) -> usize {
+        3
+    }
+
+    fn block_count(&self) -> usize {
+        0
+    }
+
+    fn evaluate(
+        &self,
+        p: &Vector3<f64>,
+        jacobians: bool,
+        visit: &mut dyn FnMut(&ResidualTerm<'_>),
+    ) -> Result<(), OutOfDomain> {
+        for ((f, ray), l) in self.frames.iter().zip(self.rays).zip(self.whitening) {
+            if !exceeds(f.sensor_point(p).z, MIN_DEPTH_MM) {
+                return Err(OutOfDomain);
+            }
+            let (pred, j) = f.predict(p);
+            let r = l * (pred - ray.ray_ab);
+            let a = if jacobians { l * j } else { Matrix2x3::zeros() };
+            // Both column-major: `a[2·k + row]` is ∂r_row/∂P_k.
+            visit(&ResidualTerm {
+                r: r.as_slice(),
+                a: a.as_slice(),
+                block: None,
+            });
+        }
+        Ok(())
+    }
+
+    fn apply_step(&self, p: &Vector3<f64>, step: &Step) -> Option<Vector3<f64>> {
+        let next = p + Vector3::new(step.da[0], step.da[1], step.da[2]);
+        next.iter().all(|v| v.is_finite()).then_some(next)
+    }
 }
 
 fn check_depths(rays: &[WorldRay], frames: &[Frame], p: &Vector3<f64>) -> Result<(), LocateError> {

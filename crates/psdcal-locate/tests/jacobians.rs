@@ -6,10 +6,11 @@ mod support;
 use nalgebra::{DMatrix, Matrix2, Vector2, Vector3};
 use psdcal_locate::{
     alpha_from_ray, angle_of_arrival, angle_of_arrival_with_jacobians, intersect_plane,
-    triangulate, CalibratedSensor, Estimated, LocateOptions, Measurement, ParameterCovariance,
-    Plane, WorldRay,
+    triangulate, CalibratedSensor, LocateOptions, Measurement, ParameterCovariance, Plane,
+    WorldRay,
 };
 use psdcal_model::sensor::electrode_currents;
+use psdcal_model::stages::Gains;
 use psdcal_model::{ChannelGains, Param, PsdGeometry, SensorModel};
 use support::{models, rel, sensor_points};
 
@@ -98,7 +99,7 @@ fn gain_columns_of_the_propagation() {
         let amps = electrode_currents(&geometry, &m, 1.0).apply_gains(&gains);
         for k in 0..3 {
             let cov = ParameterCovariance::new(
-                vec![Estimated::Gain(k)],
+                vec![Gains::parameters()[k].name.clone()],
                 DMatrix::from_element(1, 1, 1.0),
             )
             .unwrap();

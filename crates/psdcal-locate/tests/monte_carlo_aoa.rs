@@ -40,9 +40,7 @@ fn run(name: &str, truth: SensorModel, pose_seed: u64) {
         let data = support::observe(&truth, &poses, sigma_mm, &mut rng);
         let result = calibrate(&data, &CalibrateOptions::default())
             .unwrap_or_else(|e| panic!("{name}: trial {trial}: {e}"));
-        let cov =
-            ParameterCovariance::from_names(&result.covariance.names, &result.covariance.matrix)
-                .unwrap();
+        let cov: ParameterCovariance = result.covariance.parameters.clone();
         let sensor = CalibratedSensor::new(result.sensor_model(), PsdGeometry::default())
             .with_covariance(cov);
         let mut a = Vec::new();

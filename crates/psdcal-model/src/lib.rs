@@ -12,7 +12,10 @@
 //!   minimises over (P5, P29), with analytic Jacobians;
 //! - [`stage`], [`stages`], [`model`], [`model_projection`]: the model as a
 //!   chain of stages with runtime-sized, named parameter blocks (docs/model.md §8):
-//!   what calibration estimates.
+//!   what calibration estimates;
+//! - [`covariance`]: [`ParameterCovariance`], the one covariance type (named
+//!   parameters, validated symmetric matrix);
+//! - [`fit`]: what every fit shares: [`CostKind`], [`MIN_IMAGES`].
 //!
 //! Millimetres everywhere, radians inside. See `CONVENTIONS.md` at the root of
 //! the repository for symbols and frames.
@@ -22,8 +25,10 @@
 pub mod paper_setup;
 
 pub mod camera;
+pub mod covariance;
 pub mod distortion;
 mod error;
+pub mod fit;
 pub mod model;
 pub mod model_projection;
 pub mod params;
@@ -33,8 +38,10 @@ pub mod sensor;
 pub mod stage;
 pub mod stages;
 
+pub use covariance::{CovarianceError, ParameterCovariance};
 pub use distortion::CorrectionJacobian;
 pub use error::ModelError;
+pub use fit::{CostKind, MIN_IMAGES, MIN_POINTS_PER_IMAGE};
 pub use model::{ChainJacobian, Model};
 pub use model_projection::PoseJacobians;
 pub use params::{Distortion, Intrinsics, Param, SensorModel, UnknownParam, N_PARAMS};

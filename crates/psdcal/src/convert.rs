@@ -13,7 +13,8 @@ use psdcal_calib::{
 use psdcal_io::{
     Calibration, Covariance, FitSummary, GainsRecord, ImageFit, IoError, Location, StdDevs,
 };
-use psdcal_locate::{CalibratedSensor, ParameterCovariance};
+use psdcal_locate::CalibratedSensor;
+use psdcal_model::stages::gains::GAIN_NAMES;
 use psdcal_model::{Amplitudes, Param, Pose, SensorModel};
 
 use crate::dataset::DataSet;
@@ -151,31 +152,18 @@ pub fn record(
     } else if let Some(g) = &set.known_gains {
         file.gains = Some(GainsRecord::new(g, false));
     }
-    let m = &result.covariance.matrix;
-    let names = &result.covariance.names;
+    let covariance = &result.covariance.parameters;
     file.std = StdDevs(
-        names
+        covariance
+            .names()
             .iter()
-            .enumerate()
-            .map(|(k, name)| (name.clone(), m[(k, k)].max(0.0).sqrt()))
+            .map(|name| (name.clone(), covariance.std(name).unwrap_or(0.0)))
             .collect(),
     );
-    file.covariance = Covariance {
-        parameters: names.clone(),
-        matrix: (0..m.nrows())
-            .map(|i| {
-                (0..m.ncols())
-                    .map(|j| 0.5 * (m[(i, j)] + m[(j, i)]))
-                    .collect()
-            })
-            .collect(),
-    };
+    file.covariance = Covariance::from(covariance);
     let stats = &result.statistics;
     file.fit = FitSummary {
-        cost: match result.cost_kind {
-            CostKind::Template => psdcal_io::CostKind::Template,
-            CostKind::Image => psdcal_io::CostKind::Image,
-        },
+        cost: result.cost_kind,
         noise: noise_model(options.noise).name().to_string(),
         residual_mm2: stats.residual_mm2,
         rms_template_mm: stats.rms_template_mm,
@@ -210,7 +198,7 @@ pub fn fit_report(r: &CalibrationResult) -> FitReport {
         })
         .collect();
     let gains = match (&r.gains, r.covariance.gain_std()) {
-        (Some(g), Some(sd)) => psdcal_calib::GAIN_NAMES
+        (Some(g), Some(sd)) => GAIN_NAMES
             .iter()
             .zip(g.to_array())
             .zip(sd)
@@ -232,7 +220,7 @@ pub fn fit_report(r: &CalibrationResult) -> FitReport {
         gains,
         gain_start: r.gain_start.clone(),
         correlation_names: if r.free.len() > 1 {
-            r.covariance.names.clone()
+            r.covariance.names().to_vec()
         } else {
             Vec::new()
         },
@@ -274,14 +262,13 @@ pub fn fit_report(r: &CalibrationResult) -> FitReport {
 /// The calibrated sensor of a calibration record: model, sensor size, gains
 /// and covariance; `file` names it in errors.
 pub fn sensor(calibration: &Calibration, file: &Path) -> Result<CalibratedSensor, IoError> {
-    let covariance = ParameterCovariance::from_named(
-        &calibration.covariance.parameters,
-        &calibration.covariance.matrix,
-    )
-    .map_err(|e| IoError::Invalid {
-        at: Location::file(&file.display().to_string()),
-        message: format!("covariance: {e}"),
-    })?;
+    let covariance = calibration
+        .covariance
+        .to_parameter_covariance()
+        .map_err(|message| IoError::Invalid {
+            at: Location::file(&file.display().to_string()),
+            message,
+        })?;
     let mut sensor = CalibratedSensor::new(calibration.to_model(), calibration.geometry())
         .with_covariance(covariance);
     sensor.gains = calibration.gains();

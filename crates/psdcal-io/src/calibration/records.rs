@@ -6,7 +6,7 @@
 use std::fmt;
 
 use nalgebra::Vector3;
-use psdcal_model::{ChannelGains, Pose};
+use psdcal_model::{ChannelGains, CovarianceError, ParameterCovariance, Pose};
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::ser::Serializer;
 use serde::{Deserialize, Serialize};
@@ -221,59 +221,62 @@ impl Covariance {
         self.matrix.get(i)?.get(j).copied()
     }
 
-    pub(super) fn check(&self) -> Result<(), String> {
-        let n = self.parameters.len();
-        if self.matrix.len() != n {
-            return Err(format!(
-                "covariance.matrix has {} rows for {n} parameters; expected a square {n} x {n} \
-                 matrix",
-                self.matrix.len()
-            ));
-        }
-        for (i, row) in self.matrix.iter().enumerate() {
-            if row.len() != n {
-                return Err(format!(
-                    "covariance.matrix row {} has {} entries; expected {n}",
-                    i + 1,
-                    row.len()
-                ));
-            }
-            if let Some(j) = row.iter().position(|v| !v.is_finite()) {
-                return Err(format!(
-                    "covariance.matrix[{i}][{j}] must be a finite number"
-                ));
-            }
-        }
-        for i in 0..n {
-            for j in 0..i {
-                let (a, b) = (self.matrix[i][j], self.matrix[j][i]);
-                if (a - b).abs() > 1e-9 * a.abs().max(b.abs()) {
-                    return Err(format!(
-                        "covariance.matrix is not symmetric: [{i}][{j}] = {a} but [{j}][{i}] = \
-                         {b}"
-                    ));
+    /// The covariance as psdcal-model's [`ParameterCovariance`] (validated
+    /// there; the error phrased with this record's field names).
+    pub fn to_parameter_covariance(&self) -> Result<ParameterCovariance, String> {
+        ParameterCovariance::from_named(&self.parameters, &self.matrix).map_err(|e| {
+            let n = self.parameters.len();
+            match e {
+                CovarianceError::Shape { rows, .. } => format!(
+                    "covariance.matrix has {rows} rows for {n} parameters; expected a square {n} \
+                     x {n} matrix"
+                ),
+                CovarianceError::RowLength { row, len, .. } => format!(
+                    "covariance.matrix row {} has {len} entries; expected {n}",
+                    row + 1
+                ),
+                CovarianceError::Duplicate { name } => {
+                    format!("covariance.parameters lists '{name}' twice; expected each once")
                 }
+                CovarianceError::NonFinite { row, col } => {
+                    format!("covariance.matrix[{row}][{col}] must be a finite number")
+                }
+                CovarianceError::Asymmetric {
+                    row,
+                    col,
+                    value,
+                    mirror,
+                } => format!(
+                    "covariance.matrix is not symmetric: [{row}][{col}] = {value} but \
+                     [{col}][{row}] = {mirror}"
+                ),
+                CovarianceError::NegativeVariance { index, value, .. } => format!(
+                    "covariance.matrix[{index}][{index}] is a variance and must not be negative, \
+                     found {value}"
+                ),
+                other => format!("covariance: {other}"),
             }
-            if self.matrix[i][i] < 0.0 {
-                return Err(format!(
-                    "covariance.matrix[{i}][{i}] is a variance and must not be negative, found {}",
-                    self.matrix[i][i]
-                ));
-            }
-        }
-        Ok(())
+        })
+    }
+
+    pub(super) fn check(&self) -> Result<(), String> {
+        self.to_parameter_covariance().map(|_| ())
     }
 }
 
-/// Which error the fit minimised (docs/model.md §4.6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CostKind {
-    /// Template-plane error (the paper's residual).
-    Template,
-    /// Image-plane reprojection error.
-    Image,
+impl From<&ParameterCovariance> for Covariance {
+    /// The record of a covariance: its names and (symmetric) rows.
+    fn from(c: &ParameterCovariance) -> Self {
+        Self {
+            parameters: c.names().to_vec(),
+            matrix: c.rows(),
+        }
+    }
 }
+
+/// Which error the fit minimised (docs/model.md §4.6): psdcal-model's
+/// [`psdcal_model::CostKind`], the one definition the calibration uses too.
+pub use psdcal_model::CostKind;
 
 /// Summary of the fit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
