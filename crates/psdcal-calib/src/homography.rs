@@ -442,7 +442,10 @@ pub(crate) fn fast_homography(
     check_pairs(template, image, 4)?;
     let t_p = normalizing_transform(template)?;
     let t_q = normalizing_transform(image)?;
-    let a = dlt_system(&transform_points(&t_p, template), &transform_points(&t_q, image));
+    let a = dlt_system(
+        &transform_points(&t_p, template),
+        &transform_points(&t_q, image),
+    );
     let r = a.qr().r();
     let n = r.ncols();
     let scale = r.diagonal().amax().max(f64::MIN_POSITIVE);

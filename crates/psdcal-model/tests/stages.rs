@@ -7,18 +7,16 @@
 //! a stage to [`all_stages`] puts it under all of these tests.
 
 mod common;
-#[path = "common/poly_stage.rs"]
-mod poly_stage;
 
 use common::{
     check_jacobian, check_jacobian_with_floor, example_poses, example_template_points, POSE_SCALES,
 };
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
-use poly_stage::PolyField;
 use psdcal_model::stages::{Gains, Lens, Pinhole, PsdRadial};
 use psdcal_model::{
     Amplitudes, ChannelGains, Model, Pose, PsdGeometry, SensorModel, Stage, StageJacobian,
 };
+use psdcal_testkit::PolyField;
 
 const REL: f64 = 1e-6;
 

@@ -17,14 +17,18 @@
 //!   declared lines;
 //! - [`poses`]: `sensor_from_template` poses whose images cover the sensor;
 //! - [`observe`]: the measured (or ideal) points of a template in given
-//!   poses, and point noise.
+//!   poses, and point noise;
+//! - [`poly_stage`]: [`PolyField`], a test-only model stage with a large
+//!   parameter block (a polynomial displacement field, 2n² coefficients).
 #![warn(missing_docs)]
 
 pub mod observe;
+pub mod poly_stage;
 pub mod poses;
 pub mod templates;
 
 pub use observe::{add_noise, image_points, PointKind};
+pub use poly_stage::PolyField;
 pub use poses::{aimed_grid_poses, aimed_pose, covering_poses, fits, perturbed, HALF_SIDE_MM};
 pub use psdcal_model::paper_setup::{scatter14, SCATTER14_MM};
 pub use templates::{grid75, scatter, EXTRA_MM};

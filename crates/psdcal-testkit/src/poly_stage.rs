@@ -66,7 +66,7 @@ impl Stage for PolyField {
     ) -> Vector2<f64> {
         let (u, v) = (input.x / self.half, input.y / self.half);
         let (pu, du) = self.powers(u);
-        let (pv, dv) = (self.powers(v).0, self.powers(v).1);
+        let (pv, dv) = self.powers(v);
         let nn = self.n * self.n;
         let mut out = *input;
         let mut d = Matrix2::identity();
