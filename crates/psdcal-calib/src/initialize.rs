@@ -89,6 +89,13 @@ const NEIGHBOUR_FACTORS: [f64; 4] = [0.5, 0.7, 1.4, 2.0];
 /// Most images the focal search evaluates.
 pub const SEARCH_IMAGES: usize = 24;
 
+/// Most images the preliminary correction is estimated from.
+pub const PRELIMINARY_IMAGES: usize = 8;
+
+/// Most images the basin check of the refined closed form evaluates: it
+/// compares values a factor two apart, which a few images decide.
+pub const CHECK_IMAGES: usize = 6;
+
 /// Solver iterations of one precise evaluation of `J`.
 const PROFILE_ITERATIONS: usize = 40;
 /// Solver iterations and relative cost tolerance of a coarse evaluation of
@@ -352,18 +359,10 @@ impl Problem {
     /// the set (all of them when there are no more).
     fn subset(&self, max_images: usize) -> Problem {
         let n = self.data.images.len();
-        let keep: Vec<usize> = if n <= max_images {
-            (0..n).collect()
-        } else {
-            (0..max_images).map(|k| k * n / max_images).collect()
-        };
+        let keep = spread(n, max_images);
         let scale = keep.len() as f64 / n as f64;
         Problem {
-            data: CalibrationData {
-                images: keep.iter().map(|&i| self.data.images[i].clone()).collect(),
-                amplitudes: None,
-                ..self.data.clone()
-            },
+            data: subset_images(&self.data, max_images),
             homographies: keep.iter().map(|&i| self.homographies[i]).collect(),
             k1_start: self.k1_start,
             k2: self.k2,
@@ -428,6 +427,28 @@ impl Problem {
     }
 }
 
+/// At most `max` of `n` indices, spread evenly (all of them when `n ≤ max`).
+fn spread(n: usize, max: usize) -> Vec<usize> {
+    if n <= max {
+        (0..n).collect()
+    } else {
+        (0..max).map(|k| k * n / max).collect()
+    }
+}
+
+/// The data set restricted to at most `max` images spread over it (without
+/// amplitudes: the start works on the measured points).
+fn subset_images(data: &CalibrationData, max: usize) -> CalibrationData {
+    CalibrationData {
+        images: spread(data.images.len(), max)
+            .into_iter()
+            .map(|i| data.images[i].clone())
+            .collect(),
+        amplitudes: None,
+        ..data.clone()
+    }
+}
+
 /// Names the image in a homography error.
 fn name_image(e: CalibError, id: &str) -> CalibError {
     match e {
@@ -485,14 +506,33 @@ pub fn initialize(
         centre: options.preliminary_centre,
         ..PreliminaryOptions::default()
     };
-    let (preliminary, preliminary_note) = match estimate_preliminary(data, &prelim_options) {
-        Ok(r) => (r, None),
-        Err(e) if options.preliminary == Preliminary::Auto => (
-            PreliminaryReport::off(options.preliminary_centre),
-            Some(format!("automatic preliminary correction skipped: {e}")),
-        ),
-        Err(e) => return Err(e),
+    // The rough correction is estimated on at most PRELIMINARY_IMAGES images
+    // spread over the set: two coefficients need few images, and its cost
+    // then does not grow with the set.
+    let preliminary_data = {
+        // Images of ≥ 5 points (what the consistency cost uses) when there are any.
+        let rich = CalibrationData {
+            images: data
+                .images
+                .iter()
+                .filter(|im| im.points.len() >= 5)
+                .cloned()
+                .collect(),
+            amplitudes: None,
+            ..data.clone()
+        };
+        let pool = if rich.images.is_empty() { data } else { &rich };
+        subset_images(pool, PRELIMINARY_IMAGES)
     };
+    let (preliminary, preliminary_note) =
+        match estimate_preliminary(&preliminary_data, &prelim_options) {
+            Ok(r) => (r, None),
+            Err(e) if options.preliminary == Preliminary::Auto => (
+                PreliminaryReport::off(options.preliminary_centre),
+                Some(format!("automatic preliminary correction skipped: {e}")),
+            ),
+            Err(e) => return Err(e),
+        };
 
     // 3. Homographies of the corrected points.
     let corrected = preliminary.correct_data(data);
@@ -596,8 +636,21 @@ pub fn initialize(
     // The refined closed form must also be the lowest basin at the scale of
     // its own error: J at 0.5, 0.7, 1.4 and 2 × its f (its centre) and at its
     // f with the centre at (0, 0), on the subset, none below half its cost.
-    if let Some((f, cx, cy, here)) = candidate.filter(|_| options.refine_start) {
-        let subset = problem.subset(SEARCH_IMAGES);
+    // The check is skipped when the refined closed form already explains the
+    // measured points better than a free homography per image does (image-
+    // plane RMS at most the median homography RMS): a basin whose cost is
+    // twice the global minimum's cannot.
+    let explains_data = |p: &Profile| {
+        let mut rms = homography_rms.clone();
+        rms.sort_by(f64::total_cmp);
+        let median = rms.get(rms.len() / 2).copied().unwrap_or(0.0);
+        crate::refine::total_cost(data, CostKind::Image, None, &(&p.model).into(), &p.poses)
+            .map(|c| (c / n_points).sqrt() <= median)
+            .unwrap_or(false)
+    };
+    let well_fitted = closed_profile.as_ref().is_some_and(explains_data);
+    if let Some((f, cx, cy, here)) = candidate.filter(|_| options.refine_start && !well_fitted) {
+        let subset = problem.subset(CHECK_IMAGES);
         let scale = subset.data.point_count() as f64 / problem.data.point_count() as f64;
         let here = here * scale;
         let mut best = (f, (cx, cy), f64::INFINITY);

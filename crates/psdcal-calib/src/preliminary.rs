@@ -335,7 +335,7 @@ pub(crate) fn minimise(
     let settings = SolverOptions {
         // Accepted and rejected steps both count for the solver.
         max_iterations: 3 * max_iterations,
-        cost_tolerance: 1e-14,
+        cost_tolerance: 1e-10,
         step_tolerance: 1e-12,
         initial_lambda: 1e-3,
         exact_cost: 1e-30,

@@ -58,30 +58,37 @@ pub struct ResidualTerm<'a> {
 }
 
 impl NormalEquations {
-    /// Adds one residual with weight `weight` (robust reweighting).
+    /// Adds one residual with weight `weight` (robust reweighting). Only the
+    /// upper triangle of `U` is accumulated ([`Self::finish`] mirrors it).
     pub fn add(&mut self, weight: f64, term: &ResidualTerm<'_>) {
         let d = term.r.len();
         let p = self.g_a.len();
+        let u = self.u.as_mut_slice();
+        let g_a = self.g_a.as_mut_slice();
         for j in 0..p {
             let aj = &term.a[d * j..d * j + d];
             let g: f64 = aj.iter().zip(term.r).map(|(a, r)| a * r).sum();
-            self.g_a[j] += weight * g;
-            for k in j..p {
+            g_a[j] += weight * g;
+            // Column j of the column-major U, rows 0..=j (upper triangle).
+            let column = &mut u[p * j..p * j + j + 1];
+            for (k, slot) in column.iter_mut().enumerate() {
                 let ak = &term.a[d * k..d * k + d];
                 let s: f64 = aj.iter().zip(ak).map(|(a, b)| a * b).sum();
-                self.u[(j, k)] += weight * s;
+                *slot += weight * s;
             }
         }
         if let Some((i, b)) = term.block {
+            let w_i = self.w[i].as_mut_slice();
             for row in 0..d {
                 let br = Vector6::from_fn(|c, _| b[d * c + row]);
                 let wbr = br * weight;
                 self.v[i] += wbr * br.transpose();
                 self.g_b[i] += wbr * term.r[row];
-                for j in 0..p {
-                    let a = term.a[d * j + row];
-                    for c in 0..6 {
-                        self.w[i][(j, c)] += a * wbr[c];
+                // W_i is p × 6, column-major: entry (j, c) at c·p + j.
+                for c in 0..6 {
+                    let column = &mut w_i[c * p..c * p + p];
+                    for (j, slot) in column.iter_mut().enumerate() {
+                        *slot += term.a[d * j + row] * wbr[c];
                     }
                 }
             }

@@ -17,9 +17,11 @@
 //!   with Nielsen's update: after a step that lowers the cost `λ` falls ×1/3
 //!   and `ν = 2`; after one that does not, `λ ← λν`, `ν ← 2ν`;
 //! - stopping: an *exact fit* when the cost is below
-//!   [`SolverOptions::exact_cost`], a negligible step (the residual change
+//!   [`SolverOptions::exact_cost`], a negligible accepted step (the residual change
 //!   `‖J δ‖ ≈ √(Σ δ_k² (JᵀJ)_kk)` below `step_tolerance · √cost`, with a
-//!   rounding floor), a cost change below `cost_tolerance · cost`, saturated
+//!   rounding floor), a cost change below `cost_tolerance · cost` (accepted,
+//!   or predicted by the linear model `−2gᵀδ − δᵀJᵀJδ` for a step proposed
+//!   with small damping right after an accepted one), saturated
 //!   damping (`λ > 1e16`), or the iteration budget;
 //! - a [`SolverReport`] (termination, iterations, accepted steps, cost
 //!   history); the last state is returned whatever the termination.
@@ -256,6 +258,16 @@ pub fn solve<P: Problem>(
             nu *= 2.0;
             continue;
         };
+        // In the Gauss–Newton regime (small damping, no rejection since the
+        // last accepted step), a step whose predicted decrease of the cost is
+        // below the tolerance means the minimum is reached to the precision
+        // asked: stop without spending rejected trials on rounding.
+        if nu == 2.0
+            && lambda <= 1e-2
+            && predicted_decrease(&ne, &step) <= options.cost_tolerance * cost_now
+        {
+            break Termination::CostConverged;
+        }
         let trial = problem.apply_step(&state, &step);
         let trial_cost = trial
             .as_ref()
@@ -302,6 +314,28 @@ pub fn solve<P: Problem>(
             final_lambda: lambda,
         },
     })
+}
+
+/// The decrease of the cost the linear model predicts for `step`:
+/// `‖r‖² − ‖r + Jδ‖² = −2 gᵀδ − δᵀ JᵀJ δ` from the blocks of the normal
+/// equations (`g = Jᵀr`).
+fn predicted_decrease(ne: &NormalEquations, step: &Step) -> f64 {
+    let da = &step.da;
+    let mut g_dot = ne.g_a.dot(da);
+    let mut quad = (&ne.u * da).dot(da);
+    for (i, db) in step.db.iter().enumerate() {
+        g_dot += ne.g_b[i].dot(db);
+        quad += db.dot(&(ne.v[i] * db));
+        if !da.is_empty() {
+            quad += 2.0
+                * (ne.w[i].transpose() * da)
+                    .iter()
+                    .zip(db.iter())
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
+        }
+    }
+    -2.0 * g_dot - quad
 }
 
 /// Whether a step is negligible: the change it makes to the residuals,
