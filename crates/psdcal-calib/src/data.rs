@@ -5,6 +5,8 @@
 use nalgebra::Vector2;
 use psdcal_model::{Amplitudes, PsdGeometry};
 
+use crate::CalibError;
+
 /// One measured impact point of one LED in one image.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Observation {
@@ -44,6 +46,57 @@ pub struct CalibrationData {
 }
 
 impl CalibrationData {
+    /// Checks what every routine relies on: finite template and measured
+    /// points, LED indices inside the template, each LED at most once per
+    /// image, declared lines naming existing LEDs. (Files are validated by
+    /// psdcal-io before they become `CalibrationData`; this guards data built
+    /// in memory.)
+    pub fn check(&self) -> Result<(), CalibError> {
+        if !self
+            .template
+            .iter()
+            .all(|p| p.x.is_finite() && p.y.is_finite())
+        {
+            return Err(CalibError::InvalidInput {
+                reason: "the template has non-finite LED coordinates".into(),
+            });
+        }
+        for im in &self.images {
+            let mut seen = vec![false; self.template.len()];
+            for o in &im.points {
+                if o.led >= self.template.len() {
+                    return Err(CalibError::UnknownLed {
+                        led: o.led,
+                        template_len: self.template.len(),
+                    });
+                }
+                if seen[o.led] {
+                    return Err(CalibError::InvalidInput {
+                        reason: format!("image '{}' has LED {} more than once", im.id, o.led),
+                    });
+                }
+                seen[o.led] = true;
+                if !(o.measured.x.is_finite() && o.measured.y.is_finite()) {
+                    return Err(CalibError::InvalidInput {
+                        reason: format!(
+                            "image '{}' has a non-finite point for LED {}",
+                            im.id, o.led
+                        ),
+                    });
+                }
+            }
+        }
+        for line in &self.lines {
+            if let Some(&led) = line.iter().find(|&&l| l >= self.template.len()) {
+                return Err(CalibError::UnknownLed {
+                    led,
+                    template_len: self.template.len(),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Whether amplitudes are present for every point.
     pub fn has_amplitudes(&self) -> bool {
         self.amplitudes.as_ref().is_some_and(|a| {

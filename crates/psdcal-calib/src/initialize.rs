@@ -64,7 +64,7 @@
 //! `k2` the preliminary estimate (0 when off); `k3, p1, p2, l1, l2, skew` zero.
 
 use nalgebra::Vector2;
-use psdcal_model::{Model, Pose, SensorModel};
+use psdcal_model::{Model, Pose, SensorModel, MIN_POINTS_PER_IMAGE};
 use psdcal_solver::{solver, SolverOptions};
 
 use crate::homography::{fit_homography, Homography, HomographyOptions};
@@ -75,8 +75,8 @@ use crate::refine::{CalibrationProblem, CostKind, FitState};
 use crate::zhang::{closed_form, pose_from_homography, ClosedFormSolution};
 use crate::{CalibError, CalibrationData};
 
-/// Minimum number of images for a calibration.
-pub const MIN_IMAGES: usize = 3;
+/// Minimum number of images for a calibration (one definition, in psdcal-model).
+pub use psdcal_model::MIN_IMAGES;
 
 /// Relative change of `J` under halving or doubling `f` below which the
 /// profile counts as flat (`f` undetermined).
@@ -469,14 +469,22 @@ pub fn initialize(
     options: &InitOptions,
 ) -> Result<Initialization, CalibError> {
     check_data(data)?;
-    let usable = data.images.iter().filter(|im| im.points.len() >= 4).count();
+    let usable = data
+        .images
+        .iter()
+        .filter(|im| im.points.len() >= MIN_POINTS_PER_IMAGE)
+        .count();
     if usable < MIN_IMAGES {
         return Err(CalibError::TooFewImages {
             usable,
             needed: MIN_IMAGES,
         });
     }
-    if let Some(im) = data.images.iter().find(|im| im.points.len() < 4) {
+    if let Some(im) = data
+        .images
+        .iter()
+        .find(|im| im.points.len() < MIN_POINTS_PER_IMAGE)
+    {
         return Err(CalibError::TooFewPoints {
             image: im.id.clone(),
             points: im.points.len(),

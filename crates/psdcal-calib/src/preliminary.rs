@@ -164,50 +164,9 @@ pub fn radial_correct(
     centre + d * (1.0 + r2 * (k1 + r2 * k2))
 }
 
-/// Checks the data for what every linear-stage routine relies on: finite
-/// template and measured points, LED indices inside the template, each LED at
-/// most once per image.
+/// Checks the data for what every routine relies on ([`CalibrationData::check`]).
 pub fn check_data(data: &CalibrationData) -> Result<(), CalibError> {
-    if !data
-        .template
-        .iter()
-        .all(|p| p.x.is_finite() && p.y.is_finite())
-    {
-        return Err(CalibError::InvalidInput {
-            reason: "the template has non-finite LED coordinates".into(),
-        });
-    }
-    for im in &data.images {
-        let mut seen = vec![false; data.template.len()];
-        for o in &im.points {
-            if o.led >= data.template.len() {
-                return Err(CalibError::UnknownLed {
-                    led: o.led,
-                    template_len: data.template.len(),
-                });
-            }
-            if seen[o.led] {
-                return Err(CalibError::InvalidInput {
-                    reason: format!("image '{}' has LED {} more than once", im.id, o.led),
-                });
-            }
-            seen[o.led] = true;
-            if !(o.measured.x.is_finite() && o.measured.y.is_finite()) {
-                return Err(CalibError::InvalidInput {
-                    reason: format!("image '{}' has a non-finite point for LED {}", im.id, o.led),
-                });
-            }
-        }
-    }
-    for line in &data.lines {
-        if let Some(&led) = line.iter().find(|&&l| l >= data.template.len()) {
-            return Err(CalibError::UnknownLed {
-                led,
-                template_len: data.template.len(),
-            });
-        }
-    }
-    Ok(())
+    data.check()
 }
 
 /// A scale-free least-squares cost in the two dimensionless parameters

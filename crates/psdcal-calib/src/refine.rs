@@ -397,17 +397,7 @@ fn validate(data: &CalibrationData, poses: &[Pose]) -> Result<(), CalibError> {
             reason: format!("{} poses for {} images", poses.len(), data.images.len()),
         });
     }
-    for image in &data.images {
-        for obs in &image.points {
-            if obs.led >= data.template.len() {
-                return Err(CalibError::UnknownLed {
-                    led: obs.led,
-                    template_len: data.template.len(),
-                });
-            }
-        }
-    }
-    Ok(())
+    data.check()
 }
 
 /// The model a refinement starts from: `start`, with a gains stage (unit
