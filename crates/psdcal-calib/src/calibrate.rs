@@ -115,11 +115,22 @@ pub fn calibrate(
         let (a, global) =
             refine_global(data, &start, &init.poses, &options.refine, &options.global)?;
         let mut best = (a, global, "gains freed from the start");
+        // A focal length far outside any lens for this sensor (the start's
+        // plausible range) is a runaway along a degenerate direction, never
+        // a better answer.
+        let diagonal = data.geometry.lx.hypot(data.geometry.ly);
+        let plausible = |r: &Refined| {
+            let f = r.model.get("f").unwrap_or(f64::NAN);
+            f > 0.1 * diagonal && f < 100.0 * diagonal
+        };
         let mut consider = |candidate: Result<Refined, CalibError>, name: &'static str| {
             if let Ok(c) = candidate {
                 let incumbent = &best.0;
+                let incumbent_usable =
+                    incumbent.report.termination.converged() && plausible(incumbent);
                 if c.report.termination.converged()
-                    && (c.cost < incumbent.cost || !incumbent.report.termination.converged())
+                    && plausible(&c)
+                    && (c.cost < incumbent.cost || !incumbent_usable)
                 {
                     best = (c, None, name);
                 }
@@ -142,6 +153,20 @@ pub fn calibrate(
                 refine_global(data, &m, &i.poses, &options.refine, &options.global).map(|(r, _)| r)
             });
             consider(c, "search around the nominal focal length, gains freed");
+        }
+        if init.report.route == InitRoute::ClosedForm && options.init.refine_start {
+            // The refined closed form has absorbed the gain imbalance into
+            // the intrinsics; the unrefined closed form (the paper's start)
+            // has not, and competes with the gains freed.
+            let plain = InitOptions {
+                refine_start: false,
+                ..options.init
+            };
+            let d = initialize(data, &plain).and_then(|i| {
+                let m = start_model(options, &i.model)?;
+                refine_global(data, &m, &i.poses, &options.refine, &options.global).map(|(r, _)| r)
+            });
+            consider(d, "closed form unrefined, gains freed");
         }
         let (r, g, name) = best;
         (r, g, Some(name.to_string()))

@@ -203,17 +203,11 @@ pub(crate) fn null_vector(a: &DMatrix<f64>, stage: &'static str) -> Result<NullV
         });
     }
     let n = a.ncols();
-    // A tall system is first reduced to its n × n triangular factor R
-    // (A = QR): R has A's singular values and right singular vectors, and its
-    // SVD is much cheaper. A wide one (8 × 9) is padded with zero rows, since
-    // the thin SVD of a wide matrix drops the null vector.
-    let square = if a.nrows() > n {
-        a.clone().qr().r()
-    } else {
-        let mut padded = DMatrix::zeros(n, n);
-        padded.view_mut((0, 0), (a.nrows(), n)).copy_from(a);
-        padded
-    };
+    // The thin SVD of a wide system (8 × 9) drops the null vector: pad it
+    // with zero rows to square.
+    let rows = a.nrows().max(n);
+    let mut square = DMatrix::zeros(rows, n);
+    square.view_mut((0, 0), (a.nrows(), n)).copy_from(a);
     let svd = nalgebra::linalg::SVD::try_new(square, false, true, f64::EPSILON, SVD_MAX_ITERATIONS)
         .ok_or_else(|| CalibError::Numerical {
             stage,

@@ -99,7 +99,7 @@ pub const CHECK_IMAGES: usize = 6;
 /// Solver iterations of one precise evaluation of `J`.
 const PROFILE_ITERATIONS: usize = 40;
 /// Solver iterations and relative cost tolerance of a coarse evaluation of
-/// `J` (comparisons with a factor-two margin, the search's grid).
+/// `J` (the basin check's comparisons with a factor-two margin).
 const COARSE_ITERATIONS: usize = 10;
 const COARSE_TOLERANCE: f64 = 1e-4;
 /// Solver iterations of the refined closed form.
@@ -243,7 +243,8 @@ struct Profile {
 /// How precisely a profile value is needed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Precision {
-    /// To compare values a factor two apart (checks, the search's grid).
+    /// To compare values a factor two apart (the basin check, which the
+    /// search backs up).
     Coarse,
     /// The start handed on.
     Fine,
@@ -370,8 +371,8 @@ impl Problem {
         }
     }
 
-    fn cost_or_inf(&self, f: f64, cx: f64, cy: f64) -> f64 {
-        self.profile(f, cx, cy, Precision::Coarse)
+    fn cost_or_inf(&self, f: f64, cx: f64, cy: f64, precision: Precision) -> f64 {
+        self.profile(f, cx, cy, precision)
             .map(|p| p.cost)
             .unwrap_or(f64::INFINITY)
     }
@@ -384,7 +385,7 @@ impl Problem {
             .collect();
         let costs: Vec<f64> = grid
             .iter()
-            .map(|&l| self.cost_or_inf(l.exp(), cx, cy))
+            .map(|&l| self.cost_or_inf(l.exp(), cx, cy, Precision::Fine))
             .collect();
         let best = (0..n)
             .filter(|&i| costs[i].is_finite())
@@ -393,19 +394,19 @@ impl Problem {
         let phi = 0.5 * (5f64.sqrt() - 1.0);
         let mut x1 = x3 - phi * (x3 - x0);
         let mut x2 = x0 + phi * (x3 - x0);
-        let mut c1 = self.cost_or_inf(x1.exp(), cx, cy);
-        let mut c2 = self.cost_or_inf(x2.exp(), cx, cy);
+        let mut c1 = self.cost_or_inf(x1.exp(), cx, cy, Precision::Fine);
+        let mut c2 = self.cost_or_inf(x2.exp(), cx, cy, Precision::Fine);
         let mut iterations = 0;
         while x3 - x0 > GOLDEN_TOLERANCE && iterations < 100 {
             iterations += 1;
             if c1 <= c2 {
                 (x3, x2, c2) = (x2, x1, c1);
                 x1 = x3 - phi * (x3 - x0);
-                c1 = self.cost_or_inf(x1.exp(), cx, cy);
+                c1 = self.cost_or_inf(x1.exp(), cx, cy, Precision::Fine);
             } else {
                 (x0, x1, c1) = (x1, x2, c2);
                 x2 = x0 + phi * (x3 - x0);
-                c2 = self.cost_or_inf(x2.exp(), cx, cy);
+                c2 = self.cost_or_inf(x2.exp(), cx, cy, Precision::Fine);
             }
         }
         let (mut lf, mut cost) = if c1 <= c2 { (x1, c1) } else { (x2, c2) };
@@ -667,7 +668,7 @@ pub fn initialize(
             .map(|k| (k * f, cx, cy))
             .chain([(f, 0.0, 0.0)]);
         for (ft, x, y) in trials {
-            let c = subset.cost_or_inf(ft, x, y);
+            let c = subset.cost_or_inf(ft, x, y, Precision::Coarse);
             if c < best.2 {
                 best = (ft, (x, y), c);
             }
@@ -746,8 +747,8 @@ pub fn initialize(
     let mut focal_sensitivity = f64::NAN;
     if route != InitRoute::ClosedForm {
         let neighbour = problem
-            .cost_or_inf(0.5 * f, cx, cy)
-            .min(problem.cost_or_inf(2.0 * f, cx, cy));
+            .cost_or_inf(0.5 * f, cx, cy, Precision::Fine)
+            .min(problem.cost_or_inf(2.0 * f, cx, cy, Precision::Fine));
         let increase = neighbour - start.cost;
         let dof = (2 * data.point_count())
             .saturating_sub(6 * data.images.len() + 4)

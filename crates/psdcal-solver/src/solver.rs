@@ -21,7 +21,8 @@
 //!   `‖J δ‖ ≈ √(Σ δ_k² (JᵀJ)_kk)` below `step_tolerance · √cost`, with a
 //!   rounding floor), a cost change below `cost_tolerance · cost` (accepted,
 //!   or predicted by the linear model `−2gᵀδ − δᵀJᵀJδ` for a step proposed
-//!   with small damping right after an accepted one), saturated
+//!   with small damping at the start or right after an accepted step that
+//!   changed the cost by less than 1e-6 of itself), saturated
 //!   damping (`λ > 1e16`), or the iteration budget;
 //! - a [`SolverReport`] (termination, iterations, accepted steps, cost
 //!   history); the last state is returned whatever the termination.
@@ -199,6 +200,10 @@ pub struct Solution<S> {
     pub report: SolverReport,
 }
 
+/// Relative cost decrease of an accepted step below which the iteration counts
+/// as near a minimum (then a negligible predicted decrease stops it).
+const SETTLED: f64 = 1e-6;
+
 /// The cost `Σ ρ(‖r‖²)` of a problem at a state.
 pub fn cost<P: Problem>(
     problem: &P,
@@ -241,6 +246,10 @@ pub fn solve<P: Problem>(
     let mut history = vec![cost_now];
     let (mut lambda, mut nu) = (options.initial_lambda, 2.0);
     let (mut iterations, mut accepted) = (0, 0);
+    // Whether the last accepted step changed the cost by less than SETTLED
+    // of itself (the iteration is near a minimum, where the linear model's
+    // prediction is to be trusted).
+    let mut settled = false;
     let mut ne = normal_equations(problem, &state, robust)?;
     let termination = loop {
         if cost_now <= options.exact_cost {
@@ -264,6 +273,7 @@ pub fn solve<P: Problem>(
         // asked: stop without spending rejected trials on rounding.
         if nu == 2.0
             && lambda <= 1e-2
+            && (accepted == 0 || settled)
             && predicted_decrease(&ne, &step) <= options.cost_tolerance * cost_now
         {
             break Termination::CostConverged;
@@ -278,6 +288,7 @@ pub fn solve<P: Problem>(
             Some(next) if trial_cost < cost_now => {
                 let small_step = step_is_negligible(&ne, &step, cost_now, options);
                 let small_change = (cost_now - trial_cost) <= options.cost_tolerance * cost_now;
+                settled = (cost_now - trial_cost) <= SETTLED * cost_now;
                 state = next;
                 cost_now = trial_cost;
                 history.push(cost_now);
