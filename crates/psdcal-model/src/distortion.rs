@@ -119,61 +119,31 @@ impl SensorModel {
         {
             return Ok(*ideal);
         }
-        let mut m = *ideal;
-        let mut residual = self.undistort(&m) - ideal;
-        let mut last_step = f64::INFINITY;
-        for iteration in 0..INVERSE_MAX_ITERATIONS {
-            if residual.norm() <= INVERSE_TOLERANCE_MM {
-                return self.check_valid(m);
-            }
-            let jac = self.undistort_point_jacobian(&m);
-            let det = jac.determinant();
-            if det.is_nan() || det <= 1e-12 {
-                return Err(ModelError::SingularDistortion {
-                    x: m.x,
-                    y: m.y,
-                    det,
-                });
-            }
-            let step =
-                Matrix2::new(jac[(1, 1)], -jac[(0, 1)], -jac[(1, 0)], jac[(0, 0)]) * residual / det;
-            // Step halving keeps the iteration on the branch it started on.
-            let mut alpha = 1.0;
-            loop {
-                let candidate = m - step * alpha;
-                let r = self.undistort(&candidate) - ideal;
-                if r.norm() < residual.norm() || alpha < 1e-6 {
-                    m = candidate;
-                    residual = r;
-                    last_step = step.norm() * alpha;
-                    break;
-                }
-                alpha *= 0.5;
-            }
-            if !(m.x.is_finite() && m.y.is_finite()) {
-                return Err(ModelError::DistortionNotConverged {
-                    x: ideal.x,
-                    y: ideal.y,
-                    iterations: iteration + 1,
-                    last_step,
-                });
-            }
-        }
-        if residual.norm() <= INVERSE_TOLERANCE_MM {
-            return self.check_valid(m);
-        }
-        Err(ModelError::DistortionNotConverged {
-            x: ideal.x,
-            y: ideal.y,
-            iterations: INVERSE_MAX_ITERATIONS,
-            last_step,
-        })
+        invert_newton(
+            ideal,
+            &|m| self.undistort(m),
+            &|m| self.undistort_point_jacobian(m),
+            false,
+        )
     }
+}
 
-    /// A solution of the inverse must lie where the correction is locally
-    /// invertible and orientation-preserving.
-    fn check_valid(&self, m: Vector2<f64>) -> Result<Vector2<f64>, ModelError> {
-        let det = self.undistort_point_jacobian(&m).determinant();
+/// The point `m` with `map(m) = target` for a measured → ideal map with 2×2
+/// Jacobian `jacobian`: Newton's method with step halving (which keeps the
+/// iteration on the branch it started on), to [`INVERSE_TOLERANCE_MM`];
+/// a typed error when the Jacobian is singular or folds over (`det ≤ 0`) or
+/// the iteration does not converge. With `polish`, one more Newton step is
+/// taken from the converged point when it lowers the residual (the inverse is
+/// then exact to rounding, so that derivatives through it match finite
+/// differences even for distortions below the tolerance).
+pub fn invert_newton(
+    target: &Vector2<f64>,
+    map: &dyn Fn(&Vector2<f64>) -> Vector2<f64>,
+    jacobian: &dyn Fn(&Vector2<f64>) -> Matrix2<f64>,
+    polish: bool,
+) -> Result<Vector2<f64>, ModelError> {
+    let valid = |m: Vector2<f64>| -> Result<Vector2<f64>, ModelError> {
+        let det = jacobian(&m).determinant();
         if det > 1e-12 {
             Ok(m)
         } else {
@@ -183,5 +153,64 @@ impl SensorModel {
                 det,
             })
         }
+    };
+    let finish = |m: Vector2<f64>, residual: Vector2<f64>| {
+        if !polish || residual == Vector2::zeros() {
+            return valid(m);
+        }
+        let polished = jacobian(&m)
+            .try_inverse()
+            .map(|inv| m - inv * residual)
+            .filter(|c| (map(c) - target).norm() < residual.norm())
+            .unwrap_or(m);
+        valid(polished)
+    };
+    let mut m = *target;
+    let mut residual = map(&m) - target;
+    let mut last_step = f64::INFINITY;
+    for iteration in 0..INVERSE_MAX_ITERATIONS {
+        if residual.norm() <= INVERSE_TOLERANCE_MM {
+            return finish(m, residual);
+        }
+        let jac = jacobian(&m);
+        let det = jac.determinant();
+        if det.is_nan() || det <= 1e-12 {
+            return Err(ModelError::SingularDistortion {
+                x: m.x,
+                y: m.y,
+                det,
+            });
+        }
+        let step =
+            Matrix2::new(jac[(1, 1)], -jac[(0, 1)], -jac[(1, 0)], jac[(0, 0)]) * residual / det;
+        let mut alpha = 1.0;
+        loop {
+            let candidate = m - step * alpha;
+            let r = map(&candidate) - target;
+            if r.norm() < residual.norm() || alpha < 1e-6 {
+                m = candidate;
+                residual = r;
+                last_step = step.norm() * alpha;
+                break;
+            }
+            alpha *= 0.5;
+        }
+        if !(m.x.is_finite() && m.y.is_finite()) {
+            return Err(ModelError::DistortionNotConverged {
+                x: target.x,
+                y: target.y,
+                iterations: iteration + 1,
+                last_step,
+            });
+        }
     }
+    if residual.norm() <= INVERSE_TOLERANCE_MM {
+        return finish(m, residual);
+    }
+    Err(ModelError::DistortionNotConverged {
+        x: target.x,
+        y: target.y,
+        iterations: INVERSE_MAX_ITERATIONS,
+        last_step,
+    })
 }

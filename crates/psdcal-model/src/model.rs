@@ -25,7 +25,7 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix2, Vector2};
 
-use crate::distortion::{INVERSE_MAX_ITERATIONS, INVERSE_TOLERANCE_MM};
+use crate::distortion::invert_newton;
 use crate::params::{Param, SensorModel};
 use crate::stage::{ParameterInfo, Stage, StageJacobian};
 use crate::stages::gains::GAIN_NAMES;
@@ -535,92 +535,12 @@ impl Model {
         if self.distortion_is_identity() {
             return Ok(*ideal);
         }
-        let mut m = *ideal;
-        let mut residual = self.ideal(&m) - ideal;
-        let mut last_step = f64::INFINITY;
-        for iteration in 0..INVERSE_MAX_ITERATIONS {
-            if residual.norm() <= INVERSE_TOLERANCE_MM {
-                return self.check_valid(self.polish(m, ideal, residual));
-            }
-            let jac = self.ideal_point_jacobian(&m);
-            let det = jac.determinant();
-            if det.is_nan() || det <= 1e-12 {
-                return Err(ModelError::SingularDistortion {
-                    x: m.x,
-                    y: m.y,
-                    det,
-                });
-            }
-            let step =
-                Matrix2::new(jac[(1, 1)], -jac[(0, 1)], -jac[(1, 0)], jac[(0, 0)]) * residual / det;
-            // Step halving keeps the iteration on the branch it started on.
-            let mut alpha = 1.0;
-            loop {
-                let candidate = m - step * alpha;
-                let r = self.ideal(&candidate) - ideal;
-                if r.norm() < residual.norm() || alpha < 1e-6 {
-                    m = candidate;
-                    residual = r;
-                    last_step = step.norm() * alpha;
-                    break;
-                }
-                alpha *= 0.5;
-            }
-            if !(m.x.is_finite() && m.y.is_finite()) {
-                return Err(ModelError::DistortionNotConverged {
-                    x: ideal.x,
-                    y: ideal.y,
-                    iterations: iteration + 1,
-                    last_step,
-                });
-            }
-        }
-        if residual.norm() <= INVERSE_TOLERANCE_MM {
-            return self.check_valid(m);
-        }
-        Err(ModelError::DistortionNotConverged {
-            x: ideal.x,
-            y: ideal.y,
-            iterations: INVERSE_MAX_ITERATIONS,
-            last_step,
-        })
-    }
-
-    /// One more Newton step from a converged `m`, kept when it lowers the
-    /// residual: the inverse is then exact to rounding, so that its
-    /// derivatives (implicit function theorem) match finite differences even
-    /// for distortions below the 1e-12 mm tolerance.
-    fn polish(
-        &self,
-        m: Vector2<f64>,
-        ideal: &Vector2<f64>,
-        residual: Vector2<f64>,
-    ) -> Vector2<f64> {
-        if residual == Vector2::zeros() {
-            return m;
-        }
-        let Some(inv) = self.ideal_point_jacobian(&m).try_inverse() else {
-            return m;
-        };
-        let candidate = m - inv * residual;
-        if (self.ideal(&candidate) - ideal).norm() < residual.norm() {
-            candidate
-        } else {
-            m
-        }
-    }
-
-    fn check_valid(&self, m: Vector2<f64>) -> Result<Vector2<f64>, ModelError> {
-        let det = self.ideal_point_jacobian(&m).determinant();
-        if det > 1e-12 {
-            Ok(m)
-        } else {
-            Err(ModelError::SingularDistortion {
-                x: m.x,
-                y: m.y,
-                det,
-            })
-        }
+        invert_newton(
+            ideal,
+            &|m| self.ideal(m),
+            &|m| self.ideal_point_jacobian(m),
+            true,
+        )
     }
 }
 
