@@ -109,12 +109,7 @@ pub fn aoa_table(
                     out.extend([deg(px), deg(py)]);
                 }
                 let cautions = est.cautions();
-                let status = psdcal_locate::status_of(&cautions);
-                let warning = cautions
-                    .first()
-                    .map(|c| format!("{at}: {c}; answered anyway"));
-                count.answered(&status, warning);
-                out.push(status);
+                out.push(count.answered_with(&at, &cautions));
             }
             Err(e) => {
                 out.extend(empty(added.len() - 1));

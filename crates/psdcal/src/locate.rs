@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Matrix3;
 use psdcal_io::{Points, RigFile, RigObservations};
-use psdcal_locate::{status_of, LocateOptions, Measurement, Plane, Rig, RigSensor};
+use psdcal_locate::{LocateOptions, Measurement, Plane, Rig, RigSensor};
 
 use crate::aoa::measurement;
 use crate::error::Result;
@@ -126,13 +126,7 @@ fn on_plane(
                     num(loc.intersection.range_mm),
                 ]);
                 out.extend(covariance_fields(&loc.covariance()));
-                let status = status_of(&loc.cautions);
-                let warning = loc
-                    .cautions
-                    .first()
-                    .map(|c| format!("{at}: {c}; answered anyway"));
-                count.answered(&status, warning);
-                out.push(status);
+                out.push(count.answered_with(&at, &loc.cautions));
             }
             Err(e) => {
                 out.extend(empty(added.len() - 1));
@@ -229,13 +223,7 @@ fn with_rig(rig_path: &Path, points: &Path, options: &LocateOptions) -> Result<L
                 out.extend(covariance_fields(&t.covariance));
                 let max_miss = t.miss_mm.iter().copied().fold(0.0, f64::max);
                 out.extend([num(max_miss), deg(t.max_ray_angle)]);
-                let status = status_of(&loc.cautions);
-                let warning = loc
-                    .cautions
-                    .first()
-                    .map(|c| format!("{at}: {c}; answered anyway"));
-                count.answered(&status, warning);
-                out.push(status);
+                out.push(count.answered_with(&at, &loc.cautions));
             }
             Err(e) => {
                 out.extend(empty(header.len() - 3));

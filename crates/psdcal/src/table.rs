@@ -7,7 +7,7 @@ use std::io::{self, Write};
 use std::path::Path;
 
 use psdcal_io::{write_atomic, IoError, Location, Points};
-use psdcal_locate::LocateError;
+use psdcal_locate::{status_of, Caution, LocateError};
 
 use crate::error::Result;
 
@@ -120,6 +120,17 @@ impl StatusCount {
         if let Some(w) = warning {
             self.warnings.push(w);
         }
+    }
+
+    /// Records a row answered with `cautions` (none: `ok`) at `at`, and
+    /// returns its status column.
+    pub fn answered_with(&mut self, at: &str, cautions: &[Caution]) -> String {
+        let status = status_of(cautions);
+        let warning = cautions
+            .first()
+            .map(|c| format!("{at}: {c}; answered anyway"));
+        self.answered(&status, warning);
+        status
     }
 
     /// Records a row without an answer.
