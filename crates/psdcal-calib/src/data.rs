@@ -46,6 +46,36 @@ pub struct CalibrationData {
 }
 
 impl CalibrationData {
+    /// The data of `points[image][led]`: every LED of `template` seen in
+    /// every image, images named `1, 2, …`, on a PSD of `geometry`, no
+    /// amplitudes.
+    pub fn from_points(
+        template: &[Vector2<f64>],
+        lines: &[Vec<usize>],
+        points: Vec<Vec<Vector2<f64>>>,
+        geometry: PsdGeometry,
+    ) -> Self {
+        let images = points
+            .into_iter()
+            .enumerate()
+            .map(|(i, image)| ImageObservations {
+                id: format!("{}", i + 1),
+                points: image
+                    .into_iter()
+                    .enumerate()
+                    .map(|(led, measured)| Observation { led, measured })
+                    .collect(),
+            })
+            .collect();
+        Self {
+            amplitudes: None,
+            template: template.to_vec(),
+            lines: lines.to_vec(),
+            images,
+            geometry,
+        }
+    }
+
     /// Checks what every routine relies on: finite template and measured
     /// points, LED indices inside the template, each LED at most once per
     /// image, declared lines naming existing LEDs. (Files are validated by

@@ -73,7 +73,7 @@ use crate::preliminary::{
 };
 use crate::refine::{CalibrationProblem, CostKind, FitState};
 use crate::zhang::{closed_form, pose_from_homography, ClosedFormSolution};
-use crate::{CalibError, CalibrationData};
+use crate::{CalibError, CalibrationData, ImageObservations};
 
 /// Minimum number of images for a calibration (one definition, in psdcal-model).
 pub use psdcal_model::MIN_IMAGES;
@@ -363,7 +363,7 @@ impl Problem {
         let keep = spread(n, max_images);
         let scale = keep.len() as f64 / n as f64;
         Problem {
-            data: subset_images(&self.data, max_images),
+            data: subset_images(&self.data, max_images, &|_| true),
             homographies: keep.iter().map(|&i| self.homographies[i]).collect(),
             k1_start: self.k1_start,
             k2: self.k2,
@@ -437,16 +437,24 @@ fn spread(n: usize, max: usize) -> Vec<usize> {
     }
 }
 
-/// The data set restricted to at most `max` images spread over it (without
-/// amplitudes: the start works on the measured points).
-fn subset_images(data: &CalibrationData, max: usize) -> CalibrationData {
+/// The data set restricted to at most `max` of its `eligible` images,
+/// spread over them (without amplitudes: the start works on the measured
+/// points). Only the kept images are copied.
+fn subset_images(
+    data: &CalibrationData,
+    max: usize,
+    eligible: &dyn Fn(&ImageObservations) -> bool,
+) -> CalibrationData {
+    let pool: Vec<&ImageObservations> = data.images.iter().filter(|im| eligible(im)).collect();
     CalibrationData {
-        images: spread(data.images.len(), max)
+        template: data.template.clone(),
+        lines: data.lines.clone(),
+        images: spread(pool.len(), max)
             .into_iter()
-            .map(|i| data.images[i].clone())
+            .map(|i| pool[i].clone())
             .collect(),
+        geometry: data.geometry,
         amplitudes: None,
-        ..data.clone()
     }
 }
 
@@ -518,20 +526,12 @@ pub fn initialize(
     // The rough correction is estimated on at most PRELIMINARY_IMAGES images
     // spread over the set: two coefficients need few images, and its cost
     // then does not grow with the set.
-    let preliminary_data = {
-        // Images of ≥ 5 points (what the consistency cost uses) when there are any.
-        let rich = CalibrationData {
-            images: data
-                .images
-                .iter()
-                .filter(|im| im.points.len() >= 5)
-                .cloned()
-                .collect(),
-            amplitudes: None,
-            ..data.clone()
-        };
-        let pool = if rich.images.is_empty() { data } else { &rich };
-        subset_images(pool, PRELIMINARY_IMAGES)
+    // Images of ≥ 5 points (what the consistency cost uses) when there are any.
+    let rich = |im: &ImageObservations| im.points.len() >= 5;
+    let preliminary_data = if data.images.iter().any(rich) {
+        subset_images(data, PRELIMINARY_IMAGES, &rich)
+    } else {
+        subset_images(data, PRELIMINARY_IMAGES, &|_| true)
     };
     let (preliminary, preliminary_note) =
         match estimate_preliminary(&preliminary_data, &prelim_options) {
@@ -563,10 +563,7 @@ pub fn initialize(
     let n_points = data.point_count() as f64;
     let tpl_scale = data.template.iter().map(|p| p.norm()).fold(1.0, f64::max);
     let problem = Problem {
-        data: CalibrationData {
-            amplitudes: None,
-            ..data.clone()
-        },
+        data: subset_images(data, usize::MAX, &|_| true),
         homographies,
         k1_start: preliminary.k1,
         k2: preliminary.k2,

@@ -6,7 +6,7 @@
 #![allow(dead_code)]
 
 use nalgebra::{Vector2, Vector3};
-use psdcal_calib::{CalibrationData, ImageObservations, Observation};
+use psdcal_calib::CalibrationData;
 use psdcal_locate::{measured_from_ray, CalibratedSensor, Rig, RigSensor};
 use psdcal_model::{Pose, PsdGeometry, SensorModel};
 use psdcal_testkit::PointKind;
@@ -128,23 +128,5 @@ pub fn observe(
     let noise = Normal::new(0.0, sigma_mm).expect("valid sigma");
     let mut points = psdcal_testkit::image_points(truth, &template, poses, PointKind::Measured);
     psdcal_testkit::add_noise(&mut points, &noise, rng);
-    let images = points
-        .into_iter()
-        .enumerate()
-        .map(|(i, image)| ImageObservations {
-            id: format!("{}", i + 1),
-            points: image
-                .into_iter()
-                .enumerate()
-                .map(|(led, measured)| Observation { led, measured })
-                .collect(),
-        })
-        .collect();
-    CalibrationData {
-        amplitudes: None,
-        template,
-        lines: Vec::new(),
-        images,
-        geometry: PsdGeometry::default(),
-    }
+    CalibrationData::from_points(&template, &[], points, PsdGeometry::default())
 }
