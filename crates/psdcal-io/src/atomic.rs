@@ -2,9 +2,16 @@
 //! or not at all.
 //!
 //! The content goes to a new temporary file in the destination's directory
-//! (so that the final rename stays on one file system), which is flushed and
-//! synced to disk, then renamed over the destination. If anything fails the
-//! temporary file is removed and the destination is left as it was.
+//! (so that the final rename stays on one file system), which is flushed,
+//! then renamed over the destination. If anything fails the temporary file is
+//! removed and the destination is left as it was.
+//!
+//! A reader (or psdcal killed mid-write) therefore never sees a partial file.
+//! The file is not forced to disk (no `fsync`): on this class of machine an
+//! `fsync` costs several milliseconds, more than a whole calibration, and the
+//! operating system writes the file back within seconds (file systems such
+//! as ext4 flush a file renamed over another before committing the rename).
+//! Run `sync` if the power may fail right after a run.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
@@ -25,13 +32,12 @@ where
         source,
     };
     let (temp_path, file) = create_temp(path).map_err(error)?;
-    let result = fill_and_sync(file, write).and_then(|()| fs::rename(&temp_path, path));
+    let result = fill(file, write).and_then(|()| fs::rename(&temp_path, path));
     if let Err(source) = result {
         // Best effort: the temporary file may already be gone.
         let _ = fs::remove_file(&temp_path);
         return Err(error(source));
     }
-    sync_directory(path);
     Ok(())
 }
 
@@ -71,31 +77,13 @@ fn create_temp(path: &Path) -> io::Result<(PathBuf, File)> {
     }
 }
 
-fn fill_and_sync<F>(file: File, write: F) -> io::Result<()>
+fn fill<F>(file: File, write: F) -> io::Result<()>
 where
     F: FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 {
     let mut writer = BufWriter::new(file);
     write(&mut writer)?;
-    writer.flush()?;
-    let file = writer.into_inner().map_err(|e| e.into_error())?;
-    file.sync_all()
-}
-
-/// Makes the rename durable where the platform allows it (best effort).
-fn sync_directory(path: &Path) {
-    #[cfg(unix)]
-    {
-        let dir = match path.parent() {
-            Some(dir) if !dir.as_os_str().is_empty() => dir,
-            _ => Path::new("."),
-        };
-        if let Ok(d) = File::open(dir) {
-            let _ = d.sync_all();
-        }
-    }
-    #[cfg(not(unix))]
-    let _ = path;
+    writer.flush()
 }
 
 #[cfg(test)]

@@ -495,16 +495,24 @@ impl Model {
     pub fn ideal_point_jacobian(&self, measured: &Vector2<f64>) -> Matrix2<f64> {
         let mut m = Matrix2::identity();
         let mut p = *measured;
-        let mut scratch = Vec::new();
+        // ∂/∂θ is computed alongside and discarded: small blocks on the stack
+        // (this runs in every Newton step of every projection).
+        let mut small = [0.0; 32];
+        let mut large = Vec::new();
         for (stage, block) in self.stages.iter().zip(&self.blocks) {
             let mut d = Matrix2::identity();
-            scratch.resize(2 * block.len(), 0.0);
+            let scratch: &mut [f64] = if 2 * block.len() <= small.len() {
+                &mut small[..2 * block.len()]
+            } else {
+                large.resize(2 * block.len(), 0.0);
+                &mut large
+            };
             p = stage.apply(
                 block,
                 &p,
                 Some(StageJacobian {
                     wrt_input: &mut d,
-                    wrt_params: &mut scratch,
+                    wrt_params: scratch,
                 }),
             );
             m = d * m;

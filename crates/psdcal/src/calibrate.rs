@@ -2,6 +2,7 @@
 //! residuals and the printable report, and writing them.
 
 use std::path::Path;
+use std::sync::OnceLock;
 
 use psdcal_calib::CalibrationResult;
 use psdcal_io::{write_calibration, Calibration};
@@ -21,10 +22,13 @@ pub struct Calibrated {
     pub result: CalibrationResult,
     /// The calibration.json record (version 2, with provenance).
     pub record: Calibration,
-    /// Every point's residuals.
-    pub residuals: ResidualTable,
     /// The printable view of the result.
     pub report: FitReport,
+    /// Every point's residuals, computed on first use ([`Self::residuals`]):
+    /// a projection per point that a plain calibration does not need.
+    residuals: OnceLock<ResidualTable>,
+    /// The calibrated images' identifiers, in the order of `result.poses`.
+    image_ids: Vec<String>,
 }
 
 /// Calibrates `set` with `options`. The record's provenance lists the data
@@ -38,22 +42,31 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
         .map_err(Error::Calibrate)?;
     let mut record = convert::record(&result, &data, set, options);
     record.provenance = Some(provenance("", options.to_json(), &set.inputs));
-    let residuals = ResidualTable::compute(
-        &result.model,
-        &convert::poses(&result, &data),
-        &set.template,
-        &set.validated,
-    );
     let report = convert::fit_report(&result);
     Ok(Calibrated {
         result,
         record,
-        residuals,
         report,
+        residuals: OnceLock::new(),
+        image_ids: data.images.iter().map(|image| image.id.clone()).collect(),
     })
 }
 
 impl Calibrated {
+    /// Every point's residuals of `set` (the data set this calibration was
+    /// made from), computed once.
+    pub fn residuals(&self, set: &DataSet) -> &ResidualTable {
+        self.residuals.get_or_init(|| {
+            let poses: Vec<(&str, psdcal_model::Pose)> = self
+                .image_ids
+                .iter()
+                .map(String::as_str)
+                .zip(self.result.poses.iter().copied())
+                .collect();
+            ResidualTable::compute(&self.result.model, &poses, &set.template, &set.validated)
+        })
+    }
+
     /// Records the command line that made this calibration.
     pub fn set_command(&mut self, command: &str) {
         if let Some(p) = &mut self.record.provenance {
@@ -66,7 +79,7 @@ impl Calibrated {
     pub fn write(&self, set: &DataSet, out: &Path, residuals: Option<&Path>) -> Result<()> {
         write_calibration(out, &self.record)?;
         if let Some(path) = residuals {
-            self.residuals.write_csv(path, &set.template)?;
+            self.residuals(set).write_csv(path, &set.template)?;
         }
         Ok(())
     }

@@ -15,7 +15,7 @@ use psdcal_io::{
 };
 use psdcal_locate::CalibratedSensor;
 use psdcal_model::stages::gains::GAIN_NAMES;
-use psdcal_model::{Amplitudes, Param, Pose, SensorModel};
+use psdcal_model::{Amplitudes, Param, SensorModel};
 
 use crate::dataset::DataSet;
 use crate::fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
@@ -126,15 +126,6 @@ fn noise_model(noise: Noise) -> NoiseModel {
 /// The estimated model.
 pub fn model(result: &CalibrationResult) -> SensorModel {
     result.sensor_model()
-}
-
-/// The pose of every calibrated image, by id.
-pub fn poses<'a>(result: &'a CalibrationResult, data: &'a CalibrationData) -> Vec<(&'a str, Pose)> {
-    data.images
-        .iter()
-        .zip(&result.poses)
-        .map(|(image, pose)| (image.id.as_str(), *pose))
-        .collect()
 }
 
 /// The calibration.json record of a result (without provenance).

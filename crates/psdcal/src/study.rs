@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use psdcal_io::{write_atomic, write_atomic_bytes};
 use psdcal_model::PsdGeometry;
-use psdcal_study::fig9::{figure9, ErrorMap};
+use psdcal_study::fig9::{figure9, Figure9Map};
 use psdcal_study::render::{csv_rows, markdown, num, CSV_HEADER};
 use psdcal_study::{run_tables, table_spec, StudyOptions, TableResult, TableSpec, TABLE_IDS};
 
@@ -184,7 +184,7 @@ impl StudyPlan {
     fn write(
         &self,
         tables: &[TableResult],
-        maps: &[ErrorMap],
+        maps: &[Figure9Map],
         elapsed: f64,
     ) -> Result<StudyOutcome> {
         let r = &self.request;
@@ -262,7 +262,7 @@ impl StudyPlan {
         )
     }
 
-    fn markdown(&self, tables: &[TableResult], maps: &[ErrorMap], elapsed: f64) -> String {
+    fn markdown(&self, tables: &[TableResult], maps: &[Figure9Map], elapsed: f64) -> String {
         let r = &self.request;
         let mut out = String::new();
         let _ = writeln!(

@@ -1,7 +1,7 @@
 //! The study's results as the plain data psdcal-report draws its page from.
 
 use psdcal_report::{Fig9Map, Page, ReportError, StudyColumn, StudyStats, StudyTable};
-use psdcal_study::fig9::ErrorMap;
+use psdcal_study::fig9::Figure9Map;
 use psdcal_study::{Quantity, TableResult};
 
 /// Parameters that get histograms, in the order they are shown.
@@ -49,7 +49,7 @@ pub fn study_table(t: &TableResult) -> StudyTable {
 }
 
 /// A Figure 9 map as plain data.
-pub fn fig9_map(m: &ErrorMap) -> Fig9Map {
+pub fn fig9_map(m: &Figure9Map) -> Fig9Map {
     Fig9Map {
         lens: m.lens,
         condition: m.condition.clone(),
@@ -66,7 +66,7 @@ pub fn study_page(
     title: &str,
     intro: &str,
     tables: &[TableResult],
-    maps: &[ErrorMap],
+    maps: &[Figure9Map],
 ) -> Result<Page, ReportError> {
     let tables: Vec<StudyTable> = tables.iter().map(study_table).collect();
     let maps: Vec<Fig9Map> = maps.iter().map(fig9_map).collect();

@@ -63,7 +63,7 @@ fn the_record_round_trips_and_the_residuals_agree() {
         serde_json::json!(["f", "cx", "cy", "k1", "k2"])
     );
     // Every point of every image has residuals, and their RMS is the fit's.
-    let table = &calibrated.residuals;
+    let table = calibrated.residuals(&set);
     let points: usize = table.images.iter().map(|i| i.points).sum();
     assert_eq!(points, calibrated.report.points);
     for (image, row) in table.images.iter().zip(&calibrated.report.per_image) {
