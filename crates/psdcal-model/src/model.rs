@@ -493,9 +493,17 @@ impl Model {
 
     /// `∂ideal/∂measured` at a point.
     pub fn ideal_point_jacobian(&self, measured: &Vector2<f64>) -> Matrix2<f64> {
+        self.point_jacobian_with(measured, &mut Vec::new())
+    }
+
+    /// [`Self::ideal_point_jacobian`] with a reusable scratch buffer.
+    pub(crate) fn point_jacobian_with(
+        &self,
+        measured: &Vector2<f64>,
+        scratch: &mut Vec<f64>,
+    ) -> Matrix2<f64> {
         let mut m = Matrix2::identity();
         let mut p = *measured;
-        let mut scratch = Vec::new();
         for (stage, block) in self.stages.iter().zip(&self.blocks) {
             let mut d = Matrix2::identity();
             scratch.resize(2 * block.len(), 0.0);
@@ -504,7 +512,7 @@ impl Model {
                 &p,
                 Some(StageJacobian {
                     wrt_input: &mut d,
-                    wrt_params: &mut scratch,
+                    wrt_params: scratch,
                 }),
             );
             m = d * m;
@@ -515,7 +523,7 @@ impl Model {
     /// Whether every distortion coefficient is zero (the chain is the
     /// identity up to the pinhole): checked through the stages' neutral
     /// values.
-    fn distortion_is_identity(&self) -> bool {
+    pub(crate) fn distortion_is_identity(&self) -> bool {
         self.stages.iter().zip(&self.blocks).all(|(stage, block)| {
             stage
                 .parameters()
