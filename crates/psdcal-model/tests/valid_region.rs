@@ -22,13 +22,13 @@ fn smallest_positive_root(a: f64, b: f64) -> Option<f64> {
         if disc < 0.0 {
             vec![]
         } else {
-            vec![(-a - disc.sqrt()) / (2.0 * b), (-a + disc.sqrt()) / (2.0 * b)]
+            vec![
+                (-a - disc.sqrt()) / (2.0 * b),
+                (-a + disc.sqrt()) / (2.0 * b),
+            ]
         }
     };
-    roots
-        .into_iter()
-        .filter(|s| *s > 0.0)
-        .reduce(f64::min)
+    roots.into_iter().filter(|s| *s > 0.0).reduce(f64::min)
 }
 
 /// The fold radius of a radial lens, derived by hand: along a ray from the
@@ -63,7 +63,10 @@ fn radial_fold_matches_the_closed_form() {
         // fold, where det > 1e-12, i.e. within 1e-12 / |det'(r*)| (< 1e-10
         // mm here) of r*.
         for (i, r) in region.radii().iter().enumerate() {
-            assert!(*r <= r_star && r_star - r < 1e-9, "ray {i}: {r} vs {r_star}");
+            assert!(
+                *r <= r_star && r_star - r < 1e-9,
+                "ray {i}: {r} vs {r_star}"
+            );
             assert!(region.folds_on_ray(i));
         }
         assert!(!region.whole_active_area());
@@ -104,7 +107,11 @@ fn non_folding_models_cover_the_whole_active_area() {
     // and a distortion-free pinhole.
     let mut lens1 = SensorModel::paper_lens1();
     lens1.distortion.l1 = -1.3058e-3;
-    for model in [lens1, SensorModel::paper_lens2(), SensorModel::pinhole(8.0, 0.3, 0.2)] {
+    for model in [
+        lens1,
+        SensorModel::paper_lens2(),
+        SensorModel::pinhole(8.0, 0.3, 0.2),
+    ] {
         let region = ValidRegion::of_sensor_model(&model, &geometry);
         assert!(region.whole_active_area());
         assert_eq!(region.nearest_fold_mm(), None);
@@ -170,19 +177,27 @@ fn inside_points_have_positive_determinants_all_the_way_from_the_centre() {
                     folded += 1;
                     // Refused: the fold lies within the margin (and the
                     // neighbouring ray's spacing) of the point's segment.
-                    let beyond = c + (p - c) * ((e.distance_mm.max(e.limit_mm) / e.distance_mm)
-                        / (1.0 - REGION_MARGIN)
-                        * 1.02);
+                    let beyond = c
+                        + (p - c)
+                            * ((e.distance_mm.max(e.limit_mm) / e.distance_mm)
+                                / (1.0 - REGION_MARGIN)
+                                * 1.02);
                     let min_det_beyond = (0..=400)
                         .map(|k| det(&(c + (beyond - c) * (k as f64 / 400.0))))
                         .fold(f64::INFINITY, f64::min);
-                    assert!(min_det_beyond <= 1e-12, "{p:?} refused, det {min_det_beyond}");
+                    assert!(
+                        min_det_beyond <= 1e-12,
+                        "{p:?} refused, det {min_det_beyond}"
+                    );
                 }
                 Err(e) => panic!("{p:?} beyond the zone: {e:?}"),
             }
         }
     }
-    assert!(inside > 1000 && folded > 100, "{inside} inside, {folded} folded");
+    assert!(
+        inside > 1000 && folded > 100,
+        "{inside} inside, {folded} folded"
+    );
 }
 
 #[test]
@@ -197,7 +212,9 @@ fn regions_from_radii_round_trip_and_refuse_bad_values() {
     assert!(ValidRegion::from_radii(c, vec![-1.0; 360], &geometry).is_err());
     assert!(ValidRegion::from_radii(c, vec![f64::NAN; 360], &geometry).is_err());
     assert!(ValidRegion::from_radii(c, vec![20.0; 360], &geometry).is_err());
-    assert!(ValidRegion::from_radii(Vector2::new(f64::NAN, 0.0), vec![1.0; 360], &geometry).is_err());
+    assert!(
+        ValidRegion::from_radii(Vector2::new(f64::NAN, 0.0), vec![1.0; 360], &geometry).is_err()
+    );
     // A model folded at its centre has an empty region.
     let mut m = SensorModel::pinhole(8.0, 0.0, 0.0);
     m.distortion.k1 = f64::NAN;
