@@ -39,7 +39,9 @@
 
 use std::path::Path;
 
-use psdcal_model::{ChannelGains, Distortion, Intrinsics, Param, PsdGeometry, SensorModel};
+use psdcal_model::{
+    ChannelGains, Distortion, Intrinsics, Param, PsdGeometry, SensorModel, ValidRegion,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomic_bytes;
@@ -47,6 +49,7 @@ use crate::error::{IoError, Location};
 
 mod provenance;
 mod records;
+mod region;
 mod rules;
 #[cfg(test)]
 mod tests;
@@ -59,6 +62,7 @@ pub use records::{
     CostKind, Covariance, FitSummary, GainsRecord, ImageFit, IntrinsicsRecord, SensorSize,
     Software, StdDevs,
 };
+pub use region::ValidRegionRecord;
 use rules::{de_format, de_version};
 
 /// The `format` name of calibration.json.
@@ -107,6 +111,12 @@ pub struct Calibration {
     /// Where the calibration came from (version 2; absent in version 1 files).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub provenance: Option<Provenance>,
+    /// Where the model is one-to-one (version 2, docs/model.md §8.2; written
+    /// when present, [`Calibration::store_valid_region`]); `None`: not stored
+    /// (version 1 files, older version 2 files), computed from the model when
+    /// needed ([`Calibration::valid_region`]).
+    #[serde(skip)]
+    pub valid_region: Option<ValidRegionRecord>,
 }
 
 impl Calibration {
@@ -138,6 +148,7 @@ impl Calibration {
             images: Vec::new(),
             diagnostics: Vec::new(),
             provenance: None,
+            valid_region: None,
         }
     }
 
@@ -171,6 +182,22 @@ impl Calibration {
             lx: self.sensor.lx_mm,
             ly: self.sensor.ly_mm,
         }
+    }
+
+    /// The model's valid region (docs/model.md §8.2): the stored one, or
+    /// computed from the model when the file has none.
+    pub fn valid_region(&self) -> ValidRegion {
+        let geometry = self.geometry();
+        self.valid_region
+            .as_ref()
+            .and_then(|r| r.to_region(&geometry).ok())
+            .unwrap_or_else(|| ValidRegion::of_sensor_model(&self.to_model(), &geometry))
+    }
+
+    /// Computes the valid region of the model and stores it in the record.
+    pub fn store_valid_region(&mut self) {
+        let region = ValidRegion::of_sensor_model(&self.to_model(), &self.geometry());
+        self.valid_region = Some(ValidRegionRecord::from_region(&region));
     }
 
     /// The relative channel gains, if any.

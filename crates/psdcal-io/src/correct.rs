@@ -6,7 +6,10 @@
 //! any. The answer is the input table with its columns and text unchanged,
 //! followed by `x_mm`, `y_mm` (amplitude input only) and `x_ideal_mm`,
 //! `y_ideal_mm`. Points off the active area are corrected anyway, with a
-//! warning: the model was not fitted there.
+//! warning: the model was not fitted there. Points outside the calibration's
+//! valid region (docs/model.md §8.2: past the first fold of the correction
+//! from the optical centre) have no ideal point: their fields are left empty,
+//! with a warning (status `outside_valid_region`).
 
 use std::io::{self, Write};
 
@@ -29,11 +32,11 @@ pub const IDEAL_COLUMNS: [&str; 2] = ["x_ideal_mm", "y_ideal_mm"];
 pub struct Correction {
     /// Measured point of each row, mm.
     pub measured: Vec<Vector2<f64>>,
-    /// Ideal point of each row, mm.
-    pub ideal: Vec<Vector2<f64>>,
+    /// Ideal point of each row, mm (`None`: outside the valid region).
+    pub ideal: Vec<Option<Vector2<f64>>>,
     /// Whether the measured points were computed from amplitudes.
     pub from_amplitudes: bool,
-    /// Points off the active area.
+    /// Points off the active area or outside the valid region.
     pub warnings: Vec<Warning>,
 }
 
@@ -52,11 +55,25 @@ pub fn correct_points(points: &Points, calibration: &Calibration) -> Result<Corr
     }
     let model = calibration.to_model();
     let geometry = calibration.geometry();
+    let region = calibration.valid_region();
     let gains = calibration.gains().unwrap_or(ChannelGains::UNIT);
     let measured = points.measured(&geometry, &gains)?;
     let mut ideal = Vec::with_capacity(measured.len());
     let mut warnings = Vec::new();
     for (row, m) in points.rows.iter().zip(&measured) {
+        if let Err(outside) = region.check(m) {
+            warnings.push(Warning::PointOutsideValidRegion {
+                file: points.source.clone(),
+                line: row.line_no,
+                x_mm: m.x,
+                y_mm: m.y,
+                distance_mm: outside.distance_mm,
+                limit_mm: outside.limit_mm,
+                fold: outside.fold,
+            });
+            ideal.push(None);
+            continue;
+        }
         let p = model.undistort(m);
         if !(p.x.is_finite() && p.y.is_finite()) {
             return Err(IoError::Invalid {
@@ -78,7 +95,7 @@ pub fn correct_points(points: &Points, calibration: &Calibration) -> Result<Corr
                 ly_mm: geometry.ly,
             });
         }
-        ideal.push(p);
+        ideal.push(Some(p));
     }
     Ok(Correction {
         measured,
@@ -106,10 +123,10 @@ impl Correction {
     /// Writes `points` (the table this correction was made from) with the
     /// added columns.
     pub fn write_csv<W: Write>(&self, points: &Points, out: W) -> io::Result<()> {
-        let xm: Vec<f64> = self.measured.iter().map(|p| p.x).collect();
-        let ym: Vec<f64> = self.measured.iter().map(|p| p.y).collect();
-        let xi: Vec<f64> = self.ideal.iter().map(|p| p.x).collect();
-        let yi: Vec<f64> = self.ideal.iter().map(|p| p.y).collect();
+        let xm: Vec<Option<f64>> = self.measured.iter().map(|p| Some(p.x)).collect();
+        let ym: Vec<Option<f64>> = self.measured.iter().map(|p| Some(p.y)).collect();
+        let xi: Vec<Option<f64>> = self.ideal.iter().map(|p| p.map(|p| p.x)).collect();
+        let yi: Vec<Option<f64>> = self.ideal.iter().map(|p| p.map(|p| p.y)).collect();
         let mut added = Vec::with_capacity(4);
         if self.from_amplitudes {
             added.push(AddedColumn {
@@ -152,8 +169,8 @@ mod tests {
         let cal = calibration();
         let c = correct_points(&points, &cal).unwrap();
         let model = SensorModel::paper_lens2();
-        assert_eq!(c.ideal[0], model.undistort(&Vector2::new(1.5, -2.0)));
-        assert_eq!(c.ideal[1], model.undistort(&Vector2::zeros()));
+        assert_eq!(c.ideal[0], Some(model.undistort(&Vector2::new(1.5, -2.0))));
+        assert_eq!(c.ideal[1], Some(model.undistort(&Vector2::zeros())));
         assert!(c.warnings.is_empty());
         assert_eq!(c.added_columns(), ["x_ideal_mm", "y_ideal_mm"]);
         let mut out = Vec::new();
@@ -161,7 +178,10 @@ mod tests {
         let text = String::from_utf8(out).unwrap();
         let expected = format!(
             "name,x_mm,y_mm,x_ideal_mm,y_ideal_mm\nfirst,1.5,-2,{},{}\nsecond,0,0,{},{}\n",
-            c.ideal[0].x, c.ideal[0].y, c.ideal[1].x, c.ideal[1].y
+            c.ideal[0].unwrap().x,
+            c.ideal[0].unwrap().y,
+            c.ideal[1].unwrap().x,
+            c.ideal[1].unwrap().y
         );
         assert_eq!(text, expected);
     }
@@ -182,7 +202,7 @@ mod tests {
         let c = correct_points(&points, &cal).unwrap();
         assert!(c.from_amplitudes);
         assert!((c.measured[0] - Vector2::new(2.0, 1.0)).norm() < 1e-12);
-        assert_eq!(c.ideal[0], cal.to_model().undistort(&c.measured[0]));
+        assert_eq!(c.ideal[0], Some(cal.to_model().undistort(&c.measured[0])));
         assert_eq!(
             c.added_columns(),
             ["x_mm", "y_mm", "x_ideal_mm", "y_ideal_mm"]
@@ -203,10 +223,40 @@ mod tests {
             "points.csv:3: point (5, 0) mm is off the 9 x 9 mm active area, where the model was \
              not fitted: corrected anyway"
         );
+        // Far beyond the active area (and the valid region's checked zone):
+        // no answer, never an overflowed number.
         let points = Points::from_str("points.csv", "x_mm,y_mm\n0,0\n1e300,0\n").unwrap();
-        let e = correct_points(&points, &calibration()).unwrap_err();
-        assert_eq!(e.line(), Some(3));
-        assert!(e.to_string().contains("its correction overflows"), "{e}");
+        let c = correct_points(&points, &calibration()).unwrap();
+        assert_eq!(c.ideal[1], None);
+        assert!(c.warnings[0]
+            .to_string()
+            .contains("outside the calibration's valid region"));
+    }
+
+    /// Issue 12's reproducer: k1 = −0.02 mm⁻² about (0.5, −0.7) folds at
+    /// r* = 1/√(3 · 0.02) = 4.08 mm from the centre; the corner (−4.5, 4.5),
+    /// 7.21 mm away, is past the fold (its determinant is positive again and
+    /// its ideal point mirrored) and gets no ideal point.
+    #[test]
+    fn points_past_a_fold_are_not_corrected() {
+        let mut model = SensorModel::pinhole(8.0, 0.5, -0.7);
+        model.distortion.k1 = -0.02;
+        let cal = Calibration::from_model(&model, &PsdGeometry::default());
+        let points =
+            Points::from_str("points.csv", "name,x_mm,y_mm\nnear,1,1\ncorner,-4.5,4.5\n").unwrap();
+        let c = correct_points(&points, &cal).unwrap();
+        assert_eq!(c.ideal[0], Some(model.undistort(&Vector2::new(1.0, 1.0))));
+        assert_eq!(c.ideal[1], None);
+        assert_eq!(c.warnings.len(), 1);
+        let w = c.warnings[0].to_string();
+        assert!(
+            w.starts_with("points.csv:3: point (-4.5, 4.5) mm is outside"),
+            "{w}"
+        );
+        let mut out = Vec::new();
+        c.write_csv(&points, &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.ends_with("\ncorner,-4.5,4.5,,\n"), "{text}");
     }
 
     #[test]

@@ -62,8 +62,9 @@ pub struct Points {
 pub struct AddedColumn<'a> {
     /// Header name.
     pub name: &'a str,
-    /// One value per row.
-    pub values: &'a [f64],
+    /// One value per row (`None`: the row has no answer, the field is
+    /// written empty).
+    pub values: &'a [Option<f64>],
 }
 
 impl Points {
@@ -160,8 +161,9 @@ impl Points {
 
     /// Writes the table back as CSV: every input column in its original
     /// order and text, then the `added` columns, numbers in Rust's shortest
-    /// round-trip form. Fails (before writing anything) if an added column
-    /// does not have one value per row or a value is not finite.
+    /// round-trip form, a missing value as an empty field. Fails (before
+    /// writing anything) if an added column does not have one value per row
+    /// or a value is not finite.
     pub fn write_csv<W: Write>(&self, out: W, added: &[AddedColumn<'_>]) -> io::Result<()> {
         for column in added {
             if column.values.len() != self.rows.len() {
@@ -175,7 +177,11 @@ impl Points {
                     ),
                 ));
             }
-            if let Some(row) = column.values.iter().position(|v| !v.is_finite()) {
+            if let Some(row) = column
+                .values
+                .iter()
+                .position(|v| v.is_some_and(|v| !v.is_finite()))
+            {
                 return Err(io::Error::new(
                     io::ErrorKind::InvalidInput,
                     format!(
@@ -192,7 +198,13 @@ impl Points {
         for (i, row) in self.rows.iter().enumerate() {
             let values: Vec<String> = added
                 .iter()
-                .map(|c| c.values.get(i).map_or_else(String::new, f64::to_string))
+                .map(|c| {
+                    c.values
+                        .get(i)
+                        .copied()
+                        .flatten()
+                        .map_or_else(String::new, |v| v.to_string())
+                })
                 .collect();
             let fields = row.fields.iter().map(String::as_str);
             writer.write_record(fields.chain(values.iter().map(String::as_str)))?;
@@ -299,11 +311,11 @@ mod tests {
             &[
                 AddedColumn {
                     name: "x_ideal_mm",
-                    values: &[0.1, -2.0],
+                    values: &[Some(0.1), Some(-2.0)],
                 },
                 AddedColumn {
                     name: "y_ideal_mm",
-                    values: &[1.0 / 3.0, 1e-7],
+                    values: &[Some(1.0 / 3.0), None],
                 },
             ],
         )
@@ -312,7 +324,7 @@ mod tests {
             String::from_utf8(out).unwrap(),
             "id, note ,y_mm,x_mm,x_ideal_mm,y_ideal_mm\n\
              7,\"a, b\",-1.5, 2e-1 ,0.1,0.3333333333333333\n\
-             8,,0,0,-2,0.0000001\n"
+             8,,0,0,-2,\n"
         );
     }
 
@@ -335,7 +347,7 @@ mod tests {
                 &mut out,
                 &[AddedColumn {
                     name: "a",
-                    values: &[f64::NAN],
+                    values: &[Some(f64::NAN)],
                 }],
             )
             .unwrap_err();

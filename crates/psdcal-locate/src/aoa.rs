@@ -23,10 +23,14 @@
 //! ∂α/∂(a,b) = diag(1/(1 + a²), 1/(1 + b²))
 //! ```
 //!
-//! The model's valid region is where the correction is finite and locally
+//! Here, a point is answered where the correction is finite and locally
 //! invertible without folding over (`det U_m > 0`, the criterion of the
-//! model's inverse distortion); outside it there is no angle of arrival,
-//! only [`LocateError::OutsideValidRegion`].
+//! model's inverse distortion); elsewhere there is no angle of arrival, only
+//! [`LocateError::OutsideValidRegion`]. A point past a fold can have
+//! `det U_m > 0` again (with a mirrored ideal point): the calibrated
+//! sensor ([`crate::CalibratedSensor::aoa`]) also checks its valid region
+//! (docs/model.md §8.2, [`psdcal_model::ValidRegion`]), the part of the
+//! active area the optical centre reaches without crossing a fold.
 
 use nalgebra::{Matrix2, SMatrix, Unit, Vector2, Vector3};
 use psdcal_model::{SensorModel, N_PARAMS};

@@ -42,6 +42,33 @@ pub enum LocateError {
         /// What fails there.
         reason: &'static str,
     },
+    /// The measured point lies outside the calibration's valid region
+    /// (docs/model.md §8.2): past the first fold of the correction along its
+    /// direction from the optical centre, or beyond the checked zone far off
+    /// the active area. Its status is `outside_valid_region`, as for
+    /// [`LocateError::OutsideValidRegion`].
+    #[error(
+        "measured point ({x:?}, {y:?}) mm is outside the calibration's valid region: it is \
+         {distance_mm:.4} mm from the optical centre, and the region ends {limit_mm:.4} mm from \
+         it in this direction ({})",
+        if *.fold {
+            "where the distortion correction folds over: past there it has no unique answer"
+        } else {
+            "the edge of the checked zone, far off the active area"
+        }
+    )]
+    BeyondValidRegion {
+        /// Measured x, mm.
+        x: f64,
+        /// Measured y, mm.
+        y: f64,
+        /// Distance from the optical centre, mm.
+        distance_mm: f64,
+        /// How far the region reaches in that direction, mm.
+        limit_mm: f64,
+        /// Whether the region ends there at a fold.
+        fold: bool,
+    },
     /// The ray is parallel to the plane (it never meets it).
     #[error("the ray is parallel to the plane (|cos| between ray and normal = {cos:.3e})")]
     ParallelToPlane {
@@ -119,7 +146,9 @@ impl LocateError {
             LocateError::InvalidInput { .. } => "invalid_input",
             LocateError::Model(ModelError::NonPositiveTotal { .. }) => "no_light",
             LocateError::Model(_) => "model_error",
-            LocateError::OutsideValidRegion { .. } => "outside_valid_region",
+            LocateError::OutsideValidRegion { .. } | LocateError::BeyondValidRegion { .. } => {
+                "outside_valid_region"
+            }
             LocateError::ParallelToPlane { .. } => "parallel_to_plane",
             LocateError::PointsAwayFromPlane { .. } => "points_away_from_plane",
             LocateError::TooFewRays { .. } => "too_few_sensors",

@@ -17,15 +17,17 @@
 //!   `k σ_αx`, `k σ_αy`, `k √(σ²_αx + σ²_αy)`, and on the plane
 //!   `Σ_XY = S² Σ_ab`: `k σ_X`, `k σ_Y`, `k √(σ²_X + σ²_Y)`.
 //!
-//! A grid point where the model is not valid (distortion folding over) is
-//! kept with its reason, never with a made-up number.
+//! A grid point where the model is not valid — outside its valid region
+//! (docs/model.md §8.2: past the first fold of the correction from the
+//! optical centre) or where the correction folds over — is kept with its
+//! reason (status `outside_valid_region`), never with a made-up number.
 
 use nalgebra::Vector2;
-use psdcal_model::{PsdGeometry, SensorModel};
+use psdcal_model::{PsdGeometry, SensorModel, ValidRegion};
 
 use crate::error::{exceeds, finite, LocateError};
 use crate::sensitivity::{aoa_deviation, check_distance, paper_aoa_error_at, ParameterErrors};
-use crate::sensor::{CalibratedSensor, LocateOptions, Measurement};
+use crate::sensor::{check_region, CalibratedSensor, LocateOptions, Measurement};
 use crate::uncertainty::ParameterCovariance;
 
 /// Largest grid side accepted.
@@ -188,6 +190,10 @@ pub fn error_map(
         }
         ErrorSource::Parameters(_) => None,
     };
+    let region = match &sensor {
+        Some(s) => s.valid_region.clone(),
+        None => ValidRegion::of_sensor_model(model, geometry),
+    };
     let n = options.grid;
     let last = (n - 1) as f64;
     let s = options.distance_mm;
@@ -198,7 +204,7 @@ pub fn error_map(
                 geometry.lx * (ix as f64 / last - 0.5),
                 geometry.ly * (iy as f64 / last - 0.5),
             );
-            let values = match (source, &sensor) {
+            let values = check_region(&region, &measured).and_then(|()| match (source, &sensor) {
                 (ErrorSource::Parameters(errors), _) => {
                     parameter_cell(model, errors, &measured, s, options.paper_form)
                 }
@@ -206,7 +212,7 @@ pub fn error_map(
                     covariance_cell(sensor, &measured, s, *k)
                 }
                 (ErrorSource::Covariance { .. }, None) => unreachable_cell(),
-            };
+            });
             cells.push(MapCell { measured, values });
         }
     }

@@ -17,7 +17,7 @@ use nalgebra::{DMatrix, Matrix2, Matrix2x3, Matrix3, Vector2};
 use psdcal_model::sensor::{
     impact_point_gain_jacobian, impact_point_with_gains, is_on_active_area,
 };
-use psdcal_model::{Amplitudes, ChannelGains, Model, Param, PsdGeometry, SensorModel};
+use psdcal_model::{Amplitudes, ChannelGains, Model, Param, PsdGeometry, SensorModel, ValidRegion};
 
 use crate::aoa::{alpha_wrt_ray, angle_of_arrival_with_jacobians, AngleOfArrival, AoaJacobians};
 use crate::caution::Caution;
@@ -92,6 +92,11 @@ pub struct CalibratedSensor {
     /// [`Self::chain`]'s parameters (an unknown name makes `aoa` fail with
     /// `invalid_covariance`).
     pub covariance: ParameterCovariance,
+    /// Where the model's measured → ideal map is one-to-one (docs/model.md
+    /// §8.2): computed from `model` and `geometry` by [`Self::new`], or the
+    /// region stored with the calibration ([`Self::with_valid_region`]).
+    /// Recompute it ([`Self::refresh_valid_region`]) after changing `model`.
+    pub valid_region: ValidRegion,
 }
 
 /// A measured point and, for amplitude input through gains, `∂m/∂g`.
@@ -183,11 +188,31 @@ impl CalibratedSensor {
     /// A sensor with balanced channels and no calibration uncertainty.
     pub fn new(model: SensorModel, geometry: PsdGeometry) -> Self {
         Self {
+            valid_region: ValidRegion::of_sensor_model(&model, &geometry),
             model,
             geometry,
             gains: None,
             covariance: ParameterCovariance::none(),
         }
+    }
+
+    /// The same sensor with a given valid region (the one stored with its
+    /// calibration).
+    pub fn with_valid_region(mut self, region: ValidRegion) -> Self {
+        self.valid_region = region;
+        self
+    }
+
+    /// Recomputes the valid region from `model` and `geometry`.
+    pub fn refresh_valid_region(&mut self) {
+        self.valid_region = ValidRegion::of_sensor_model(&self.model, &self.geometry);
+    }
+
+    /// `Ok` when `point` is inside the valid region, else
+    /// [`LocateError::BeyondValidRegion`] (a non-finite point is
+    /// [`LocateError::NonFinite`]).
+    pub fn check_valid_region(&self, point: &Vector2<f64>) -> Result<(), LocateError> {
+        check_region(&self.valid_region, point)
     }
 
     /// The same sensor with a covariance.
@@ -258,6 +283,7 @@ impl CalibratedSensor {
     ) -> Result<AoaEstimate, LocateError> {
         options.check()?;
         let measured = self.measured_point(measurement)?;
+        self.check_valid_region(&measured.point)?;
         let (aoa, jacobians) = angle_of_arrival_with_jacobians(&self.model, &measured.point)?;
         let wrt_gains = measured.wrt_gains.map(|g| jacobians.ray_wrt_measured * g);
         let ray_covariance_calibration = if self.covariance.is_empty() {
@@ -338,4 +364,20 @@ impl CalibratedSensor {
             cautions,
         })
     }
+}
+
+/// `Ok` when `point` is inside `region`: [`LocateError::NonFinite`] for a
+/// non-finite point, [`LocateError::BeyondValidRegion`] outside.
+pub(crate) fn check_region(region: &ValidRegion, point: &Vector2<f64>) -> Result<(), LocateError> {
+    finite(point.x, "measured x")?;
+    finite(point.y, "measured y")?;
+    region
+        .check(point)
+        .map_err(|o| LocateError::BeyondValidRegion {
+            x: point.x,
+            y: point.y,
+            distance_mm: o.distance_mm,
+            limit_mm: o.limit_mm,
+            fold: o.fold,
+        })
 }

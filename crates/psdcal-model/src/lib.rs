@@ -15,7 +15,9 @@
 //!   what calibration estimates;
 //! - [`covariance`]: [`ParameterCovariance`], the one covariance type (named
 //!   parameters, validated symmetric matrix);
-//! - [`fit`]: what every fit shares: [`CostKind`], [`MIN_IMAGES`].
+//! - [`fit`]: what every fit shares: [`CostKind`], [`MIN_IMAGES`];
+//! - [`valid_region`]: where the measured → ideal map is one-to-one
+//!   (docs/model.md §8.2), a radius per ray from the optical centre.
 //!
 //! Millimetres everywhere, radians inside. See `CONVENTIONS.md` at the root of
 //! the repository for symbols and frames.
@@ -37,6 +39,7 @@ pub mod projection;
 pub mod sensor;
 pub mod stage;
 pub mod stages;
+pub mod valid_region;
 
 pub use covariance::{CovarianceError, ParameterCovariance};
 pub use distortion::CorrectionJacobian;
@@ -49,3 +52,4 @@ pub use pose::{Pose, RotationJacobian, N_POSE};
 pub use projection::{BackProjectionJacobians, ProjectionJacobians};
 pub use sensor::{Amplitudes, ChannelGains, PsdGeometry};
 pub use stage::{ParameterInfo, Stage, StageJacobian};
+pub use valid_region::{OutsideRegion, ValidRegion};

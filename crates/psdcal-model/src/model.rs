@@ -493,19 +493,28 @@ impl Model {
 
     /// `∂ideal/∂measured` at a point.
     pub fn ideal_point_jacobian(&self, measured: &Vector2<f64>) -> Matrix2<f64> {
+        self.point_jacobian_with(measured, &mut Vec::new())
+    }
+
+    /// [`Self::ideal_point_jacobian`] with a reusable scratch buffer.
+    pub(crate) fn point_jacobian_with(
+        &self,
+        measured: &Vector2<f64>,
+        scratch: &mut Vec<f64>,
+    ) -> Matrix2<f64> {
         let mut m = Matrix2::identity();
         let mut p = *measured;
         // ∂/∂θ is computed alongside and discarded: small blocks on the stack
-        // (this runs in every Newton step of every projection).
+        // (this runs in every Newton step of every projection), large ones in
+        // the caller's scratch buffer.
         let mut small = [0.0; 32];
-        let mut large = Vec::new();
         for (stage, block) in self.stages.iter().zip(&self.blocks) {
             let mut d = Matrix2::identity();
             let scratch: &mut [f64] = if 2 * block.len() <= small.len() {
                 &mut small[..2 * block.len()]
             } else {
-                large.resize(2 * block.len(), 0.0);
-                &mut large
+                scratch.resize(2 * block.len(), 0.0);
+                &mut scratch[..]
             };
             p = stage.apply(
                 block,
@@ -523,7 +532,7 @@ impl Model {
     /// Whether every distortion coefficient is zero (the chain is the
     /// identity up to the pinhole): checked through the stages' neutral
     /// values.
-    fn distortion_is_identity(&self) -> bool {
+    pub(crate) fn distortion_is_identity(&self) -> bool {
         self.stages.iter().zip(&self.blocks).all(|(stage, block)| {
             stage
                 .parameters()

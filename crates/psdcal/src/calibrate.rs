@@ -4,8 +4,10 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use psdcal_calib::CalibrationResult;
-use psdcal_io::{write_calibration, Calibration};
+use nalgebra::Vector2;
+use psdcal_calib::{CalibrationData, CalibrationResult};
+use psdcal_io::{write_calibration, Calibration, ValidRegionRecord};
+use psdcal_model::ValidRegion;
 
 use crate::convert;
 use crate::dataset::DataSet;
@@ -40,7 +42,10 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
     let data = convert::calibration_data(set, options.fit_gains);
     let result = psdcal_calib::calibrate(&data, &convert::calibrate_options(options))
         .map_err(Error::Calibrate)?;
+    let region = ValidRegion::of_model(&result.model, &data.geometry);
+    check_data_in_region(&result, &data, set, &region)?;
     let mut record = convert::record(&result, &data, set, options);
+    record.valid_region = Some(ValidRegionRecord::from_region(&region));
     record.provenance = Some(provenance("", options.to_json(), &set.inputs));
     let report = convert::fit_report(&result);
     Ok(Calibrated {
@@ -49,6 +54,62 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
         report,
         residuals: OnceLock::new(),
         image_ids: data.images.iter().map(|image| image.id.clone()).collect(),
+    })
+}
+
+/// Refuses a calibration whose valid region does not contain the measured
+/// points it was fitted to (with fitted gains, the points recomputed from the
+/// amplitudes through them).
+fn check_data_in_region(
+    result: &CalibrationResult,
+    data: &CalibrationData,
+    set: &DataSet,
+    region: &ValidRegion,
+) -> Result<()> {
+    let mut points = Vec::new();
+    for (i, image) in data.images.iter().enumerate() {
+        for (j, obs) in image.points.iter().enumerate() {
+            let amplitudes = data.amplitudes.as_ref().and_then(|a| a.get(i)?.get(j));
+            let measured = match (result.model.gains_stage(), amplitudes) {
+                (Some(_), Some(a)) => result
+                    .model
+                    .measured_from_amplitudes(a)
+                    .unwrap_or(obs.measured),
+                _ => obs.measured,
+            };
+            let led = set
+                .template
+                .leds
+                .get(obs.led)
+                .map_or_else(|| format!("#{}", obs.led), |l| l.id.clone());
+            points.push((image.id.as_str(), led, measured));
+        }
+    }
+    refuse_points_outside(region, &points)
+}
+
+/// [`Error::DataOutsideValidRegion`] when a point `(image, LED, measured)`
+/// lies outside `region`.
+fn refuse_points_outside(
+    region: &ValidRegion,
+    points: &[(&str, String, Vector2<f64>)],
+) -> Result<()> {
+    let outside: Vec<_> = points
+        .iter()
+        .filter_map(|(image, led, m)| region.check(m).err().map(|o| (image, led, m, o)))
+        .collect();
+    let Some((image, led, m, o)) = outside.first() else {
+        return Ok(());
+    };
+    Err(Error::DataOutsideValidRegion {
+        outside: outside.len(),
+        points: points.len(),
+        fold_mm: region.nearest_fold_mm().unwrap_or(o.limit_mm),
+        first: format!(
+            "image {image}, LED {led} at ({:.4}, {:.4}) mm, {:.4} mm from the centre where the \
+             region ends at {:.4} mm",
+            m.x, m.y, o.distance_mm, o.limit_mm
+        ),
     })
 }
 
@@ -88,5 +149,55 @@ impl Calibrated {
     pub fn summary_json(&self) -> Result<String> {
         serde_json::to_string_pretty(&self.result.summary())
             .map_err(|e| Error::Input(format!("cannot encode the summary: {e}")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use psdcal_model::{PsdGeometry, SensorModel};
+
+    use super::*;
+
+    /// Data past the fold of k1 = −0.02 mm⁻² about (0.5, −0.7) (r* =
+    /// 1/√(3 · 0.02) = 4.08 mm) are refused with the count and the first
+    /// point; data inside pass.
+    #[test]
+    fn data_past_the_fold_are_refused() {
+        let mut model = SensorModel::pinhole(8.0, 0.5, -0.7);
+        model.distortion.k1 = -0.02;
+        let region = ValidRegion::of_sensor_model(&model, &PsdGeometry::default());
+        let inside = vec![
+            ("1", "a".to_string(), Vector2::new(0.5, -0.7)),
+            ("1", "b".to_string(), Vector2::new(3.0, 1.0)),
+        ];
+        assert!(refuse_points_outside(&region, &inside).is_ok());
+        let mut data = inside.clone();
+        data.push(("2", "c".to_string(), Vector2::new(-4.5, 4.5)));
+        data.push(("3", "d".to_string(), Vector2::new(4.5, -4.5)));
+        let e = refuse_points_outside(&region, &data).unwrap_err();
+        let Error::DataOutsideValidRegion {
+            outside,
+            points,
+            fold_mm,
+            ..
+        } = &e
+        else {
+            panic!("{e}")
+        };
+        assert_eq!((*outside, *points), (2, 4));
+        assert!((fold_mm - 1.0 / (3.0f64 * 0.02).sqrt()).abs() < 1e-9);
+        let text = e.to_string();
+        assert!(
+            text.contains("2 of 4 points lie outside its valid region"),
+            "{text}"
+        );
+        assert!(
+            text.contains("image 2, LED c at (-4.5000, 4.5000) mm, 7.2139 mm"),
+            "{text}"
+        );
+        // A non-folding calibration accepts the same data.
+        let plain =
+            ValidRegion::of_sensor_model(&SensorModel::paper_lens2(), &PsdGeometry::default());
+        assert!(refuse_points_outside(&plain, &data).is_ok());
     }
 }

@@ -262,6 +262,9 @@ pub fn sensor(calibration: &Calibration, file: &Path) -> Result<CalibratedSensor
         })?;
     let mut sensor = CalibratedSensor::new(calibration.to_model(), calibration.geometry())
         .with_covariance(covariance);
+    if calibration.valid_region.is_some() {
+        sensor = sensor.with_valid_region(calibration.valid_region());
+    }
     sensor.gains = calibration.gains();
     Ok(sensor)
 }

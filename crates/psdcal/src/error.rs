@@ -37,6 +37,26 @@ pub enum Error {
     /// A plot or page could not be drawn.
     #[error(transparent)]
     Report(#[from] ReportError),
+    /// A calibration whose valid region (docs/model.md §8.2) does not
+    /// contain its own data: the fitted correction folds over where the
+    /// points are, so it cannot answer there. Refused, not written.
+    #[error(
+        "the calibration is refused: its distortion correction folds over inside its own data \
+         ({outside} of {points} points lie outside its valid region, the nearest fold {fold_mm:.3} \
+         mm from the optical centre; first: {first}). Past a fold the model has no unique \
+         answer; fit fewer distortion terms (--fit), check the data for outliers, or drop the \
+         points far off the centre"
+    )]
+    DataOutsideValidRegion {
+        /// Points outside the region.
+        outside: usize,
+        /// Points of the data.
+        points: usize,
+        /// Distance of the nearest fold from the optical centre, mm.
+        fold_mm: f64,
+        /// The first point outside: image, LED, position and distances.
+        first: String,
+    },
     /// Options that cannot work together or values out of range.
     #[error("{0}")]
     Options(String),

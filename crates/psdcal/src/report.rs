@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use nalgebra::Vector2;
 use psdcal_io::{write_atomic_bytes, Warning};
 use psdcal_locate::{error_map, ErrorSource, MapOptions};
-use psdcal_model::{Model, SensorModel};
+use psdcal_model::sensor::is_on_active_area;
+use psdcal_model::{Model, SensorModel, ValidRegion};
 use psdcal_report::{
     calibration_page, Arrow, ArrowSet, CalibrationReport, Frame, HeatCell, Plot, PlotData, PointSet,
 };
@@ -126,7 +127,13 @@ pub fn report_content(
         recomputed = Some(residual_rows(&table));
         data_plots(&mut plots, set, &table, lx, ly);
     }
-    model_plots(&mut plots, model, lx, ly);
+    let region = &loaded.sensor.valid_region;
+    if let (false, Some(coverage)) = (region.whole_active_area(), plots.first_mut()) {
+        if let PlotData::Coverage { sets, .. } = &mut coverage.data {
+            sets.push(region_boundary(region));
+        }
+    }
+    model_plots(&mut plots, model, region, lx, ly);
     if !loaded.sensor.covariance.is_empty() {
         let map = error_map(
             model,
@@ -185,7 +192,42 @@ pub fn report_content(
             });
         }
     }
-    Ok(tables(request, calibration, model, plots, recomputed))
+    let mut report = tables(request, calibration, model, plots, recomputed);
+    report.sources.push(region_text(region));
+    Ok(report)
+}
+
+/// The valid region's boundary where it folds inside the active area, as a
+/// point set (docs/model.md §8.2).
+fn region_boundary(region: &ValidRegion) -> PointSet {
+    let area = region.geometry();
+    PointSet {
+        label: "valid region boundary (the correction folds beyond)".into(),
+        points: region
+            .boundary()
+            .iter()
+            .enumerate()
+            .filter(|(i, p)| region.folds_on_ray(*i) && is_on_active_area(&area, p))
+            .map(|(_, p)| (p.x, p.y))
+            .collect(),
+    }
+}
+
+/// The valid region in one line, for the report's list.
+fn region_text(region: &ValidRegion) -> String {
+    let c = region.centre();
+    match region.nearest_fold_mm() {
+        _ if region.whole_active_area() => {
+            "valid region: the whole active area (the correction is one-to-one there)".into()
+        }
+        Some(r) => format!(
+            "valid region: NOT the whole active area — the distortion correction folds {r:.3} mm \
+             from the optical centre ({:.3}, {:.3}) mm at the nearest; points beyond are \
+             answered outside_valid_region (the boundary is drawn on the coverage plot)",
+            c.x, c.y
+        ),
+        None => "valid region: not the whole active area (the optical centre is far off it)".into(),
+    }
 }
 
 /// Coverage and residual plots of the data.
@@ -270,19 +312,22 @@ fn data_plots(plots: &mut Vec<Plot>, set: &DataSet, table: &ResidualTable, lx: f
 }
 
 /// The distortion field, the corrected spiral and the AoA sensitivity.
-fn model_plots(plots: &mut Vec<Plot>, model: &SensorModel, lx: f64, ly: f64) {
+///
+/// Only points inside the valid region are drawn (past a fold the
+/// correction has no answer).
+fn model_plots(plots: &mut Vec<Plot>, model: &SensorModel, region: &ValidRegion, lx: f64, ly: f64) {
     let n = 11;
     let field: Vec<Arrow> = (0..n * n)
-        .map(|k| {
+        .filter_map(|k| {
             let m = Vector2::new(
                 lx * (-0.45 + 0.9 * (k % n) as f64 / (n - 1) as f64),
                 ly * (-0.45 + 0.9 * (k / n) as f64 / (n - 1) as f64),
             );
             let i = model.undistort(&m);
-            Arrow {
+            region.contains(&m).then_some(Arrow {
                 at: (m.x, m.y),
                 delta: (i.x - m.x, i.y - m.y),
-            }
+            })
         })
         .collect();
     let scale = arrow_scale(field.iter(), lx.max(ly) * 1.1);
@@ -302,7 +347,7 @@ fn model_plots(plots: &mut Vec<Plot>, model: &SensorModel, lx: f64, ly: f64) {
             ),
         },
     });
-    let (measured, corrected) = spiral(model, 0.45 * lx.min(ly));
+    let (measured, corrected) = spiral(model, region, 0.45 * lx.min(ly));
     let frame = Frame::fit(
         "A measured spiral and its correction",
         "x (mm)",
@@ -359,16 +404,17 @@ fn round_scale(scale: f64) -> String {
 type Points = Vec<(f64, f64)>;
 
 /// A spiral of measured points of radius up to `radius` and its correction.
-fn spiral(model: &SensorModel, radius: f64) -> (Points, Points) {
+/// (only its part inside the valid region).
+fn spiral(model: &SensorModel, region: &ValidRegion, radius: f64) -> (Points, Points) {
     let n = 120;
     let turns = 4.0;
     (0..n)
-        .map(|k| {
+        .filter_map(|k| {
             let u = k as f64 / (n - 1) as f64;
             let t = u * turns * std::f64::consts::TAU;
             let m = Vector2::new(radius * u * t.cos(), radius * u * t.sin());
             let i = model.undistort(&m);
-            ((m.x, m.y), (i.x, i.y))
+            region.contains(&m).then_some(((m.x, m.y), (i.x, i.y)))
         })
         .unzip()
 }

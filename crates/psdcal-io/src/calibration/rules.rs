@@ -43,6 +43,9 @@ impl Calibration {
             g.check()?;
         }
         self.check_uncertainty()?;
+        if let Some(region) = &self.valid_region {
+            region.to_region(&self.geometry())?;
+        }
         self.check_fit()
     }
 

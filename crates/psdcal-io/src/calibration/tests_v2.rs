@@ -139,3 +139,73 @@ fn stages_and_parameters_must_agree() {
     bad["stages"][0]["estimated"] = serde_json::json!(["g_x2"]);
     assert!(read(&bad).contains("estimated together"));
 }
+
+/// A lens folding at r* = 1/√(3 · 0.02) = 4.08 mm about (0.5, −0.7).
+fn folding() -> Calibration {
+    let mut model = SensorModel::pinhole(8.0, 0.5, -0.7);
+    model.distortion.k1 = -0.02;
+    Calibration::from_model(&model, &PsdGeometry::default())
+}
+
+#[test]
+fn the_valid_region_is_written_when_stored_and_read_back_exactly() {
+    let mut cal = folding();
+    assert!(json(&cal).get("valid_region").is_none());
+    cal.store_valid_region();
+    let v = json(&cal);
+    let region = &v["valid_region"];
+    assert_eq!(region["centre_mm"], serde_json::json!([0.5, -0.7]));
+    assert_eq!(region["rays"], 360);
+    assert_eq!(region["whole_active_area"], false);
+    let r_star = 1.0 / (3.0f64 * 0.02).sqrt();
+    let radii = region["radius_mm"].as_array().unwrap();
+    assert_eq!(radii.len(), 360);
+    assert!(radii
+        .iter()
+        .all(|r| (r.as_f64().unwrap() - r_star).abs() < 1e-9));
+    let back =
+        Calibration::from_json_str("c.json", &cal.to_json_string("c.json").unwrap()).unwrap();
+    assert_eq!(back, cal);
+    assert_eq!(back.valid_region(), cal.valid_region());
+    // Without a stored region (version 1, older version 2 files) the same
+    // region is computed from the model.
+    let mut bare = cal.clone();
+    bare.valid_region = None;
+    assert_eq!(bare.valid_region(), cal.valid_region());
+    let mut v1 = cal.clone();
+    v1.version = 1;
+    let text = v1.to_json_string("c.json").unwrap();
+    assert!(!text.contains("valid_region"));
+    let from_v1 = Calibration::from_json_str("c.json", &text).unwrap();
+    assert_eq!(from_v1.valid_region, None);
+    assert_eq!(from_v1.valid_region(), cal.valid_region());
+}
+
+#[test]
+fn a_valid_region_that_contradicts_itself_is_refused() {
+    let mut cal = folding();
+    cal.store_valid_region();
+    let v = json(&cal);
+    let read = |v: &serde_json::Value| {
+        Calibration::from_json_str("c.json", &serde_json::to_string_pretty(v).unwrap())
+            .unwrap_err()
+            .to_string()
+    };
+    let mut bad = v.clone();
+    bad["valid_region"]["whole_active_area"] = serde_json::json!(true);
+    assert!(read(&bad).contains("valid_region.whole_active_area is true but its radii say false"));
+    let mut bad = v.clone();
+    bad["valid_region"]["rays"] = serde_json::json!(12);
+    assert!(read(&bad).contains("valid_region.rays is 12 but valid_region.radius_mm has 360"));
+    let mut bad = v.clone();
+    bad["valid_region"]["radius_mm"][7] = serde_json::json!(-1.0);
+    assert!(
+        read(&bad).contains("radius -1 mm of ray 7"),
+        "{}",
+        read(&bad)
+    );
+    let mut bad = v.clone();
+    bad["valid_region"]["radius_mm"] = serde_json::json!([1.0, 1.0]);
+    bad["valid_region"]["rays"] = serde_json::json!(2);
+    assert!(read(&bad).contains("expected at least 8"), "{}", read(&bad));
+}

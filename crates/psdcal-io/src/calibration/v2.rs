@@ -21,6 +21,7 @@ use super::provenance::{Diagnostic, Provenance};
 use super::records::{
     Covariance, FitSummary, GainsRecord, ImageFit, SensorSize, Software, StdDevs,
 };
+use super::region::ValidRegionRecord;
 use super::rules::{de_format, de_version};
 use super::{Calibration, GAIN_NAMES};
 
@@ -130,6 +131,8 @@ pub(super) struct FileV2 {
     #[serde(default)]
     diagnostics: Vec<Diagnostic>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    valid_region: Option<ValidRegionRecord>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     provenance: Option<Provenance>,
 }
 
@@ -191,6 +194,7 @@ impl FileV2 {
             fit: c.fit.clone(),
             images: c.images.clone(),
             diagnostics: c.diagnostics.clone(),
+            valid_region: c.valid_region.clone(),
             provenance: c.provenance.clone(),
         }
     }
@@ -298,6 +302,7 @@ impl FileV2 {
         record.images = self.images;
         record.diagnostics = self.diagnostics;
         record.provenance = self.provenance;
+        record.valid_region = self.valid_region;
         Ok(record)
     }
 }

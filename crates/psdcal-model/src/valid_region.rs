@@ -1,0 +1,348 @@
+//! The model's valid region (docs/model.md §8.2): where the measured → ideal
+//! map (the correction, every distortion stage of a [`Model`]) is one-to-one.
+//!
+//! The correction `x = u(m)` folds where the determinant of its 2×2
+//! Jacobian `J(m) = ∂ideal/∂measured` stops being positive. Past the first
+//! fold along a ray, a measured point has a twin on the near side of the fold
+//! with the same (or a mirrored) ideal point, and nothing tells which one the
+//! light came from: such a point has no answer. The region is star-shaped
+//! about the optical centre `c = (cx, cy)`:
+//!
+//! ```text
+//! u_i   = (cos θ_i, sin θ_i),      θ_i = 2π i / N,   i = 0 … N − 1   (N = 360 by default)
+//! R_i   = the distance from c along u_i to the edge of the checked zone,
+//!         the active area scaled by ZONE_SCALE = 1.5 about the electrical centre
+//! r_i   = sup { t ≤ R_i : det J(c + s u_i) > 1e-12 for every s ∈ [0, t] }
+//! ```
+//!
+//! `r_i` is found by sampling `det J` at `R_i k / 512`, `k = 0 … 512`, and
+//! bisecting the first interval whose right end is not positive (or not
+//! finite) to 1e-12 relative; the stored radius is the bracket's positive end,
+//! so it lies before the fold. A ray that does not fold before the zone's
+//! edge has `r_i = R_i`. A model whose correction is not positive at the
+//! centre itself has an empty region (every `r_i = 0`).
+//!
+//! A point `p` at distance `ρ = |p − c|` in direction `θ ∈ [θ_i, θ_{i+1})` is
+//! inside when
+//!
+//! ```text
+//! ρ < min(r_i, r_{i+1}) · (1 − 1e-3)
+//! ```
+//!
+//! the smaller neighbouring radius with a relative margin of 1e-3, so that
+//! between rays (1° apart) the rule stays on the safe side of a smooth
+//! boundary. `whole_active_area` is true when every point of the active area
+//! is inside by this rule (checked exactly: on each interval between rays the
+//! largest distance from `c` to the active area's far edge is reached at the
+//! interval's ends or at a corner direction).
+
+use std::f64::consts::TAU;
+
+use nalgebra::Vector2;
+
+use crate::model::Model;
+use crate::params::SensorModel;
+use crate::sensor::PsdGeometry;
+use crate::ModelError;
+
+/// Rays of a region computed by [`ValidRegion::of_model`].
+pub const REGION_RAYS: usize = 360;
+/// Fewest rays a region may have (a region read from a file).
+pub const MIN_REGION_RAYS: usize = 8;
+/// The checked zone: the active area scaled by this factor about the
+/// electrical centre (points a little off the active area are still
+/// answered, with a caution).
+pub const ZONE_SCALE: f64 = 1.5;
+/// Samples of `det J` per ray before bisection.
+pub const SAMPLES_PER_RAY: usize = 512;
+/// Smallest determinant of `∂ideal/∂measured` that counts as positive (the
+/// threshold of the inverse distortion, docs/model.md §2.5).
+pub const MIN_FOLD_DET: f64 = 1e-12;
+/// Relative margin of the inside rule.
+pub const REGION_MARGIN: f64 = 1e-3;
+
+/// Where the measured → ideal map is one-to-one: a radius per ray direction
+/// from the optical centre.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ValidRegion {
+    centre: Vector2<f64>,
+    radius: Vec<f64>,
+    geometry: PsdGeometry,
+    whole_active_area: bool,
+}
+
+/// Why a point is outside a region.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutsideRegion {
+    /// Distance of the point from the region's centre, mm.
+    pub distance_mm: f64,
+    /// How far the region reaches in the point's direction (after the
+    /// margin), mm.
+    pub limit_mm: f64,
+    /// Whether the region ends there at a fold (`false`: at the edge of the
+    /// checked zone, far off the active area).
+    pub fold: bool,
+}
+
+impl ValidRegion {
+    /// The region of `model`'s distortion stages over `geometry`'s active
+    /// area, centred on the model's optical centre `(cx, cy)` (0 when the
+    /// chain has none), with [`REGION_RAYS`] rays.
+    pub fn of_model(model: &Model, geometry: &PsdGeometry) -> Self {
+        let centre = Vector2::new(
+            model.get("cx").unwrap_or(0.0),
+            model.get("cy").unwrap_or(0.0),
+        );
+        let usable = centre.iter().all(|v| v.is_finite())
+            && geometry.lx.is_finite()
+            && geometry.ly.is_finite()
+            && geometry.lx > 0.0
+            && geometry.ly > 0.0;
+        if !usable {
+            return Self::assemble(Vector2::zeros(), vec![0.0; REGION_RAYS], *geometry);
+        }
+        let mut scratch = Vec::new();
+        let mut det = |p: &Vector2<f64>| model.point_jacobian_with(p, &mut scratch).determinant();
+        let identity = model.distortion_is_identity();
+        let centre_ok = positive(det(&centre));
+        let radius = (0..REGION_RAYS)
+            .map(|i| {
+                let u = direction(i, REGION_RAYS);
+                let reach = zone_reach(&centre, &u, geometry);
+                if identity {
+                    reach
+                } else if !centre_ok {
+                    0.0
+                } else {
+                    first_fold(&mut det, &centre, &u, reach)
+                }
+            })
+            .collect();
+        Self::assemble(centre, radius, *geometry)
+    }
+
+    /// The region of a standard model ([`Model::standard`]).
+    pub fn of_sensor_model(model: &SensorModel, geometry: &PsdGeometry) -> Self {
+        Self::of_model(&Model::standard(model), geometry)
+    }
+
+    /// A region from stored radii (ray `i` at `θ_i = 2π i / N`, `N =
+    /// radius.len()`); refused when the centre or a radius is not finite, a
+    /// radius is negative or beyond the checked zone, or there are fewer
+    /// than [`MIN_REGION_RAYS`] rays.
+    pub fn from_radii(
+        centre: Vector2<f64>,
+        radius: Vec<f64>,
+        geometry: &PsdGeometry,
+    ) -> Result<Self, ModelError> {
+        let invalid = |reason: String| Err(ModelError::InvalidModel { reason });
+        if radius.len() < MIN_REGION_RAYS {
+            return invalid(format!(
+                "a valid region of {} rays; expected at least {MIN_REGION_RAYS}",
+                radius.len()
+            ));
+        }
+        if !centre.iter().all(|v| v.is_finite()) {
+            return invalid("the valid region's centre is not finite".into());
+        }
+        let n = radius.len();
+        for (i, r) in radius.iter().enumerate() {
+            let reach = zone_reach(&centre, &direction(i, n), geometry);
+            if !(r.is_finite() && *r >= 0.0 && *r <= reach * (1.0 + 1e-9)) {
+                return invalid(format!(
+                    "the valid region's radius {r} mm of ray {i}; expected 0 to {reach} mm (the \
+                     edge of the checked zone, {ZONE_SCALE} times the active area)"
+                ));
+            }
+        }
+        Ok(Self::assemble(centre, radius, *geometry))
+    }
+
+    fn assemble(centre: Vector2<f64>, radius: Vec<f64>, geometry: PsdGeometry) -> Self {
+        let mut region = Self {
+            centre,
+            radius,
+            geometry,
+            whole_active_area: false,
+        };
+        region.whole_active_area = region.covers_active_area();
+        region
+    }
+
+    /// The centre the rays start from (the optical centre), mm.
+    pub fn centre(&self) -> Vector2<f64> {
+        self.centre
+    }
+
+    /// The radius of each ray, mm (ray `i` at `θ_i = 2π i / N`).
+    pub fn radii(&self) -> &[f64] {
+        &self.radius
+    }
+
+    /// Number of rays.
+    pub fn rays(&self) -> usize {
+        self.radius.len()
+    }
+
+    /// The active area the region was computed over.
+    pub fn geometry(&self) -> PsdGeometry {
+        self.geometry
+    }
+
+    /// Whether every point of the active area is inside.
+    pub fn whole_active_area(&self) -> bool {
+        self.whole_active_area
+    }
+
+    /// Whether ray `i` ends at a fold (rather than at the zone's edge).
+    pub fn folds_on_ray(&self, i: usize) -> bool {
+        let n = self.rays();
+        let reach = zone_reach(&self.centre, &direction(i % n, n), &self.geometry);
+        self.radius[i % n] < reach * (1.0 - 1e-12)
+    }
+
+    /// The smallest fold radius, mm (`None` when no ray folds).
+    pub fn nearest_fold_mm(&self) -> Option<f64> {
+        (0..self.rays())
+            .filter(|&i| self.folds_on_ray(i))
+            .map(|i| self.radius[i])
+            .reduce(f64::min)
+    }
+
+    /// The end point of each ray, `c + r_i u_i`, mm: the region's boundary
+    /// as a closed polygon (for plots).
+    pub fn boundary(&self) -> Vec<Vector2<f64>> {
+        let n = self.rays();
+        (0..n)
+            .map(|i| self.centre + direction(i, n) * self.radius[i])
+            .collect()
+    }
+
+    /// Whether `point` is inside (see the module documentation).
+    pub fn contains(&self, point: &Vector2<f64>) -> bool {
+        self.check(point).is_ok()
+    }
+
+    /// `Ok` when `point` is inside; otherwise how far it is and how far the
+    /// region reaches in its direction.
+    pub fn check(&self, point: &Vector2<f64>) -> Result<(), OutsideRegion> {
+        let d = point - self.centre;
+        let distance_mm = d.norm();
+        let n = self.rays();
+        let theta = d.y.atan2(d.x).rem_euclid(TAU);
+        let i = if theta.is_finite() {
+            ((theta / TAU * n as f64).floor() as usize).min(n - 1)
+        } else {
+            0
+        };
+        let j = (i + 1) % n;
+        let limit_mm = self.radius[i].min(self.radius[j]) * (1.0 - REGION_MARGIN);
+        if distance_mm < limit_mm {
+            Ok(())
+        } else {
+            let fold = self.folds_on_ray(if self.radius[i] <= self.radius[j] {
+                i
+            } else {
+                j
+            });
+            Err(OutsideRegion {
+                distance_mm,
+                limit_mm,
+                fold,
+            })
+        }
+    }
+
+    /// Whether every point of the active area passes [`Self::check`].
+    fn covers_active_area(&self) -> bool {
+        let n = self.rays();
+        let (hx, hy) = (0.5 * self.geometry.lx, 0.5 * self.geometry.ly);
+        let corners: Vec<f64> = [(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)]
+            .iter()
+            .map(|(x, y)| (y - self.centre.y).atan2(x - self.centre.x).rem_euclid(TAU))
+            .collect();
+        let far = |theta: f64| {
+            let u = Vector2::new(theta.cos(), theta.sin());
+            box_exit(&self.centre, &u, hx, hy)
+        };
+        (0..n).all(|i| {
+            let (a, b) = (TAU * i as f64 / n as f64, TAU * (i + 1) as f64 / n as f64);
+            let limit = self.radius[i].min(self.radius[(i + 1) % n]) * (1.0 - REGION_MARGIN);
+            let mut worst = far(a).max(far(b));
+            for &c in &corners {
+                if c >= a && c <= b {
+                    worst = worst.max(far(c));
+                }
+            }
+            worst < limit
+        })
+    }
+}
+
+fn positive(det: f64) -> bool {
+    det > MIN_FOLD_DET
+}
+
+/// `u_i` of `n` rays.
+fn direction(i: usize, n: usize) -> Vector2<f64> {
+    let theta = TAU * i as f64 / n as f64;
+    Vector2::new(theta.cos(), theta.sin())
+}
+
+/// The distance from `c` along `u` to where the ray last leaves the box
+/// `[−hx, hx] × [−hy, hy]` (0 when it never meets it).
+fn box_exit(c: &Vector2<f64>, u: &Vector2<f64>, hx: f64, hy: f64) -> f64 {
+    let mut near = 0.0f64;
+    let mut far = f64::INFINITY;
+    for (ci, ui, h) in [(c.x, u.x, hx), (c.y, u.y, hy)] {
+        if ui.abs() < 1e-15 {
+            if ci.abs() > h {
+                return 0.0;
+            }
+        } else {
+            let (t1, t2) = ((-h - ci) / ui, (h - ci) / ui);
+            near = near.max(t1.min(t2));
+            far = far.min(t1.max(t2));
+        }
+    }
+    if far.is_finite() && far >= near {
+        far
+    } else {
+        0.0
+    }
+}
+
+/// How far the checked zone reaches from `c` along `u`.
+fn zone_reach(c: &Vector2<f64>, u: &Vector2<f64>, geometry: &PsdGeometry) -> f64 {
+    let s = 0.5 * ZONE_SCALE;
+    box_exit(c, u, s * geometry.lx, s * geometry.ly)
+}
+
+/// The last distance before the first fold along `c + t u`, `t ∈ [0, reach]`
+/// (`reach` when the determinant stays positive).
+fn first_fold(
+    det: &mut dyn FnMut(&Vector2<f64>) -> f64,
+    c: &Vector2<f64>,
+    u: &Vector2<f64>,
+    reach: f64,
+) -> f64 {
+    let at = |t: f64| c + u * t;
+    let mut previous = 0.0;
+    for k in 1..=SAMPLES_PER_RAY {
+        let t = reach * k as f64 / SAMPLES_PER_RAY as f64;
+        if !positive(det(&at(t))) {
+            let (mut good, mut bad) = (previous, t);
+            while bad - good > 1e-12 * bad.max(1.0) {
+                let mid = 0.5 * (good + bad);
+                if positive(det(&at(mid))) {
+                    good = mid;
+                } else {
+                    bad = mid;
+                }
+            }
+            return good;
+        }
+        previous = t;
+    }
+    reach
+}
