@@ -104,6 +104,12 @@ pub fn calibrate(
 ) -> Result<CalibrationResult, CalibError> {
     let free = options.refine.free_names();
     let init = initialize(data, &options.init)?;
+    // The global search's cold starts use the same start options.
+    let global_options = GlobalOptions {
+        init: options.init,
+        ..options.global.clone()
+    };
+    let global_options = &global_options;
     let start = start_model(options, &init.model)?;
     let (refined, global, gain_start) = if options.refine.fit_gains {
         // Several starts, the lowest cost among the converged ones wins: (a)
@@ -113,7 +119,7 @@ pub fn calibrate(
         // focal-length search around the nominal value, gains freed. A wrong
         // minimum stands out by a residual orders of magnitude larger.
         let (a, global) =
-            refine_global(data, &start, &init.poses, &options.refine, &options.global)?;
+            refine_global(data, &start, &init.poses, &options.refine, global_options)?;
         let mut best = (a, global, "gains freed from the start");
         // A focal length far outside any lens for this sensor (the start's
         // plausible range) is a runaway along a degenerate direction, never
@@ -140,7 +146,7 @@ pub fn calibrate(
             fit_gains: false,
             ..options.refine.clone()
         };
-        let b = refine_global(data, &start, &init.poses, &fixed, &options.global)
+        let b = refine_global(data, &start, &init.poses, &fixed, global_options)
             .and_then(|(plain, _)| refine(data, &plain.model, &plain.poses, &options.refine));
         consider(b, "gains fixed first, then freed");
         if options.init.focal_guess.is_some() && init.report.route == InitRoute::ClosedForm {
@@ -150,7 +156,7 @@ pub fn calibrate(
             };
             let c = initialize(data, &searched).and_then(|i| {
                 let m = start_model(options, &i.model)?;
-                refine_global(data, &m, &i.poses, &options.refine, &options.global).map(|(r, _)| r)
+                refine_global(data, &m, &i.poses, &options.refine, global_options).map(|(r, _)| r)
             });
             consider(c, "search around the nominal focal length, gains freed");
         }
@@ -164,14 +170,14 @@ pub fn calibrate(
             };
             let d = initialize(data, &plain).and_then(|i| {
                 let m = start_model(options, &i.model)?;
-                refine_global(data, &m, &i.poses, &options.refine, &options.global).map(|(r, _)| r)
+                refine_global(data, &m, &i.poses, &options.refine, global_options).map(|(r, _)| r)
             });
             consider(d, "closed form unrefined, gains freed");
         }
         let (r, g, name) = best;
         (r, g, Some(name.to_string()))
     } else {
-        let (r, g) = refine_global(data, &start, &init.poses, &options.refine, &options.global)?;
+        let (r, g) = refine_global(data, &start, &init.poses, &options.refine, global_options)?;
         (r, g, None)
     };
     let fitted_gains = refined.model.gains();

@@ -128,6 +128,10 @@ pub struct InitOptions {
     /// they are plausible, the preliminary `k1, k2` and the poses of the
     /// homographies — for studies that compare iteration counts with it.
     pub refine_start: bool,
+    /// Fall back to the focal search when the closed form gives no plausible
+    /// start (default `true`); `false` makes that case an error instead (the
+    /// global search's cold starts, which have other starts to compare with).
+    pub search_fallback: bool,
 }
 
 impl Default for InitOptions {
@@ -139,6 +143,7 @@ impl Default for InitOptions {
             focal_guess: None,
             use_closed_form: true,
             refine_start: true,
+            search_fallback: true,
         }
     }
 }
@@ -682,6 +687,14 @@ pub fn initialize(
         }
     }
     let mut search: Option<FocalSearchReport> = None;
+    if candidate.is_none() && !options.search_fallback {
+        return Err(CalibError::Degenerate {
+            reason: format!(
+                "no plausible closed-form start ({}) and the focal search is off",
+                rejection.unwrap_or_default()
+            ),
+        });
+    }
     if candidate.is_none() {
         let subset = problem.subset(SEARCH_IMAGES);
         let mut centres = vec![(0.0, 0.0, false)];

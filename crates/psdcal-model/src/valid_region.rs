@@ -46,7 +46,7 @@ use crate::sensor::PsdGeometry;
 use crate::ModelError;
 
 /// Rays of a region computed by [`ValidRegion::of_model`].
-pub const REGION_RAYS: usize = 360;
+pub const REGION_RAYS: usize = 180;
 /// Fewest rays a region may have (a region read from a file).
 pub const MIN_REGION_RAYS: usize = 8;
 /// The checked zone: the active area scaled by this factor about the
@@ -54,7 +54,7 @@ pub const MIN_REGION_RAYS: usize = 8;
 /// answered, with a caution).
 pub const ZONE_SCALE: f64 = 1.5;
 /// Samples of `det J` per ray before bisection.
-pub const SAMPLES_PER_RAY: usize = 512;
+pub const SAMPLES_PER_RAY: usize = 64;
 /// Smallest determinant of `∂ideal/∂measured` that counts as positive (the
 /// threshold of the inverse distortion, docs/model.md §2.5).
 pub const MIN_FOLD_DET: f64 = 1e-12;
