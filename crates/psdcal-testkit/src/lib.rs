@@ -19,16 +19,22 @@
 //! - [`observe`]: the measured (or ideal) points of a template in given
 //!   poses, and point noise;
 //! - [`poly_stage`]: [`PolyField`], a test-only model stage with a large
-//!   parameter block (a polynomial displacement field, 2n² coefficients).
+//!   parameter block (a polynomial displacement field, 2n² coefficients);
+//! - [`wide`]: [`WideScenario`], scenarios drawn far wider than the
+//!   simulator's defaults (both lenses jittered, PSD distortion of either
+//!   sign, 9–20 images tilted 5°–45°, partial coverage, noise-free to
+//!   beyond 30 dB), for judging the calibration's search.
 #![warn(missing_docs)]
 
 pub mod observe;
 pub mod poly_stage;
 pub mod poses;
 pub mod templates;
+pub mod wide;
 
 pub use observe::{add_noise, image_points, PointKind};
 pub use poly_stage::PolyField;
 pub use poses::{aimed_grid_poses, aimed_pose, covering_poses, fits, perturbed, HALF_SIDE_MM};
 pub use psdcal_model::paper_setup::{scatter14, SCATTER14_MM};
 pub use templates::{grid75, scatter, EXTRA_MM};
+pub use wide::{WideImage, WideScenario};

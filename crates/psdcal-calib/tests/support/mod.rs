@@ -7,6 +7,7 @@
 
 mod data;
 pub mod robustness;
+pub mod wide;
 
 pub use data::calibration_data;
 
