@@ -96,9 +96,9 @@ fn free_l1_never_ends_above_l1_fixed_at_truth() {
     assert_acceptance(&SAMPLE);
 }
 
+/// Scenarios on which the earlier search (a profile continued from the start
+/// only) ended in the l1 ≈ +5e-3 minimum.
 #[test]
-#[ignore = "main's l1 search (profile with warm-started continuation) ends in the l1 ≈ +5e-3 \
-            minimum on scenarios 163, 407, 598 and 85; the rewritten search must pass"]
 fn free_l1_never_ends_above_l1_fixed_at_truth_where_main_fails() {
     assert_acceptance(&MAIN_FAILURES);
 }
