@@ -68,6 +68,7 @@ mod gains;
 mod locate;
 mod map;
 mod options;
+mod point_rows;
 mod provenance;
 mod report;
 mod report_tables;
@@ -79,6 +80,7 @@ mod study_page;
 mod table;
 
 pub use aoa::{aoa_table, measurement, AoaTable};
+pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use calibrate::{calibrate, Calibrated};
 pub use correct::{correct, Corrected};
 pub use dataset::{source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
@@ -98,7 +100,7 @@ pub use simulate::{
     SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
 };
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
-pub use table::{deg, num, StatusCount, Table};
+pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
 
 pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, Warning};
