@@ -35,8 +35,7 @@ pub fn run(config: &MapConfig, output: Output) -> anyhow::Result<()> {
             println!("{}", serde_json::to_string_pretty(&json)?);
         }
         (Output::Text, out) => {
-            let text =
-                format!(
+            let text = format!(
                 "map: {}, {}, {n} x {n} grid over {lx} x {ly} mm, plane at {s} mm: largest AoA \
                  error {aoa}°, largest position error {pos} mm; {counts}",
                 map.model_name,

@@ -13,11 +13,15 @@ type Named<'a> = (&'static str, &'a Path);
 /// The input and output files of `job` (folders of `simulate`, `study` and
 /// `demo` are not checked: they read no file; `report`'s page is).
 fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
-    let points = |p: &'_ PointSource| match p {
-        PointSource::Observations(path) => ("--observations", path.as_path()),
-        PointSource::Signals(path) => ("--signals", path.as_path()),
-    };
-    let out = |o: &Option<std::path::PathBuf>| o.iter().map(|p| ("--out", p.as_path())).collect();
+    fn points(p: &PointSource) -> Named<'_> {
+        match p {
+            PointSource::Observations(path) => ("--observations", path.as_path()),
+            PointSource::Signals(path) => ("--signals", path.as_path()),
+        }
+    }
+    fn out(o: &Option<std::path::PathBuf>) -> Vec<Named<'_>> {
+        o.iter().map(|p| ("--out", p.as_path())).collect()
+    }
     match job {
         Job::Calibrate(c) => {
             let mut inputs = vec![("--template", c.template.as_path()), points(&c.points)];

@@ -209,7 +209,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         // A process id that cannot be running: beyond Linux's pid_max.
         let dead = dir.path().join(".aoa.csv.4294967295.0.tmp");
-        let mine = dir.path().join(format!(".aoa.csv.{}.99.tmp", std::process::id()));
+        let mine = dir
+            .path()
+            .join(format!(".aoa.csv.{}.99.tmp", std::process::id()));
         let foreign = dir.path().join(".notes.tmp");
         for p in [&dead, &mine, &foreign] {
             fs::write(p, "partial").unwrap();

@@ -298,4 +298,3 @@ fn newer_version(text: &str) -> Option<u64> {
     let found = value.get("version")?.as_u64()?;
     (found > u64::from(CALIBRATION_VERSION)).then_some(found)
 }
-

@@ -172,7 +172,11 @@ mod tests {
         assert!(e.to_string().contains("0x00 at byte offset 6"), "{e}");
         let e = lines(b"\xEF\xBB\xBFa,\xe9\n").unwrap_err();
         assert!(e.to_string().contains("0xe9 at byte offset 5"), "{e}");
-        let mut r = LineReader::new("z", std::io::BufReader::new(std::io::repeat(b'\n')), Some(100));
+        let mut r = LineReader::new(
+            "z",
+            std::io::BufReader::new(std::io::repeat(b'\n')),
+            Some(100),
+        );
         let e = loop {
             match r.next_line() {
                 Ok(Some(_)) => {}

@@ -238,9 +238,7 @@ impl<R: BufRead> CsvStream<R> {
                          with the columns {expected}"
                     )
                 } else {
-                    format!(
-                        "the file is empty; expected a header row with the columns {expected}"
-                    )
+                    format!("the file is empty; expected a header row with the columns {expected}")
                 };
                 return Err(IoError::Structure {
                     at: Location::file(source),

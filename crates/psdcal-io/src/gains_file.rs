@@ -61,7 +61,14 @@ impl GainsFile {
 /// Writes gains.json atomically.
 pub fn write_gains(path: impl AsRef<Path>, file: &GainsFile) -> Result<(), IoError> {
     let path = path.as_ref();
-    let values = [file.x2, file.y1, file.y2, file.std.g_x2, file.std.g_y1, file.std.g_y2];
+    let values = [
+        file.x2,
+        file.y1,
+        file.y2,
+        file.std.g_x2,
+        file.std.g_y1,
+        file.std.g_y2,
+    ];
     if values.iter().any(|v| !v.is_finite()) || file.gains().validate().is_err() {
         return Err(IoError::Invalid {
             at: Location::file(&path.display().to_string()),
@@ -83,7 +90,8 @@ pub fn read_gains(path: impl AsRef<Path>) -> Result<GainsFile, IoError> {
     let path = path.as_ref();
     let source = path.display().to_string();
     let text = crate::error::read_text(path)?;
-    let file: GainsFile = serde_json::from_str(&text).map_err(|e| crate::error::json_error(&source, &e))?;
+    let file: GainsFile =
+        serde_json::from_str(&text).map_err(|e| crate::error::json_error(&source, &e))?;
     if file.format != GAINS_FORMAT {
         return Err(IoError::Invalid {
             at: Location::file(&source),

@@ -61,11 +61,11 @@ pub use error::{ColumnRef, IoError, Location};
 pub use export::{
     write_observations, write_signals, write_template, ObservationRow, SignalRowOut, TemplateLed,
 };
+pub use gains_file::{read_gains, write_gains, GainStd, GainsFile, GAINS_FORMAT};
 pub use limits::{
     max_file_bytes, read_all_bounded, read_bounded, set_max_file_bytes, DEFAULT_MAX_FILE_BYTES,
     MAX_EXCERPT_CHARS, MAX_LINE_BYTES,
 };
-pub use gains_file::{read_gains, write_gains, GainStd, GainsFile, GAINS_FORMAT};
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};

@@ -55,7 +55,7 @@ pub(crate) fn too_large(source: &str, limit: u64) -> IoError {
 /// `512 MiB`, `1.5 KiB`, `100 bytes`.
 pub(crate) fn bytes_text(bytes: u64) -> String {
     const MIB: u64 = 1 << 20;
-    if bytes >= MIB && bytes % MIB == 0 {
+    if bytes >= MIB && bytes.is_multiple_of(MIB) {
         format!("{} MiB", bytes / MIB)
     } else if bytes >= 1024 {
         format!("{:.1} KiB", bytes as f64 / 1024.0)

@@ -189,7 +189,11 @@ impl Points {
         for (i, row) in self.rows.iter().enumerate() {
             let values: Vec<String> = added
                 .iter()
-                .map(|c| c.values.get(i).map_or_else(String::new, |v| number_text(*v)))
+                .map(|c| {
+                    c.values
+                        .get(i)
+                        .map_or_else(String::new, |v| number_text(*v))
+                })
                 .collect();
             let fields = row.fields.iter().map(String::as_str);
             writer.write_record(fields.chain(values.iter().map(String::as_str)))?;
@@ -425,7 +429,10 @@ mod tests {
                 "{row:?}"
             );
         }
-        assert_eq!(p.rows[3].input, PointInput::Position(Vector2::new(3.0, 4.0)));
+        assert_eq!(
+            p.rows[3].input,
+            PointInput::Position(Vector2::new(3.0, 4.0))
+        );
     }
 
     #[test]

@@ -50,7 +50,10 @@ fn destination(path: &Path) -> PathBuf {
 /// Refuses outputs that are one of the inputs or one another. `inputs` and
 /// `outputs` pair each path with the option that names it (`--points`,
 /// `--out`) for the message.
-pub fn refuse_overwrite(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)]) -> Result<(), IoError> {
+pub fn refuse_overwrite(
+    inputs: &[(&str, &Path)],
+    outputs: &[(&str, &Path)],
+) -> Result<(), IoError> {
     for (k, (out_option, out)) in outputs.iter().enumerate() {
         let out_identity = identity(out);
         for (in_option, input) in inputs {
@@ -97,7 +100,11 @@ mod tests {
         let ok = refuse_overwrite(&[("-o", &input)], &[("--out", &other)]);
         assert!(ok.is_ok());
         let e = refuse_overwrite(&[("-o", &input)], &[("--out", &input)]).unwrap_err();
-        assert!(e.to_string().contains("--out would overwrite the input given with -o"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("--out would overwrite the input given with -o"),
+            "{e}"
+        );
         // Through a relative spelling, a hard link and a symbolic link.
         let dotted = dir.path().join(".").join("obs.csv");
         assert!(refuse_overwrite(&[("-o", &input)], &[("--out", &dotted)]).is_err());

@@ -113,7 +113,8 @@ pub fn read_truth(path: impl AsRef<Path>) -> Result<Truth, IoError> {
     let path = path.as_ref();
     let source = path.display().to_string();
     let text = crate::error::read_text(path)?;
-    let truth: Truth = serde_json::from_str(&text).map_err(|e| crate::error::json_error(&source, &e))?;
+    let truth: Truth =
+        serde_json::from_str(&text).map_err(|e| crate::error::json_error(&source, &e))?;
     if truth.format != TRUTH_FORMAT {
         return Err(IoError::Invalid {
             at: crate::Location::file(&source),

@@ -45,7 +45,10 @@ const RIG_POINTS: &str = "emitter,sensor,x_mm,y_mm\ntag1,a,2.68,2.35\ntag1,b,-3.
 /// Checks an error: it names `source` and is one short line.
 fn check_error(source: &str, e: &IoError) {
     let text = e.to_string();
-    assert!(text.starts_with(source), "error does not name the file: {text}");
+    assert!(
+        text.starts_with(source),
+        "error does not name the file: {text}"
+    );
     assert_eq!(e.file(), Some(source), "{text}");
     assert!(!text.contains('\n'), "multi-line error: {text}");
     assert!(
@@ -121,9 +124,41 @@ fn read_everywhere(dir: &Path, name: &str, bytes: &[u8]) {
 }
 
 const TOKENS: &[&str] = &[
-    "nan", "NaN", "inf", "-inf", "1e999", "-1e999", "1e308", "4.9e-324", "0", "-0", "\"", "\"\"",
-    ",", ",,", ";", "\t", "\r", "\r\n", "\n", "\0", "\u{feff}", "é", "#", "{", "}", "[", "]",
-    "null", "true", "\"version\": 99", "99999999999999999999999", "x_mm", "vx1", "led", "image",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1e999",
+    "-1e999",
+    "1e308",
+    "4.9e-324",
+    "0",
+    "-0",
+    "\"",
+    "\"\"",
+    ",",
+    ",,",
+    ";",
+    "\t",
+    "\r",
+    "\r\n",
+    "\n",
+    "\0",
+    "\u{feff}",
+    "é",
+    "#",
+    "{",
+    "}",
+    "[",
+    "]",
+    "null",
+    "true",
+    "\"version\": 99",
+    "99999999999999999999999",
+    "x_mm",
+    "vx1",
+    "led",
+    "image",
 ];
 
 /// One mutation of `seed`.

@@ -6,7 +6,9 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::{Vector2, Vector3};
-use psdcal_locate::{measured_from_ray, CalibratedSensor, LocateOptions, Measurement, Rig, RigSensor};
+use psdcal_locate::{
+    measured_from_ray, CalibratedSensor, LocateOptions, Measurement, Rig, RigSensor,
+};
 use psdcal_model::{Pose, PsdGeometry, SensorModel};
 
 /// Sensors every 100 mm along x, looking along +z.
@@ -16,7 +18,10 @@ fn sensors(n: usize) -> Vec<RigSensor> {
         .map(|k| RigSensor {
             id: format!("s{k}"),
             sensor: sensor.clone(),
-            world_from_sensor: Pose::new(Vector3::zeros(), Vector3::new(100.0 * k as f64, 0.0, 0.0)),
+            world_from_sensor: Pose::new(
+                Vector3::zeros(),
+                Vector3::new(100.0 * k as f64, 0.0, 0.0),
+            ),
         })
         .collect()
 }
@@ -30,7 +35,10 @@ fn observations(rig: &Rig) -> Vec<Vec<(usize, Measurement)>> {
             [k, k + 1]
                 .iter()
                 .map(|&i| {
-                    let p = rig.sensors()[i].world_from_sensor.inverse().transform(&emitter);
+                    let p = rig.sensors()[i]
+                        .world_from_sensor
+                        .inverse()
+                        .transform(&emitter);
                     let m = measured_from_ray(&model, &Vector2::new(p.x / p.z, p.y / p.z))
                         .expect("in view");
                     (i, Measurement::Point(m))

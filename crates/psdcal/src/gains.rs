@@ -4,7 +4,9 @@
 use std::path::Path;
 
 use psdcal_calib::equal_current_gains;
-use psdcal_io::{shown_number, GainStd, GainsFile, IoError, Location, PointInput, Points, GAINS_FORMAT};
+use psdcal_io::{
+    shown_number, GainStd, GainsFile, IoError, Location, PointInput, Points, GAINS_FORMAT,
+};
 use psdcal_model::Amplitudes;
 
 use crate::error::{Error, Result};
@@ -72,7 +74,14 @@ pub fn estimate_gains(signals: &Path, method: GainsMethod) -> Result<GainsFile> 
         },
         records: estimate.records,
     };
-    let values = [file.x2, file.y1, file.y2, file.std.g_x2, file.std.g_y1, file.std.g_y2];
+    let values = [
+        file.x2,
+        file.y1,
+        file.y2,
+        file.std.g_x2,
+        file.std.g_y1,
+        file.std.g_y2,
+    ];
     if values.iter().any(|v| !v.is_finite()) {
         return Err(Error::Input(format!(
             "{}: the records give no finite gains; expected equal-current records with \
@@ -92,8 +101,13 @@ fn check_record(source: &str, line: usize, a: &Amplitudes) -> Result<()> {
             message,
         })
     };
-    let values = [("vx1", a.vx1), ("vx2", a.vx2), ("vy1", a.vy1), ("vy2", a.vy2)];
-    if let Some((name, v)) = values.iter().find(|(_, v)| !(*v > 0.0)) {
+    let values = [
+        ("vx1", a.vx1),
+        ("vx2", a.vx2),
+        ("vy1", a.vy1),
+        ("vy2", a.vy2),
+    ];
+    if let Some((name, v)) = values.iter().find(|(_, v)| v.is_nan() || *v <= 0.0) {
         return Err(at(format!(
             "amplitude {name} = {}; expected four positive amplitudes in an equal-current \
              record",
@@ -102,7 +116,7 @@ fn check_record(source: &str, line: usize, a: &Amplitudes) -> Result<()> {
     }
     for (name, v) in &values[1..] {
         let ratio = v / a.vx1;
-        if !(ratio <= MAX_GAIN_RATIO && ratio >= 1.0 / MAX_GAIN_RATIO) {
+        if !(1.0 / MAX_GAIN_RATIO..=MAX_GAIN_RATIO).contains(&ratio) {
             return Err(at(format!(
                 "{name}/vx1 = {} is an outlier: the channels of an equal-current record carry \
                  the same current, so their amplitudes agree within a factor {MAX_GAIN_RATIO}; \

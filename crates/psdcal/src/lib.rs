@@ -80,7 +80,6 @@ mod study_page;
 mod table;
 
 pub use aoa::{aoa_table, measurement, AoaTable};
-pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use calibrate::{calibrate, Calibrated};
 pub use correct::{correct, Corrected};
 pub use dataset::{source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
@@ -91,6 +90,7 @@ pub use gains::{estimate_gains, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
 pub use map::{map_table, MapModel, MapRequest, MapSource, MapTable};
 pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust};
+pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
 pub use report::{report_content, write_report, ReportFiles, ReportRequest};
 pub use residuals::{ImageResiduals, Residual, ResidualTable};

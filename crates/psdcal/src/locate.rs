@@ -179,11 +179,10 @@ fn load_rig(path: &Path, warnings: &mut Vec<String>) -> Result<(RigFile, Rig)> {
 /// a field of view (only those pairs are checked: linear in the emitters).
 fn shared_view_warning(rig: &Rig, emitters: &[Vec<usize>], file: &RigFile) -> Option<String> {
     let any_shared = emitters.iter().any(|sensors| {
-        sensors.iter().enumerate().any(|(a, &i)| {
-            sensors[a + 1..]
-                .iter()
-                .any(|&j| rig.shares_view(i, j))
-        })
+        sensors
+            .iter()
+            .enumerate()
+            .any(|(a, &i)| sensors[a + 1..].iter().any(|&j| rig.shares_view(i, j)))
     });
     (!any_shared).then(|| {
         format!(
@@ -232,7 +231,10 @@ fn with_rig(
                 let row = &observations.rows[i];
                 let k = sensor_of(i);
                 let m = measurement(&row.input);
-                (k, m.unwrap_or(Measurement::Point(Vector2::new(f64::NAN, f64::NAN))))
+                (
+                    k,
+                    m.unwrap_or(Measurement::Point(Vector2::new(f64::NAN, f64::NAN))),
+                )
             })
             .collect();
         let sensor_ids: Vec<&str> = indices

@@ -48,6 +48,13 @@ pub fn answer_points(
     mut answer: impl FnMut(&Measurement) -> RowAnswer,
 ) -> Result<PointsAnswer> {
     let mut stream = PointStream::open(points)?;
+    if out.is_none() {
+        // Standard output cannot be taken back: a file that fails on a
+        // later row must fail before the first row is printed (a second
+        // pass, still in constant memory).
+        let mut check = PointStream::open(points)?;
+        while check.next_row()?.is_some() {}
+    }
     let added = added(stream.amplitudes);
     if let Some(name) = added.iter().find(|name| stream.has_column(name)) {
         return Err(IoError::Structure {
@@ -93,9 +100,7 @@ pub fn answer_points(
             let result = match &row.input {
                 PointInput::Position(p) => answer(&Measurement::Point(*p)),
                 PointInput::Amplitudes(a) => answer(&Measurement::Amplitudes(*a)),
-                _ => Err(LocateError::NonFinite {
-                    what: "input cell",
-                }),
+                _ => Err(LocateError::NonFinite { what: "input cell" }),
             };
             let mut fields = row.fields;
             match result {
