@@ -28,6 +28,10 @@ pub struct Cli {
     /// Print the summary as JSON on standard output
     #[arg(long, global = true)]
     pub json: bool,
+    /// Largest input file read whole, MiB (default 512; streamed points
+    /// files have no limit; docs/formats.md, "Limits")
+    #[arg(long, global = true, value_name = "MB", value_parser = clap::value_parser!(u64).range(1..=1_048_576))]
+    pub max_input_mb: Option<u64>,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -84,10 +88,10 @@ pub struct CheckArgs {
     #[arg(long, short = 's', value_name = "FILE")]
     pub signals: Option<PathBuf>,
     /// Active area side along x, mm
-    #[arg(long, value_name = "MM", default_value = "9", value_parser = positive_mm, allow_negative_numbers = true)]
+    #[arg(long, value_name = "MM", default_value = "9", value_parser = side_mm, allow_negative_numbers = true)]
     pub lx: f64,
     /// Active area side along y, mm
-    #[arg(long, value_name = "MM", default_value = "9", value_parser = positive_mm, allow_negative_numbers = true)]
+    #[arg(long, value_name = "MM", default_value = "9", value_parser = side_mm, allow_negative_numbers = true)]
     pub ly: f64,
     /// Treat every warning as an error instead of dropping the data
     #[arg(long)]
@@ -151,10 +155,10 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "FILE")]
     pub residuals: Option<PathBuf>,
     /// Active area side along x, mm
-    #[arg(long, value_name = "MM", default_value = "9", value_parser = positive_mm, allow_negative_numbers = true)]
+    #[arg(long, value_name = "MM", default_value = "9", value_parser = side_mm, allow_negative_numbers = true)]
     pub lx: f64,
     /// Active area side along y, mm
-    #[arg(long, value_name = "MM", default_value = "9", value_parser = positive_mm, allow_negative_numbers = true)]
+    #[arg(long, value_name = "MM", default_value = "9", value_parser = side_mm, allow_negative_numbers = true)]
     pub ly: f64,
     /// Treat every data warning as an error instead of dropping the data
     #[arg(long)]
@@ -404,10 +408,29 @@ fn point_source(
     }
 }
 
-/// A positive, finite length in mm.
+/// The longest length an option accepts, mm (1 000 km): beyond it results
+/// overflow or mean a unit error.
+pub(crate) const MAX_LENGTH_MM: f64 = 1e9;
+/// The largest active-area side, mm.
+pub(crate) const MAX_SIDE_MM: f64 = 1000.0;
+
+/// A positive, finite length in mm, at most [`MAX_LENGTH_MM`].
 pub(crate) fn positive_mm(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("expected a positive length in mm, found '{text}'")),
+        Ok(v) if v.is_finite() && v > 0.0 && v <= MAX_LENGTH_MM => Ok(v),
+        _ => Err(format!(
+            "expected a positive length in mm up to 1e9, found '{text}'"
+        )),
+    }
+}
+
+/// An active-area side: a positive length in mm, at most [`MAX_SIDE_MM`].
+pub(crate) fn side_mm(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= MAX_SIDE_MM => Ok(v),
+        _ => Err(format!(
+            "expected the side of the active area, a positive length in mm up to 1000, found \
+             '{text}'"
+        )),
     }
 }

@@ -10,7 +10,7 @@ pub use psdcal::{LocateTarget, MapModel, MapSource};
 use psdcal_model::UnknownParam;
 
 use crate::choice::LensArg;
-use crate::cli::{positive_mm, Cli, Output};
+use crate::cli::{positive_mm, Cli, Output, MAX_LENGTH_MM};
 
 pub const AOA_EXAMPLES: &str = include_str!("../help/aoa.txt");
 
@@ -268,19 +268,26 @@ fn number(text: &str) -> Option<f64> {
     text.trim().parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
-/// A non-negative, finite length in mm.
+/// A non-negative, finite length in mm, at most [`MAX_LENGTH_MM`].
 fn non_negative_mm(text: &str) -> Result<f64, String> {
     match number(text) {
-        Some(v) if v >= 0.0 => Ok(v),
-        _ => Err(format!("expected a length of 0 mm or more, found '{text}'")),
+        Some(v) if (0.0..=MAX_LENGTH_MM).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "expected a length from 0 to 1e9 mm, found '{text}'"
+        )),
     }
 }
 
-/// A positive, finite number.
+/// The largest `--k-sigma`.
+const MAX_K_SIGMA: f64 = 1000.0;
+
+/// A positive, finite number, at most [`MAX_K_SIGMA`].
 fn positive_number(text: &str) -> Result<f64, String> {
     match number(text) {
-        Some(v) if v > 0.0 => Ok(v),
-        _ => Err(format!("expected a positive number, found '{text}'")),
+        Some(v) if v > 0.0 && v <= MAX_K_SIGMA => Ok(v),
+        _ => Err(format!(
+            "expected a positive number up to {MAX_K_SIGMA}, found '{text}'"
+        )),
     }
 }
 
@@ -313,6 +320,11 @@ fn parse_plane(text: &str) -> Result<PlaneSpec, String> {
              '{text}'"
         ));
     };
+    if d.abs() > MAX_LENGTH_MM {
+        return Err(format!(
+            "expected the plane's D within ±1e9 mm, found '{text}'"
+        ));
+    }
     let normal = Vector3::new(nx, ny, nz);
     Plane::new(normal, d).map_err(|e| e.to_string())?;
     Ok(PlaneSpec {

@@ -7,18 +7,22 @@ use crate::report::print_row_warnings;
 
 /// Runs `aoa`.
 pub fn run(config: &AoaConfig, output: Output) -> anyhow::Result<()> {
-    let answer = psdcal::aoa_table(&config.calibration, &config.points, config.point_sigma_mm)?;
-    if let Some(w) = psdcal::covariance_warning(&answer.sensor) {
+    let table = psdcal::aoa_table(
+        &config.calibration,
+        &config.points,
+        config.point_sigma_mm,
+        config.out.as_deref(),
+    )?;
+    if let Some(w) = psdcal::covariance_warning(&table.sensor) {
         eprintln!("warning: {w}");
     }
-    answer.table.write_to(config.out.as_deref())?;
-    print_row_warnings(&answer.count.warnings);
-    let points = &answer.points;
+    let answer = &table.answer;
+    print_row_warnings(&answer.count);
     let summary = format!(
         "aoa: {} point{} of {} with {}: {}",
-        points.rows.len(),
-        if points.rows.len() == 1 { "" } else { "s" },
-        points.source,
+        answer.rows,
+        if answer.rows == 1 { "" } else { "s" },
+        answer.source,
         config.calibration.display(),
         answer.count.summary()
     );
@@ -28,9 +32,9 @@ pub fn run(config: &AoaConfig, output: Output) -> anyhow::Result<()> {
             let json = serde_json::json!({
                 "command": "aoa",
                 "calibration": config.calibration.display().to_string(),
-                "points": points.source,
+                "points": answer.source,
                 "out": out.as_ref().map(|p| p.display().to_string()),
-                "from_amplitudes": points.amplitudes,
+                "from_amplitudes": answer.amplitudes,
                 "point_sigma_mm": config.point_sigma_mm,
                 "added_columns": answer.added,
                 "rows": answer.count.to_json(),

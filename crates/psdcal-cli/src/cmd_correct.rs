@@ -1,41 +1,42 @@
-//! `psdcal correct`: measured points (or amplitudes) → ideal points.
+//! `psdcal correct`: measured points (or amplitudes) → ideal points, with
+//! a status per row.
 
 use crate::cli::{CorrectConfig, Output};
-use crate::report::print_warnings;
+use crate::report::print_row_warnings;
 
 /// Runs `correct`.
 pub fn run(config: &CorrectConfig, output: Output) -> anyhow::Result<()> {
-    let corrected = psdcal::correct(&config.calibration, &config.points)?;
-    let (points, correction) = (&corrected.points, &corrected.correction);
-    print_warnings(&correction.warnings);
-    corrected.write_to(config.out.as_deref())?;
-    let Some(out) = &config.out else {
-        return Ok(());
-    };
-    let columns = correction.added_columns();
-    match output {
-        Output::Quiet => {}
-        Output::Json => {
-            let summary = serde_json::json!({
+    let corrected = psdcal::correct(&config.calibration, &config.points, config.out.as_deref())?;
+    let answer = &corrected.answer;
+    print_row_warnings(&answer.count);
+    let summary = format!(
+        "corrected {} point{} of {} with {}: {}",
+        answer.rows,
+        if answer.rows == 1 { "" } else { "s" },
+        answer.source,
+        config.calibration.display(),
+        answer.count.summary()
+    );
+    match (output, &config.out) {
+        (Output::Quiet, _) => {}
+        (Output::Json, out) => {
+            let json = serde_json::json!({
+                "command": "correct",
                 "calibration": config.calibration.display().to_string(),
-                "points": points.source,
-                "out": out.display().to_string(),
-                "rows": points.rows.len(),
-                "from_amplitudes": correction.from_amplitudes,
-                "added_columns": columns,
-                "warnings": correction.warnings,
+                "points": answer.source,
+                "out": out.as_ref().map(|p| p.display().to_string()),
+                "from_amplitudes": answer.amplitudes,
+                "added_columns": answer.added,
+                "rows": answer.count.to_json(),
             });
-            println!("{}", serde_json::to_string_pretty(&summary)?);
+            println!("{}", serde_json::to_string_pretty(&json)?);
         }
-        Output::Text => println!(
-            "corrected {} point{} of {} with {}: wrote {} (added {})",
-            points.rows.len(),
-            if points.rows.len() == 1 { "" } else { "s" },
-            points.source,
-            config.calibration.display(),
+        (Output::Text, Some(out)) => println!(
+            "{summary}; wrote {} (added {})",
             out.display(),
-            columns.join(", ")
+            answer.added.join(", ")
         ),
+        (Output::Text, None) => eprintln!("{summary}"),
     }
     Ok(())
 }

@@ -10,12 +10,16 @@ use crate::report::print_row_warnings;
 
 /// Runs `locate`.
 pub fn run(config: &LocateConfig, output: Output) -> anyhow::Result<()> {
-    let answer = psdcal::locate_table(&config.target, &config.points, &config.options)?;
+    let answer = psdcal::locate_table(
+        &config.target,
+        &config.points,
+        &config.options,
+        config.out.as_deref(),
+    )?;
     for w in &answer.warnings {
         eprintln!("warning: {w}");
     }
-    answer.table.write_to(config.out.as_deref())?;
-    print_row_warnings(&answer.count.warnings);
+    print_row_warnings(&answer.count);
     let summary = format!(
         "locate: {} {}: {}",
         answer.rows,

@@ -17,7 +17,7 @@ pub fn run(config: &MapConfig, output: Output) -> anyhow::Result<()> {
         paper: config.paper,
     })?;
     map.table.write_to(config.out.as_deref())?;
-    print_row_warnings(&map.count.warnings);
+    print_row_warnings(&map.count);
     match (output, &config.out) {
         (Output::Quiet, _) => {}
         (Output::Json, out) => {
@@ -35,8 +35,7 @@ pub fn run(config: &MapConfig, output: Output) -> anyhow::Result<()> {
             println!("{}", serde_json::to_string_pretty(&json)?);
         }
         (Output::Text, out) => {
-            let text =
-                format!(
+            let text = format!(
                 "map: {}, {}, {n} x {n} grid over {lx} x {ly} mm, plane at {s} mm: largest AoA \
                  error {aoa}°, largest position error {pos} mm; {counts}",
                 map.model_name,
@@ -46,7 +45,11 @@ pub fn run(config: &MapConfig, output: Output) -> anyhow::Result<()> {
                 ly = map.geometry.ly,
                 s = config.distance_mm,
                 aoa = map.max_aoa_deg.map_or("-".into(), |v| format!("{v:.4}")),
-                pos = map.max_position_mm.map_or("-".into(), |v| format!("{v:.2}")),
+                pos = map.max_position_mm.map_or("-".into(), |v| if v < 1e6 {
+                    format!("{v:.2}")
+                } else {
+                    format!("{v:.3e}")
+                }),
                 counts = map.count.summary(),
             );
             match out {

@@ -3,7 +3,7 @@
 //! `psdcal` binary.
 //!
 //! Exit codes: 0 success, 1 failure (one `error: ...` line on stderr),
-//! 2 usage error (clap).
+//! 2 usage error (clap, or an output that is one of the inputs).
 
 pub mod choice;
 pub mod cli;
@@ -22,6 +22,7 @@ mod cmd_map;
 mod cmd_report;
 mod cmd_simulate;
 mod cmd_study;
+mod guard;
 mod report;
 
 use std::process::ExitCode;
@@ -32,10 +33,18 @@ use crate::cli::{Cli, Job};
 
 /// Parses the arguments, runs the job and prints; the process's exit code.
 pub fn main() -> ExitCode {
-    let (output, job) = match Cli::parse().into_job() {
+    let cli = Cli::parse();
+    if let Some(mb) = cli.max_input_mb {
+        psdcal_io::set_max_file_bytes(mb << 20);
+    }
+    let (output, job) = match cli.into_job() {
         Ok(parsed) => parsed,
         Err(usage) => usage.exit(),
     };
+    if let Err(clash) = guard::check(&job) {
+        eprintln!("error: {clash}");
+        return ExitCode::from(2);
+    }
     let result = match &job {
         Job::Check(config) => cmd_check::run(config, output),
         Job::Calibrate(config) => cmd_calibrate::run(config, output),

@@ -67,6 +67,7 @@ fn hint(error: &anyhow::Error) -> &'static str {
                 "vary the template's tilt and position between images, or fix the parameters the data cannot determine"
             }
             psdcal::CalibError::InvalidInput { .. } => "change the options or the data as the message says",
+            psdcal::CalibError::Model(_) => "check the data and the fixed values (--set)",
             psdcal::CalibError::NotConverged { .. } => {
                 "give --focal-guess, free fewer parameters (--fit), or add images"
             }
@@ -78,7 +79,7 @@ fn hint(error: &anyhow::Error) -> &'static str {
     };
     match io {
         IoError::Field { .. } => {
-            "correct that field of the rig file (format: README, section 'Rig files')"
+            "correct that field of the rig file (format: docs/formats.md, 'rig.json')"
         }
         IoError::Read { .. } => "check the path and that the file is readable",
         IoError::Write { .. } => "check that the destination folder exists and is writable",
@@ -91,25 +92,42 @@ fn hint(error: &anyhow::Error) -> &'static str {
         IoError::Amplitudes { .. } => {
             "check that row's amplitudes (no light reached the sensor, or a channel is broken)"
         }
-        IoError::Json { .. } => "correct the calibration file, or write it again with psdcal",
+        IoError::Json { file, .. } => json_hint(file),
+        IoError::TooLarge { .. } => {
+            "give a smaller file, or raise the limit with --max-input-mb (docs/formats.md, 'Limits')"
+        }
+        IoError::OutputIsInput { .. } => "write the output to another file",
         IoError::NewerVersion { .. } => "upgrade psdcal to read this file",
         IoError::Strict { .. } => "fix the data, or run without --strict to drop it with a warning",
         _ => "see 'psdcal --help'",
     }
 }
 
-/// At most this many per-row warnings are printed.
-const MAX_ROW_WARNINGS: usize = 20;
+/// What to do about a JSON file that does not parse, by its kind.
+fn json_hint(file: &str) -> &'static str {
+    let name = std::path::Path::new(file)
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if name.contains("rig") {
+        "correct the rig file at that line and column (format: docs/formats.md, 'rig.json')"
+    } else if name.contains("gain") {
+        "correct the gains file at that line and column, or write it again with 'psdcal gains'"
+    } else if name.contains("truth") {
+        "correct the truth file at that line and column, or write it again with 'psdcal simulate'"
+    } else {
+        "correct the JSON file at that line and column, or write it again with psdcal (formats: docs/formats.md)"
+    }
+}
 
-/// Prints the warnings of table rows that are not `ok` (at most 20).
-pub fn print_row_warnings(warnings: &[String]) {
-    for w in warnings.iter().take(MAX_ROW_WARNINGS) {
+/// Prints the warnings kept for the table rows that are not `ok` (the
+/// first [`psdcal::MAX_ROW_WARNINGS`]) and how many more there are.
+pub fn print_row_warnings(count: &psdcal::StatusCount) {
+    for w in &count.warnings {
         eprintln!("warning: {w}");
     }
-    if warnings.len() > MAX_ROW_WARNINGS {
-        eprintln!(
-            "warning: {} more rows with a status other than ok (see the status column)",
-            warnings.len() - MAX_ROW_WARNINGS
-        );
+    let more = count.not_ok().saturating_sub(count.warnings.len());
+    if more > 0 {
+        eprintln!("warning: {more} more rows with a status other than ok (see the status column)");
     }
 }

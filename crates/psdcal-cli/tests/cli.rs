@@ -262,7 +262,15 @@ fn correct_writes_ideal_points_to_stdout() {
         valid("points.csv").as_os_str(),
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
-    assert_eq!(stderr(&out), "");
+    // The table is on standard output: the summary goes to standard error.
+    assert_eq!(
+        stderr(&out),
+        format!(
+            "corrected 10 points of {} with {}: 10 ok\n",
+            valid("points.csv").display(),
+            valid("calibration.json").display()
+        )
+    );
     let (header, rows) = parse_csv(&stdout(&out));
     assert_eq!(
         header,
@@ -273,7 +281,8 @@ fn correct_writes_ideal_points_to_stdout() {
             "y_mm",
             "extra",
             "x_ideal_mm",
-            "y_ideal_mm"
+            "y_ideal_mm",
+            "status"
         ]
     );
     let inputs = common::points_to_correct();
@@ -290,6 +299,7 @@ fn correct_writes_ideal_points_to_stdout() {
         let y: f64 = row[6].parse().unwrap();
         assert!((x - ideal.x).abs() <= 1e-12, "{x} vs {}", ideal.x);
         assert!((y - ideal.y).abs() <= 1e-12, "{y} vs {}", ideal.y);
+        assert_eq!(row[7], "ok");
     }
 }
 
@@ -312,7 +322,8 @@ fn correct_writes_a_file_atomically_with_a_summary() {
     assert_eq!(
         stdout(&out),
         format!(
-            "corrected {n} points of {} with {}: wrote {} (added x_ideal_mm, y_ideal_mm)\n",
+            "corrected {n} points of {} with {}: {n} ok; wrote {} (added x_ideal_mm, \
+             y_ideal_mm, status)\n",
             valid("points.csv").display(),
             valid("calibration.json").display(),
             out_path.display()
@@ -344,11 +355,12 @@ fn correct_writes_a_file_atomically_with_a_summary() {
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     let json: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(json["rows"], n);
+    assert_eq!(json["rows"]["rows"], n);
+    assert_eq!(json["rows"]["status"]["ok"], n);
     assert_eq!(json["from_amplitudes"], false);
     assert_eq!(
         json["added_columns"],
-        serde_json::json!(["x_ideal_mm", "y_ideal_mm"])
+        serde_json::json!(["x_ideal_mm", "y_ideal_mm", "status"])
     );
 }
 
@@ -374,7 +386,8 @@ fn correct_amplitudes_divides_the_calibration_gains() {
             "x_mm",
             "y_mm",
             "x_ideal_mm",
-            "y_ideal_mm"
+            "y_ideal_mm",
+            "status"
         ]
     );
     let model = common::model();
@@ -418,9 +431,11 @@ fn correct_warns_about_points_off_the_area() {
     assert_eq!(
         stderr(&out),
         format!(
-            "warning: {}:3: point (4.6, 0) mm is off the 9 x 9 mm active area, where the model \
-             was not fitted: corrected anyway\n",
-            points.display()
+            "warning: {p}:3: point (4.6, 0.0) mm is off the active area, where the model was not \
+             fitted; answered anyway\ncorrected 2 points of {p} with {}: 1 ok, 1 \
+             off_active_area\n",
+            valid("calibration.json").display(),
+            p = points.display()
         )
     );
     assert_eq!(stdout(&out).lines().count(), 3);

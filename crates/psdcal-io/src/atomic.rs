@@ -12,6 +12,11 @@
 //! operating system writes the file back within seconds (file systems such
 //! as ext4 flush a file renamed over another before committing the rename).
 //! Run `sync` if the power may fail right after a run.
+//!
+//! Temporary files are named `.<name>.<pid>.<n>.tmp`. A process killed
+//! while writing (SIGKILL, power loss) cannot remove its own: the next write
+//! into the same folder removes every such file whose process is no longer
+//! running (on systems without `/proc`, those older than a day).
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
@@ -31,6 +36,7 @@ where
         file: path.display().to_string(),
         source,
     };
+    remove_stale_temps(path);
     let (temp_path, file) = create_temp(path).map_err(error)?;
     let result = fill(file, write).and_then(|()| fs::rename(&temp_path, path));
     if let Err(source) = result {
@@ -73,6 +79,63 @@ fn create_temp(path: &Path) -> io::Result<(PathBuf, File)> {
             Ok(file) => return Ok((temp_path, file)),
             Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
             Err(e) => return Err(e),
+        }
+    }
+}
+
+/// The folder a destination is written in.
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    }
+}
+
+/// The process id in a name of psdcal's temporary files
+/// (`.<name>.<pid>.<n>.tmp`), if the name is one.
+fn temp_owner(file_name: &str) -> Option<u32> {
+    let inner = file_name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let mut parts = inner.rsplitn(3, '.');
+    let n = parts.next()?;
+    let pid = parts.next()?;
+    let name = parts.next()?;
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    (!name.is_empty() && digits(n) && digits(pid))
+        .then(|| pid.parse().ok())
+        .flatten()
+}
+
+/// Whether the process that owns a temporary file is gone.
+fn owner_is_gone(pid: u32, entry: &fs::DirEntry) -> bool {
+    if pid == std::process::id() {
+        return false;
+    }
+    let proc = Path::new("/proc");
+    if proc.join("self").exists() {
+        return !proc.join(pid.to_string()).exists();
+    }
+    const DAY: std::time::Duration = std::time::Duration::from_secs(24 * 3600);
+    entry
+        .metadata()
+        .and_then(|m| m.modified())
+        .ok()
+        .and_then(|t| t.elapsed().ok())
+        .is_some_and(|age| age > DAY)
+}
+
+/// Removes the temporary files left in `path`'s folder by psdcal processes
+/// that were killed while writing (best effort).
+fn remove_stale_temps(path: &Path) {
+    let Ok(entries) = fs::read_dir(folder_of(path)) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(temp_owner) else {
+            continue;
+        };
+        if entry.file_type().is_ok_and(|t| t.is_file()) && owner_is_gone(pid, &entry) {
+            let _ = fs::remove_file(entry.path());
         }
     }
 }
@@ -127,6 +190,34 @@ mod tests {
             e.to_string(),
             format!("{}: cannot write the file: disk full", path.display())
         );
+    }
+
+    #[test]
+    fn stale_temporary_files_of_dead_processes_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        // A process id that cannot be running: beyond Linux's pid_max.
+        let dead = dir.path().join(".aoa.csv.4294967295.0.tmp");
+        let mine = dir
+            .path()
+            .join(format!(".aoa.csv.{}.99.tmp", std::process::id()));
+        let foreign = dir.path().join(".notes.tmp");
+        for p in [&dead, &mine, &foreign] {
+            fs::write(p, "partial").unwrap();
+        }
+        write_atomic_bytes(dir.path().join("other.csv"), b"x").unwrap();
+        let mut expected = vec![
+            ".notes.tmp".to_string(),
+            format!(".aoa.csv.{}.99.tmp", std::process::id()),
+            "other.csv".to_string(),
+        ];
+        if !Path::new("/proc/self").exists() {
+            expected.push(".aoa.csv.4294967295.0.tmp".to_string());
+        }
+        expected.sort();
+        assert_eq!(entries(dir.path()), expected);
+        assert_eq!(temp_owner(".a.b.csv.12.3.tmp"), Some(12));
+        assert_eq!(temp_owner(".12.3.tmp"), None);
+        assert_eq!(temp_owner(".a.x2.3.tmp"), None);
     }
 
     #[test]

@@ -45,7 +45,7 @@ use psdcal_model::{
 use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomic_bytes;
-use crate::error::{IoError, Location};
+use crate::error::{json_error, IoError, Location};
 
 mod provenance;
 mod records;
@@ -296,10 +296,7 @@ impl Calibration {
 pub fn read_calibration(path: impl AsRef<Path>) -> Result<Calibration, IoError> {
     let path = path.as_ref();
     let source = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| IoError::Read {
-        file: source.clone(),
-        source: e,
-    })?;
+    let bytes = crate::limits::read_bounded(path)?;
     Calibration::from_json_bytes(&source, &bytes)
 }
 
@@ -327,16 +324,4 @@ fn newer_version(text: &str) -> Option<u64> {
     }
     let found = value.get("version")?.as_u64()?;
     (found > u64::from(CALIBRATION_VERSION)).then_some(found)
-}
-
-fn json_error(source: &str, e: &serde_json::Error) -> IoError {
-    let full = e.to_string();
-    let suffix = format!(" at line {} column {}", e.line(), e.column());
-    let message = full.strip_suffix(&suffix).unwrap_or(&full).to_string();
-    IoError::Json {
-        file: source.to_string(),
-        line: e.line().max(1),
-        column: e.column(),
-        message,
-    }
 }

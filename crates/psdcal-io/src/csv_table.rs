@@ -18,11 +18,14 @@
 //! one: binary data (NUL or other control bytes), bytes that are not UTF-8,
 //! and a header that is separated by `;` or tabs instead of commas.
 
-use std::io::Read;
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
 use crate::csv_fields::split_fields;
+use crate::csv_lines::LineReader;
 use crate::error::{quoted, ColumnRef, IoError, Location};
+use crate::limits::{excerpt, max_file_bytes};
 
 /// A parsed CSV file: its header and its data records, with line numbers.
 #[derive(Debug, Clone)]
@@ -68,84 +71,32 @@ impl Col {
 }
 
 impl CsvTable {
-    /// Reads and parses a file; `expected` lists the format's columns for
-    /// messages.
+    /// Reads and parses a file (at most [`max_file_bytes`]); `expected`
+    /// lists the format's columns for messages.
     pub fn read_path(path: &Path, expected: &'static str) -> Result<Self, IoError> {
-        let source = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|e| IoError::Read {
-            file: source.clone(),
-            source: e,
-        })?;
-        Self::parse(&source, &bytes, expected)
+        let stream = CsvStream::open(path, expected, Some(max_file_bytes()))?;
+        stream.collect_rows()
     }
 
-    /// Reads everything from `reader` and parses it; `source` names it in
-    /// messages.
+    /// Reads everything from `reader` (at most [`max_file_bytes`]) and parses
+    /// it; `source` names it in messages.
     pub fn from_reader(
         source: &str,
-        mut reader: impl Read,
+        reader: impl Read,
         expected: &'static str,
     ) -> Result<Self, IoError> {
-        let mut bytes = Vec::new();
-        reader.read_to_end(&mut bytes).map_err(|e| IoError::Read {
-            file: source.to_string(),
-            source: e,
-        })?;
-        Self::parse(source, &bytes, expected)
+        let stream = CsvStream::new(
+            source,
+            BufReader::new(reader),
+            expected,
+            Some(max_file_bytes()),
+        )?;
+        stream.collect_rows()
     }
 
     /// Parses the bytes of a CSV file.
     pub fn parse(source: &str, bytes: &[u8], expected: &'static str) -> Result<Self, IoError> {
-        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-        let text = check_text(source, bytes)?;
-        let mut header: Option<(usize, Vec<String>)> = None;
-        let mut rows = Vec::new();
-        for (index, raw_line) in text.split('\n').enumerate() {
-            let line = index + 1;
-            let content = raw_line.strip_suffix('\r').unwrap_or(raw_line);
-            let trimmed = content.trim();
-            if trimmed.is_empty() || trimmed.starts_with('#') {
-                continue;
-            }
-            let fields = split_fields(content).map_err(|message| IoError::Structure {
-                at: Location::line(source, line),
-                message,
-            })?;
-            if fields.iter().all(|f| f.trim().is_empty()) {
-                continue;
-            }
-            match &header {
-                None => {
-                    check_delimiter(source, line, content, &fields, expected)?;
-                    header = Some((line, fields));
-                }
-                Some((header_line, names)) => {
-                    let fields = fit_to_header(source, line, fields, names.len(), *header_line)?;
-                    rows.push(CsvRow { line, fields });
-                }
-            }
-        }
-        let Some((header_line, header)) = header else {
-            let message = if text.trim().is_empty() {
-                format!("the file is empty; expected a header row with the columns {expected}")
-            } else {
-                format!(
-                    "the file holds only comments and blank lines; expected a header row with \
-                     the columns {expected}"
-                )
-            };
-            return Err(IoError::Structure {
-                at: Location::file(source),
-                message,
-            });
-        };
-        Ok(Self {
-            source: source.to_string(),
-            header,
-            header_line,
-            rows,
-            expected,
-        })
+        CsvStream::new(source, bytes, expected, None)?.collect_rows()
     }
 
     /// A location on a line of this file.
@@ -215,7 +166,7 @@ impl CsvTable {
             message: format!(
                 "missing column '{name}'; expected the columns {} (the header has: {})",
                 self.expected,
-                found.join(", ")
+                excerpt(&found.join(", "))
             ),
         }
     }
@@ -248,6 +199,125 @@ impl CsvTable {
     }
 }
 
+/// A CSV file read row by row in constant memory: the header (with the
+/// column lookups of [`CsvTable`], whose `rows` stay empty), then each record
+/// on demand.
+pub(crate) struct CsvStream<R> {
+    /// The header, as a table without rows.
+    pub head: CsvTable,
+    lines: LineReader<R>,
+}
+
+impl CsvStream<BufReader<File>> {
+    /// Opens a file and reads up to its header; `limit` bounds its size.
+    pub fn open(path: &Path, expected: &'static str, limit: Option<u64>) -> Result<Self, IoError> {
+        let source = path.display().to_string();
+        let file = File::open(path).map_err(|e| IoError::Read {
+            file: source.clone(),
+            source: e,
+        })?;
+        Self::new(&source, BufReader::new(file), expected, limit)
+    }
+}
+
+impl<R: BufRead> CsvStream<R> {
+    /// Reads up to the header of `reader`; `source` names it in messages.
+    pub fn new(
+        source: &str,
+        reader: R,
+        expected: &'static str,
+        limit: Option<u64>,
+    ) -> Result<Self, IoError> {
+        let mut lines = LineReader::new(source, reader, limit);
+        let mut seen_text = false;
+        loop {
+            let Some((line, content)) = lines.next_line()? else {
+                let message = if seen_text {
+                    format!(
+                        "the file holds only comments and blank lines; expected a header row \
+                         with the columns {expected}"
+                    )
+                } else {
+                    format!("the file is empty; expected a header row with the columns {expected}")
+                };
+                return Err(IoError::Structure {
+                    at: Location::file(source),
+                    message,
+                });
+            };
+            let Some(fields) = significant_fields(source, line, content, &mut seen_text)? else {
+                continue;
+            };
+            check_delimiter(source, line, content, &fields, expected)?;
+            let head = CsvTable {
+                source: source.to_string(),
+                header: fields,
+                header_line: line,
+                rows: Vec::new(),
+                expected,
+            };
+            return Ok(Self { head, lines });
+        }
+    }
+
+    /// The next data record, or `None` at the end of the file.
+    pub fn next_row(&mut self) -> Result<Option<CsvRow>, IoError> {
+        let mut seen_text = true;
+        loop {
+            let Some((line, content)) = self.lines.next_line()? else {
+                return Ok(None);
+            };
+            let source = &self.head.source;
+            let Some(fields) = significant_fields(source, line, content, &mut seen_text)? else {
+                continue;
+            };
+            let fields = fit_to_header(
+                source,
+                line,
+                fields,
+                self.head.header.len(),
+                self.head.header_line,
+            )?;
+            return Ok(Some(CsvRow { line, fields }));
+        }
+    }
+
+    /// Every remaining record, as a table.
+    pub fn collect_rows(mut self) -> Result<CsvTable, IoError> {
+        while let Some(row) = self.next_row()? {
+            self.head.rows.push(row);
+        }
+        Ok(self.head)
+    }
+}
+
+/// The fields of a line, or `None` for a line that is skipped (blank, a
+/// comment, only empty fields); `seen_text` records whether any non-blank
+/// line was seen.
+fn significant_fields(
+    source: &str,
+    line: usize,
+    content: &str,
+    seen_text: &mut bool,
+) -> Result<Option<Vec<String>>, IoError> {
+    let trimmed = content.trim();
+    if trimmed.is_empty() {
+        return Ok(None);
+    }
+    *seen_text = true;
+    if trimmed.starts_with('#') {
+        return Ok(None);
+    }
+    let fields = split_fields(content).map_err(|message| IoError::Structure {
+        at: Location::line(source, line),
+        message,
+    })?;
+    if fields.iter().all(|f| f.trim().is_empty()) {
+        return Ok(None);
+    }
+    Ok(Some(fields))
+}
+
 /// Parses a finite decimal or scientific number; the error says what was
 /// found (never echoing a NaN spelling back).
 pub(crate) fn parse_number(text: &str) -> Result<f64, String> {
@@ -277,34 +347,6 @@ pub(crate) fn parse_number(text: &str) -> Result<f64, String> {
         }
         Err(_) => Err(format!("expected a number, found {}", quoted(text))),
     }
-}
-
-/// Checks that the bytes are text: no NUL or other control bytes, valid UTF-8.
-fn check_text<'a>(source: &str, bytes: &'a [u8]) -> Result<&'a str, IoError> {
-    let line_of = |offset: usize| 1 + bytes[..offset].iter().filter(|&&b| b == b'\n').count();
-    if let Some(offset) = bytes
-        .iter()
-        .position(|&b| (b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r')) || b == 0x7f)
-    {
-        let byte = bytes.get(offset).copied().unwrap_or(0);
-        return Err(IoError::Encoding {
-            at: Location::line(source, line_of(offset)),
-            message: format!(
-                "binary data (control byte 0x{byte:02x} at byte offset {offset}); expected a \
-                 UTF-8 CSV text file"
-            ),
-        });
-    }
-    std::str::from_utf8(bytes).map_err(|e| {
-        let offset = e.valid_up_to();
-        let byte = bytes.get(offset).copied().unwrap_or(0);
-        IoError::Encoding {
-            at: Location::line(source, line_of(offset)),
-            message: format!(
-                "byte 0x{byte:02x} at byte offset {offset} is not UTF-8; expected UTF-8 text"
-            ),
-        }
-    })
 }
 
 /// A header that is one field containing `;` or a tab is a file with the

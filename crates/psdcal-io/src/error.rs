@@ -108,6 +108,23 @@ pub enum IoError {
         /// What was found and what was expected.
         message: String,
     },
+    /// The file is larger than the size limit (docs/formats.md, "Limits").
+    #[error("{at}: {message}")]
+    TooLarge {
+        /// The file.
+        at: Location,
+        /// The limit and how to raise it.
+        message: String,
+    },
+    /// An output would replace an input of the same run (the same file,
+    /// also through links), or two outputs are the same file.
+    #[error("{file}: {message}")]
+    OutputIsInput {
+        /// The output as given.
+        file: String,
+        /// Which input it is, and what to do.
+        message: String,
+    },
     /// A value in a CSV column is unusable (not a number, not finite, empty).
     #[error("{at}: {column}: {message}")]
     Value {
@@ -214,9 +231,11 @@ impl IoError {
             | IoError::Write { file, .. }
             | IoError::Json { file, .. }
             | IoError::NewerVersion { file, .. }
-            | IoError::Field { file, .. } => Some(file),
+            | IoError::Field { file, .. }
+            | IoError::OutputIsInput { file, .. } => Some(file),
             IoError::Encoding { at, .. }
             | IoError::Structure { at, .. }
+            | IoError::TooLarge { at, .. }
             | IoError::Value { at, .. }
             | IoError::UnknownLed { at, .. }
             | IoError::Duplicate { at, .. }
@@ -229,10 +248,14 @@ impl IoError {
     /// The 1-based physical line the error is on, if it is on one.
     pub fn line(&self) -> Option<usize> {
         match self {
-            IoError::Read { .. } | IoError::Write { .. } | IoError::Field { .. } => None,
+            IoError::Read { .. }
+            | IoError::Write { .. }
+            | IoError::Field { .. }
+            | IoError::OutputIsInput { .. } => None,
             IoError::Json { line, .. } | IoError::NewerVersion { line, .. } => Some(*line),
             IoError::Encoding { at, .. }
             | IoError::Structure { at, .. }
+            | IoError::TooLarge { at, .. }
             | IoError::Value { at, .. }
             | IoError::UnknownLed { at, .. }
             | IoError::Duplicate { at, .. }
@@ -241,6 +264,39 @@ impl IoError {
             IoError::Strict { warning } => warning.line(),
         }
     }
+}
+
+/// A JSON syntax or type error of `source` with its line and column, the
+/// message without serde's own position and at most 160 characters long.
+pub(crate) fn json_error(source: &str, e: &serde_json::Error) -> IoError {
+    let full = e.to_string();
+    let suffix = format!(" at line {} column {}", e.line(), e.column());
+    let message = full.strip_suffix(&suffix).unwrap_or(&full);
+    let mut shown: String = message.chars().take(160).collect();
+    if message.chars().nth(160).is_some() {
+        shown.push('…');
+    }
+    IoError::Json {
+        file: source.to_string(),
+        line: e.line().max(1),
+        column: e.column(),
+        message: shown,
+    }
+}
+
+/// A file read whole (within the size limit) as UTF-8 text.
+pub(crate) fn read_text(path: &std::path::Path) -> Result<String, IoError> {
+    let source = path.display().to_string();
+    let bytes = crate::limits::read_bounded(path)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let offset = e.utf8_error().valid_up_to();
+        IoError::Encoding {
+            at: Location::file(&source),
+            message: format!(
+                "the byte at offset {offset} is not UTF-8; expected a UTF-8 JSON file"
+            ),
+        }
+    })
 }
 
 /// A raw field as shown in messages: quoted, control characters escaped,

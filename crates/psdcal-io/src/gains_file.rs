@@ -61,6 +61,22 @@ impl GainsFile {
 /// Writes gains.json atomically.
 pub fn write_gains(path: impl AsRef<Path>, file: &GainsFile) -> Result<(), IoError> {
     let path = path.as_ref();
+    let values = [
+        file.x2,
+        file.y1,
+        file.y2,
+        file.std.g_x2,
+        file.std.g_y1,
+        file.std.g_y2,
+    ];
+    if values.iter().any(|v| !v.is_finite()) || file.gains().validate().is_err() {
+        return Err(IoError::Invalid {
+            at: Location::file(&path.display().to_string()),
+            message: "the gains or their standard deviations are not positive finite numbers; \
+                      nothing was written"
+                .to_string(),
+        });
+    }
     let mut text = serde_json::to_string_pretty(file).map_err(|e| IoError::Invalid {
         at: Location::file(&path.display().to_string()),
         message: format!("cannot encode the gains as JSON: {e}"),
@@ -73,16 +89,9 @@ pub fn write_gains(path: impl AsRef<Path>, file: &GainsFile) -> Result<(), IoErr
 pub fn read_gains(path: impl AsRef<Path>) -> Result<GainsFile, IoError> {
     let path = path.as_ref();
     let source = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| IoError::Read {
-        file: source.clone(),
-        source: e,
-    })?;
-    let file: GainsFile = serde_json::from_str(&text).map_err(|e| IoError::Json {
-        file: source.clone(),
-        line: e.line().max(1),
-        column: e.column(),
-        message: e.to_string(),
-    })?;
+    let text = crate::error::read_text(path)?;
+    let file: GainsFile =
+        serde_json::from_str(&text).map_err(|e| crate::error::json_error(&source, &e))?;
     if file.format != GAINS_FORMAT {
         return Err(IoError::Invalid {
             at: Location::file(&source),

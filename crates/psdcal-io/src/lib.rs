@@ -30,14 +30,18 @@ mod calibration;
 mod correct;
 mod coverage;
 mod csv_fields;
+mod csv_lines;
 mod csv_table;
 mod error;
 mod export;
 mod gains_file;
+mod limits;
+mod number_text;
 mod observations;
 mod points;
 mod rig;
 mod rig_observations;
+mod same_file;
 mod signals;
 mod summary;
 mod template;
@@ -58,10 +62,16 @@ pub use export::{
     write_observations, write_signals, write_template, ObservationRow, SignalRowOut, TemplateLed,
 };
 pub use gains_file::{read_gains, write_gains, GainStd, GainsFile, GAINS_FORMAT};
+pub use limits::{
+    max_file_bytes, read_all_bounded, read_bounded, set_max_file_bytes, DEFAULT_MAX_FILE_BYTES,
+    MAX_EXCERPT_CHARS, MAX_LINE_BYTES,
+};
+pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
-pub use points::{AddedColumn, PointInput, PointRow, Points};
+pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
 pub use rig::{read_rig, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION};
 pub use rig_observations::{RigObservation, RigObservations};
+pub use same_file::refuse_overwrite;
 pub use signals::{SignalRow, Signals};
 pub use summary::{DataSetSummary, ImageSummary, LineSummary, TemplateSummary};
 pub use template::{Led, LineGroup, Template};

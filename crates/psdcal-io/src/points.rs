@@ -10,25 +10,37 @@
 //! written so that the answer can repeat them in their original order, then
 //! append its own columns ([`Points::write_csv`]).
 
-use std::io::{self, Read, Write};
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, Read, Write};
 use std::path::Path;
 
 use nalgebra::Vector2;
 use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
 
-use crate::csv_table::CsvTable;
-use crate::error::{IoError, Location};
+use crate::csv_table::{parse_number, Col, CsvRow, CsvStream, CsvTable};
+use crate::error::{ColumnRef, IoError, Location};
+use crate::number_text::number_text;
 use crate::signals::impact_point_at;
 
 const EXPECTED_COLUMNS: &str = "x_mm, y_mm (or vx1, vx2, vy1, vy2)";
 
-/// What a row gives: a measured point, or the amplitudes to compute it from.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// What a row gives: a measured point, the amplitudes to compute it from,
+/// or a cell without a finite number (the row gets the status
+/// `non_finite_input`, the batch goes on).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum PointInput {
     /// A measured impact point, mm.
     Position(Vector2<f64>),
     /// Electrode amplitudes (docs/model.md §1).
     Amplitudes(Amplitudes),
+    /// A needed cell is empty, NaN, infinite or beyond the `f64` range.
+    NonFinite {
+        /// The first such column.
+        column: ColumnRef,
+        /// What it holds (e.g. `an empty field`).
+        message: String,
+    },
 }
 
 /// One row of points.csv.
@@ -68,65 +80,45 @@ pub struct AddedColumn<'a> {
 }
 
 impl Points {
-    /// Reads points.csv from a file.
+    /// Reads points.csv from a file (whole, within the size limit).
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(path.as_ref(), EXPECTED_COLUMNS)?)
+        Self::collect(PointStream::from_table(CsvTable::read_path(
+            path.as_ref(),
+            EXPECTED_COLUMNS,
+        )?)?)
     }
 
     /// Reads points.csv from a reader; `source` names it in messages.
     pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::from_reader(source, reader, EXPECTED_COLUMNS)?)
+        Self::collect(PointStream::from_table(CsvTable::from_reader(
+            source,
+            reader,
+            EXPECTED_COLUMNS,
+        )?)?)
     }
 
     /// Parses points.csv text; `source` names it in messages.
     pub fn from_str(source: &str, text: &str) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::parse(source, text.as_bytes(), EXPECTED_COLUMNS)?)
+        Self::collect(PointStream::from_table(CsvTable::parse(
+            source,
+            text.as_bytes(),
+            EXPECTED_COLUMNS,
+        )?)?)
     }
 
-    fn from_table(table: CsvTable) -> Result<Self, IoError> {
-        let x = table.find_column("x_mm")?;
-        let y = table.find_column("y_mm")?;
-        let amplitudes = (x.is_none() || y.is_none()) && table.find_column("vx1")?.is_some();
-        let mut rows = Vec::with_capacity(table.rows.len());
-        if amplitudes {
-            let cols = [
-                table.column("vx1")?,
-                table.column("vx2")?,
-                table.column("vy1")?,
-                table.column("vy2")?,
-            ];
-            table.require_rows()?;
-            for row in &table.rows {
-                let amps = Amplitudes {
-                    vx1: table.number(row, &cols[0])?,
-                    vx2: table.number(row, &cols[1])?,
-                    vy1: table.number(row, &cols[2])?,
-                    vy2: table.number(row, &cols[3])?,
-                };
-                rows.push(PointRow {
-                    line_no: row.line,
-                    fields: row.fields.clone(),
-                    input: PointInput::Amplitudes(amps),
-                });
-            }
-        } else {
-            let x = x.ok_or_else(|| table.missing_column("x_mm"))?;
-            let y = y.ok_or_else(|| table.missing_column("y_mm"))?;
-            table.require_rows()?;
-            for row in &table.rows {
-                let point = Vector2::new(table.number(row, &x)?, table.number(row, &y)?);
-                rows.push(PointRow {
-                    line_no: row.line,
-                    fields: row.fields.clone(),
-                    input: PointInput::Position(point),
-                });
-            }
+    fn collect<R: BufRead>(mut stream: PointStream<R>) -> Result<Self, IoError> {
+        let mut rows = Vec::new();
+        while let Some(row) = stream.next_row()? {
+            rows.push(row);
+        }
+        if rows.is_empty() {
+            stream.head.require_rows()?;
         }
         Ok(Self {
-            source: table.source,
-            header: table.header,
-            header_line: table.header_line,
-            amplitudes,
+            source: stream.head.source.clone(),
+            header: stream.head.header.clone(),
+            header_line: stream.head.header_line,
+            amplitudes: stream.amplitudes,
             rows,
         })
     }
@@ -154,6 +146,11 @@ impl Points {
                 PointInput::Position(p) => Ok(*p),
                 PointInput::Amplitudes(a) => impact_point_at(geometry, a, gains, || {
                     Location::line(&self.source, row.line_no)
+                }),
+                PointInput::NonFinite { column, message } => Err(IoError::Value {
+                    at: Location::line(&self.source, row.line_no),
+                    column: column.clone(),
+                    message: message.clone(),
                 }),
             })
             .collect()
@@ -203,7 +200,7 @@ impl Points {
                         .get(i)
                         .copied()
                         .flatten()
-                        .map_or_else(String::new, |v| v.to_string())
+                        .map_or_else(String::new, number_text)
                 })
                 .collect();
             let fields = row.fields.iter().map(String::as_str);
@@ -211,6 +208,147 @@ impl Points {
         }
         writer.flush()
     }
+}
+
+/// points.csv read row by row in constant memory (no size limit): what
+/// `correct`, `aoa` and `locate` on a plane stream through.
+pub struct PointStream<R> {
+    head: CsvTable,
+    rows: Option<CsvStream<R>>,
+    next: usize,
+    columns: Vec<Col>,
+    /// Whether the rows give amplitudes rather than positions.
+    pub amplitudes: bool,
+}
+
+impl PointStream<BufReader<File>> {
+    /// Opens points.csv and reads its header.
+    pub fn open(path: impl AsRef<Path>) -> Result<Self, IoError> {
+        let stream = CsvStream::open(path.as_ref(), EXPECTED_COLUMNS, None)?;
+        let head = stream.head.clone();
+        Self::with(head, Some(stream))
+    }
+}
+
+impl PointStream<&'static [u8]> {
+    /// The rows of a table already read.
+    fn from_table(table: CsvTable) -> Result<Self, IoError> {
+        Self::with(table, None)
+    }
+}
+
+impl<R: BufRead> PointStream<R> {
+    fn with(head: CsvTable, rows: Option<CsvStream<R>>) -> Result<Self, IoError> {
+        let x = head.find_column("x_mm")?;
+        let y = head.find_column("y_mm")?;
+        let amplitudes = (x.is_none() || y.is_none()) && head.find_column("vx1")?.is_some();
+        let columns = if amplitudes {
+            vec![
+                head.column("vx1")?,
+                head.column("vx2")?,
+                head.column("vy1")?,
+                head.column("vy2")?,
+            ]
+        } else {
+            vec![
+                x.ok_or_else(|| head.missing_column("x_mm"))?,
+                y.ok_or_else(|| head.missing_column("y_mm"))?,
+            ]
+        };
+        Ok(Self {
+            head,
+            rows,
+            next: 0,
+            columns,
+            amplitudes,
+        })
+    }
+
+    /// File name, for messages.
+    pub fn source(&self) -> &str {
+        &self.head.source
+    }
+
+    /// Header fields as written.
+    pub fn header(&self) -> &[String] {
+        &self.head.header
+    }
+
+    /// Physical line of the header, 1-based.
+    pub fn header_line(&self) -> usize {
+        self.head.header_line
+    }
+
+    /// Whether the header has a column called `name` (ignoring surrounding
+    /// blanks and ASCII case, as column lookup does).
+    pub fn has_column(&self, name: &str) -> bool {
+        self.head
+            .header
+            .iter()
+            .any(|h| h.trim().eq_ignore_ascii_case(name))
+    }
+
+    /// The next row, or `None` at the end. A cell that is not a number is
+    /// an error; an empty or non-finite one gives [`PointInput::NonFinite`].
+    pub fn next_row(&mut self) -> Result<Option<PointRow>, IoError> {
+        let row = match &mut self.rows {
+            Some(stream) => stream.next_row()?,
+            None => {
+                let row = self.head.rows.get(self.next).cloned();
+                self.next += 1;
+                row
+            }
+        };
+        let Some(row) = row else {
+            return Ok(None);
+        };
+        let input = self.input(&row)?;
+        Ok(Some(PointRow {
+            line_no: row.line,
+            fields: row.fields,
+            input,
+        }))
+    }
+
+    fn input(&self, row: &CsvRow) -> Result<PointInput, IoError> {
+        let mut values = [0.0; 4];
+        for (k, col) in self.columns.iter().enumerate() {
+            let text = self.head.text(row, col);
+            match parse_number(text) {
+                Ok(v) => values[k] = v,
+                Err(message) if is_non_finite(text) => {
+                    return Ok(PointInput::NonFinite {
+                        column: col.to_ref(),
+                        message,
+                    })
+                }
+                Err(message) => {
+                    return Err(IoError::Value {
+                        at: self.head.at(row.line),
+                        column: col.to_ref(),
+                        message,
+                    })
+                }
+            }
+        }
+        Ok(if self.amplitudes {
+            PointInput::Amplitudes(Amplitudes {
+                vx1: values[0],
+                vx2: values[1],
+                vy1: values[2],
+                vy2: values[3],
+            })
+        } else {
+            PointInput::Position(Vector2::new(values[0], values[1]))
+        })
+    }
+}
+
+/// Whether a cell that is not a finite number is empty or a number that is
+/// not finite (NaN, an infinity, beyond the `f64` range), rather than text.
+fn is_non_finite(text: &str) -> bool {
+    let text = text.trim();
+    text.is_empty() || text.parse::<f64>().is_ok()
 }
 
 #[cfg(test)]
@@ -285,10 +423,23 @@ mod tests {
         assert!(e.to_string().contains("missing column 'x_mm'"), "{e}");
         let e = Points::from_str("points.csv", "vx1,vx2,vy1\n1,2,3\n").unwrap_err();
         assert!(e.to_string().contains("missing column 'vy2'"), "{e}");
-        let e = Points::from_str("points.csv", "x_mm,y_mm\n1,2\n1,\n").unwrap_err();
+        let e = Points::from_str("points.csv", "x_mm,y_mm\n1,2\n1,abc\n").unwrap_err();
         assert_eq!(
             e.to_string(),
-            "points.csv:3: column 'y_mm' (2): expected a number, found an empty field"
+            "points.csv:3: column 'y_mm' (2): expected a number, found 'abc'"
+        );
+        // Empty and non-finite cells are rows of their own, not errors.
+        let p = Points::from_str("points.csv", "x_mm,y_mm\n1,\nnan,2\n1e999,0\n3,4\n").unwrap();
+        assert_eq!(p.rows.len(), 4);
+        for (row, column) in p.rows[..3].iter().zip(["y_mm", "x_mm", "x_mm"]) {
+            assert!(
+                matches!(&row.input, PointInput::NonFinite { column: c, .. } if c.name == column),
+                "{row:?}"
+            );
+        }
+        assert_eq!(
+            p.rows[3].input,
+            PointInput::Position(Vector2::new(3.0, 4.0))
         );
     }
 

@@ -25,6 +25,7 @@
 //! names the file and the field (`sensors[1].world_from_sensor.t_mm`) and
 //! says what was expected; JSON syntax errors give line and column.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
@@ -95,10 +96,7 @@ impl RigFile {
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
         let path = path.as_ref();
         let source = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|e| IoError::Read {
-            file: source.clone(),
-            source: e,
-        })?;
+        let bytes = crate::limits::read_bounded(path)?;
         let text = std::str::from_utf8(&bytes).map_err(|e| IoError::Encoding {
             at: crate::Location::file(&source),
             message: format!(
@@ -114,16 +112,8 @@ impl RigFile {
     /// relative calibration paths are resolved against `base_dir`.
     pub fn from_json_str(source: &str, text: &str, base_dir: &Path) -> Result<Self, IoError> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let value: Value = serde_json::from_str(text).map_err(|e| IoError::Json {
-            file: source.to_string(),
-            line: e.line().max(1),
-            column: e.column(),
-            message: {
-                let full = e.to_string();
-                let suffix = format!(" at line {} column {}", e.line(), e.column());
-                full.strip_suffix(&suffix).unwrap_or(&full).to_string()
-            },
-        })?;
+        let value: Value =
+            serde_json::from_str(text).map_err(|e| crate::error::json_error(source, &e))?;
         let fields = Fields { source };
         let top = value
             .as_object()
@@ -167,9 +157,10 @@ impl RigFile {
             });
         }
         let mut sensors: Vec<RigSensorRecord> = Vec::with_capacity(list.len());
+        let mut seen: HashMap<String, usize> = HashMap::with_capacity(list.len());
         for (i, item) in list.iter().enumerate() {
             let sensor = fields.sensor(&format!("sensors[{i}]"), item, base_dir)?;
-            if let Some(k) = sensors.iter().position(|s| s.id == sensor.id) {
+            if let Some(&k) = seen.get(&sensor.id) {
                 return Err(IoError::Field {
                     file: source.to_string(),
                     field: format!("sensors[{i}].id"),
@@ -179,6 +170,7 @@ impl RigFile {
                     ),
                 });
             }
+            seen.insert(sensor.id.clone(), i);
             sensors.push(sensor);
         }
         Ok(Self {
@@ -186,6 +178,16 @@ impl RigFile {
             version: version as u32,
             sensors,
         })
+    }
+
+    /// Every sensor's index by id (a lookup in constant time, for large
+    /// rigs).
+    pub fn index(&self) -> HashMap<&str, usize> {
+        self.sensors
+            .iter()
+            .enumerate()
+            .map(|(k, s)| (s.id.as_str(), k))
+            .collect()
     }
 
     /// Index of the sensor called `id`.

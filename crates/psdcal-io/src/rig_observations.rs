@@ -13,6 +13,7 @@
 //! refuses sensors the rig does not have and a sensor seen twice for one
 //! emitter, naming the line.
 
+use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
 
@@ -120,28 +121,29 @@ impl RigObservations {
     /// Checks that every sensor is in `rig` and that no emitter is seen
     /// twice by one sensor; errors name the line.
     pub fn check_against(&self, rig: &RigFile) -> Result<(), IoError> {
-        for (i, row) in self.rows.iter().enumerate() {
-            if rig.index_of(&row.sensor).is_none() {
+        let index = rig.index();
+        let mut first: HashMap<(&str, &str), usize> = HashMap::with_capacity(self.rows.len());
+        for row in &self.rows {
+            if !index.contains_key(row.sensor.as_str()) {
                 return Err(IoError::Invalid {
                     at: crate::Location::line(&self.source, row.line_no),
                     message: format!(
                         "sensor '{}' is not in the rig {}; expected one of {}",
                         row.sensor,
                         rig.source,
-                        rig.ids()
+                        crate::limits::excerpt(&rig.ids())
                     ),
                 });
             }
-            if let Some(first) = self.rows[..i]
-                .iter()
-                .find(|r| r.emitter == row.emitter && r.sensor == row.sensor)
-            {
+            let key = (row.emitter.as_str(), row.sensor.as_str());
+            if let Some(&first_line) = first.get(&key) {
                 return Err(IoError::Duplicate {
                     at: crate::Location::line(&self.source, row.line_no),
-                    first_line: first.line_no,
+                    first_line,
                     what: format!("emitter '{}' seen by sensor '{}'", row.emitter, row.sensor),
                 });
             }
+            first.insert(key, row.line_no);
         }
         Ok(())
     }
@@ -150,10 +152,14 @@ impl RigObservations {
     /// its rows.
     pub fn emitters(&self) -> Vec<(String, Vec<usize>)> {
         let mut out: Vec<(String, Vec<usize>)> = Vec::new();
+        let mut slot: HashMap<&str, usize> = HashMap::new();
         for (i, row) in self.rows.iter().enumerate() {
-            match out.iter_mut().find(|(e, _)| *e == row.emitter) {
-                Some((_, rows)) => rows.push(i),
-                None => out.push((row.emitter.clone(), vec![i])),
+            match slot.get(row.emitter.as_str()) {
+                Some(&k) => out[k].1.push(i),
+                None => {
+                    slot.insert(row.emitter.as_str(), out.len());
+                    out.push((row.emitter.clone(), vec![i]));
+                }
             }
         }
         out

@@ -112,16 +112,9 @@ pub fn write_truth(path: impl AsRef<Path>, truth: &Truth) -> Result<(), IoError>
 pub fn read_truth(path: impl AsRef<Path>) -> Result<Truth, IoError> {
     let path = path.as_ref();
     let source = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| IoError::Read {
-        file: source.clone(),
-        source: e,
-    })?;
-    let truth: Truth = serde_json::from_str(&text).map_err(|e| IoError::Json {
-        file: source.clone(),
-        line: e.line().max(1),
-        column: e.column(),
-        message: e.to_string(),
-    })?;
+    let text = crate::error::read_text(path)?;
+    let truth: Truth =
+        serde_json::from_str(&text).map_err(|e| crate::error::json_error(&source, &e))?;
     if truth.format != TRUTH_FORMAT {
         return Err(IoError::Invalid {
             at: crate::Location::file(&source),

@@ -9,13 +9,19 @@
 //! into the calibrations' and the measurements' parts.
 //!
 //! *Shared views.* Two sensors share a view when some point in front of both
-//! falls on both active areas. [`Rig::new`] checks every pair by sampling:
+//! falls on both active areas. A pair is checked when first asked (and the
+//! answer kept), so building a rig and locating emitters take time linear in
+//! the sensors and the observations, not in the pairs; a pair is checked by
+//! sampling:
 //! rays through a 17 × 17 grid over each sensor's active area, points along
 //! them from 10 mm to 1 km (40 logarithmic steps), projected into the other
 //! sensor. An emitter whose observing sensors include no sharing pair is
 //! answered only if the triangulated point lies in front of all of them and
 //! projects onto each of their active areas; otherwise it fails with
 //! [`LocateError::NoSharedView`].
+
+use std::collections::HashMap;
+use std::sync::Mutex;
 
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 use psdcal_model::sensor::is_on_active_area;
@@ -47,10 +53,28 @@ pub struct RigSensor {
 }
 
 /// Calibrated sensors with known poses.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug)]
 pub struct Rig {
     sensors: Vec<RigSensor>,
-    shared: Vec<Vec<bool>>,
+    ids: HashMap<String, usize>,
+    /// Pairs `(i, j)`, `i < j`, checked so far, and whether they share a view.
+    shared: Mutex<HashMap<(usize, usize), bool>>,
+}
+
+impl Clone for Rig {
+    fn clone(&self) -> Self {
+        Self {
+            sensors: self.sensors.clone(),
+            ids: self.ids.clone(),
+            shared: Mutex::new(self.shared_views().clone()),
+        }
+    }
+}
+
+impl PartialEq for Rig {
+    fn eq(&self, other: &Self) -> bool {
+        self.sensors == other.sensors
+    }
 }
 
 /// An emitter located by a rig.
@@ -71,11 +95,12 @@ pub struct RigLocation {
 }
 
 impl Rig {
-    /// A rig; identifiers must be unique and poses finite. Computes which
-    /// pairs share a view.
+    /// A rig; identifiers must be unique and poses finite. Which pairs share
+    /// a view is found when asked ([`Rig::shares_view`]).
     pub fn new(sensors: Vec<RigSensor>) -> Result<Self, LocateError> {
+        let mut ids = HashMap::with_capacity(sensors.len());
         for (i, s) in sensors.iter().enumerate() {
-            if sensors[..i].iter().any(|o| o.id == s.id) {
+            if ids.insert(s.id.clone(), i).is_some() {
                 return Err(LocateError::InvalidInput {
                     what: "rig",
                     reason: format!("sensor id '{}' appears twice; expected unique ids", s.id),
@@ -89,16 +114,17 @@ impl Rig {
             }
             s.sensor.model.validate()?;
         }
-        let n = sensors.len();
-        let mut shared = vec![vec![false; n]; n];
-        for i in 0..n {
-            for j in 0..i {
-                let s = sees_into(&sensors[i], &sensors[j]) || sees_into(&sensors[j], &sensors[i]);
-                shared[i][j] = s;
-                shared[j][i] = s;
-            }
-        }
-        Ok(Self { sensors, shared })
+        Ok(Self {
+            sensors,
+            ids,
+            shared: Mutex::new(HashMap::new()),
+        })
+    }
+
+    /// The pairs checked so far (a poisoned lock only means another thread
+    /// panicked mid-insert: the map is still valid).
+    fn shared_views(&self) -> std::sync::MutexGuard<'_, HashMap<(usize, usize), bool>> {
+        self.shared.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// The sensors.
@@ -108,19 +134,28 @@ impl Rig {
 
     /// Index of the sensor called `id`.
     pub fn index_of(&self, id: &str) -> Option<usize> {
-        self.sensors.iter().position(|s| s.id == id)
+        self.ids.get(id).copied()
     }
 
-    /// Whether sensors `i` and `j` share a view (false for `i == j`).
+    /// Whether sensors `i` and `j` share a view (false for `i == j` and
+    /// unknown indices); checked on first use, then remembered.
     pub fn shares_view(&self, i: usize, j: usize) -> bool {
-        self.shared
-            .get(i)
-            .and_then(|row| row.get(j))
-            .copied()
-            .unwrap_or(false)
+        let n = self.sensors.len();
+        if i == j || i >= n || j >= n {
+            return false;
+        }
+        let key = (i.min(j), i.max(j));
+        if let Some(&known) = self.shared_views().get(&key) {
+            return known;
+        }
+        let (a, b) = (&self.sensors[key.0], &self.sensors[key.1]);
+        let shared = sees_into(a, b) || sees_into(b, a);
+        self.shared_views().insert(key, shared);
+        shared
     }
 
-    /// Every pair `(i, j)`, `i < j`, that shares a view.
+    /// Every pair `(i, j)`, `i < j`, that shares a view (checks all pairs:
+    /// quadratic in the sensors; [`Rig::shares_view`] checks one).
     pub fn view_pairs(&self) -> Vec<(usize, usize)> {
         let n = self.sensors.len();
         (0..n)

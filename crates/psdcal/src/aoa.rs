@@ -1,28 +1,23 @@
 //! Angles of arrival of a points file with their uncertainty (docs/model.md §5):
-//! the table `psdcal aoa` writes.
+//! the table `psdcal aoa` writes, streamed row by row.
 
 use std::path::Path;
 
-use psdcal_io::{PointInput, Points};
+use psdcal_io::PointInput;
 use psdcal_locate::{sigmas_and_correlation, LocateOptions, Measurement};
 
 use crate::error::Result;
+use crate::point_rows::{answer_points, PointsAnswer};
 use crate::sensor::LoadedSensor;
-use crate::table::{deg, empty, num, refuse_existing_columns, StatusCount, Table};
+use crate::table::{deg, num};
 
-/// The angles of arrival of a points file.
+/// The angles of arrival of a points file, written as they are computed.
 #[derive(Debug, Clone)]
 pub struct AoaTable {
     /// The calibration used.
     pub sensor: LoadedSensor,
-    /// The points read.
-    pub points: Points,
-    /// The columns added, in order.
-    pub added: Vec<String>,
-    /// Input columns then the added ones.
-    pub table: Table,
-    /// Status counts and per-row warnings.
-    pub count: StatusCount,
+    /// What was written: rows, added columns, status counts.
+    pub answer: PointsAnswer,
 }
 
 /// The columns added, in order.
@@ -52,79 +47,69 @@ fn added_columns(amplitudes: bool, point_sigma: bool) -> Vec<String> {
     names.into_iter().map(String::from).collect()
 }
 
-/// The measurement of a points row.
-pub fn measurement(input: &PointInput) -> Measurement {
+/// The measurement of a points row (`None` for a row without finite
+/// numbers).
+pub fn measurement(input: &PointInput) -> Option<Measurement> {
     match input {
-        PointInput::Position(p) => Measurement::Point(*p),
-        PointInput::Amplitudes(a) => Measurement::Amplitudes(*a),
+        PointInput::Position(p) => Some(Measurement::Point(*p)),
+        PointInput::Amplitudes(a) => Some(Measurement::Amplitudes(*a)),
+        _ => None,
     }
 }
 
 /// Angles of arrival of every row of `points` with the calibration at
-/// `calibration`; `point_sigma_mm` adds the point noise's part.
+/// `calibration`, streamed to `out` (standard output when `None`);
+/// `point_sigma_mm` adds the point noise's part.
 pub fn aoa_table(
     calibration: &Path,
     points: &Path,
     point_sigma_mm: Option<f64>,
+    out: Option<&Path>,
 ) -> Result<AoaTable> {
     let loaded = LoadedSensor::read(calibration)?;
-    let points = Points::read(points)?;
     let with_point = point_sigma_mm.is_some();
-    let added = added_columns(points.amplitudes, with_point);
-    refuse_existing_columns(&points, &added)?;
     let options = LocateOptions {
         point_sigma_mm: point_sigma_mm.unwrap_or(0.0),
         ..LocateOptions::default()
     };
-    let mut count = StatusCount::default();
-    let mut values = Vec::with_capacity(points.rows.len());
-    for row in &points.rows {
-        let at = format!("{}:{}", points.source, row.line_no);
-        let mut out = Vec::with_capacity(added.len());
-        match loaded.sensor.aoa(&measurement(&row.input), &options) {
-            Ok(est) => {
-                let a = &est.aoa;
-                if points.amplitudes {
-                    out.extend([num(a.measured.x), num(a.measured.y)]);
-                }
-                let (sx, sy, rho) = sigmas_and_correlation(&est.alpha_covariance());
-                let (cx, cy, _) = sigmas_and_correlation(&est.alpha_covariance_calibration());
-                let d = a.direction.into_inner();
-                out.extend([
-                    num(a.ideal.x),
-                    num(a.ideal.y),
-                    deg(a.alpha.x),
-                    deg(a.alpha.y),
-                    num(d.x),
-                    num(d.y),
-                    num(d.z),
-                    deg(sx),
-                    deg(sy),
-                    num(rho),
-                    deg(cx),
-                    deg(cy),
-                ]);
-                if with_point {
-                    let (px, py, _) = sigmas_and_correlation(&est.alpha_covariance_measurement());
-                    out.extend([deg(px), deg(py)]);
-                }
-                let cautions = est.cautions();
-                out.push(count.answered_with(&at, &cautions));
+    let sensor = &loaded.sensor;
+    let answer = answer_points(
+        points,
+        out,
+        |amps| added_columns(amps, with_point),
+        |m| {
+            let est = sensor.aoa(m, &options)?;
+            let a = &est.aoa;
+            let mut out = Vec::with_capacity(16);
+            if matches!(m, Measurement::Amplitudes(_)) {
+                out.extend([num(a.measured.x), num(a.measured.y)]);
             }
-            Err(e) => {
-                out.extend(empty(added.len() - 1));
-                out.push(e.status().to_string());
-                count.failed(&e, &at);
+            let (sx, sy, rho) = sigmas_and_correlation(&est.alpha_covariance());
+            let (cx, cy, _) = sigmas_and_correlation(&est.alpha_covariance_calibration());
+            let d = a.direction.into_inner();
+            out.extend([
+                num(a.ideal.x),
+                num(a.ideal.y),
+                deg(a.alpha.x),
+                deg(a.alpha.y),
+                num(d.x),
+                num(d.y),
+                num(d.z),
+                deg(sx),
+                deg(sy),
+                num(rho),
+                deg(cx),
+                deg(cy),
+            ]);
+            if with_point {
+                let (px, py, _) = sigmas_and_correlation(&est.alpha_covariance_measurement());
+                out.extend([deg(px), deg(py)]);
             }
-        }
-        values.push(out);
-    }
-    let table = Table::extending(&points, &added, values);
+            Ok((out, est.cautions()))
+        },
+    )?;
     Ok(AoaTable {
         sensor: loaded,
-        points,
-        added,
-        table,
-        count,
+        answer,
     })
 }

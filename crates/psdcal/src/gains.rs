@@ -4,7 +4,10 @@
 use std::path::Path;
 
 use psdcal_calib::equal_current_gains;
-use psdcal_io::{GainStd, GainsFile, PointInput, Points, GAINS_FORMAT};
+use psdcal_io::{
+    shown_number, GainStd, GainsFile, IoError, Location, PointInput, Points, GAINS_FORMAT,
+};
+use psdcal_model::Amplitudes;
 
 use crate::error::{Error, Result};
 
@@ -25,26 +28,39 @@ impl GainsMethod {
     }
 }
 
+/// The largest ratio (or its inverse) between two amplitudes of one
+/// equal-current record: the channels carry the same current, so their
+/// amplitudes differ only by the amplifier gains.
+pub const MAX_GAIN_RATIO: f64 = 10.0;
+
 /// The gains.json record estimated from the amplitude records in `signals`.
+/// Every record must have four positive amplitudes within a factor
+/// [`MAX_GAIN_RATIO`] of `vx1`; a record that does not is an error naming
+/// its line, so the file written is always one `calibrate --gains` reads.
 pub fn estimate_gains(signals: &Path, method: GainsMethod) -> Result<GainsFile> {
     let points = Points::read(signals)?;
-    let records: Vec<_> = points
-        .rows
-        .iter()
-        .filter_map(|r| match r.input {
-            PointInput::Amplitudes(a) => Some(a),
-            PointInput::Position(_) => None,
-        })
-        .collect();
-    if records.is_empty() {
+    if !points.amplitudes {
         return Err(Error::Input(format!(
             "{}: no amplitude columns (vx1, vx2, vy1, vy2); the equal-current method needs \
              electrode amplitudes",
             signals.display()
         )));
     }
-    let estimate = equal_current_gains(&records)?;
-    Ok(GainsFile {
+    let mut records = Vec::with_capacity(points.rows.len());
+    for row in &points.rows {
+        let PointInput::Amplitudes(a) = row.input else {
+            continue;
+        };
+        check_record(&points.source, row.line_no, &a)?;
+        records.push(a);
+    }
+    let estimate = equal_current_gains(&records).map_err(|e| {
+        Error::Input(format!(
+            "{}: {e}; expected equal-current records with four positive amplitudes",
+            points.source
+        ))
+    })?;
+    let file = GainsFile {
         format: GAINS_FORMAT.into(),
         version: 1,
         method: method.name().to_string(),
@@ -57,5 +73,57 @@ pub fn estimate_gains(signals: &Path, method: GainsMethod) -> Result<GainsFile> 
             g_y2: estimate.std[2],
         },
         records: estimate.records,
-    })
+    };
+    let values = [
+        file.x2,
+        file.y1,
+        file.y2,
+        file.std.g_x2,
+        file.std.g_y1,
+        file.std.g_y2,
+    ];
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(Error::Input(format!(
+            "{}: the records give no finite gains; expected equal-current records with \
+             amplitudes of the same order",
+            points.source
+        )));
+    }
+    Ok(file)
+}
+
+/// Checks one equal-current record: four positive amplitudes within a
+/// factor [`MAX_GAIN_RATIO`] of `vx1`.
+fn check_record(source: &str, line: usize, a: &Amplitudes) -> Result<()> {
+    let at = |message: String| {
+        Error::Io(IoError::Invalid {
+            at: Location::line(source, line),
+            message,
+        })
+    };
+    let values = [
+        ("vx1", a.vx1),
+        ("vx2", a.vx2),
+        ("vy1", a.vy1),
+        ("vy2", a.vy2),
+    ];
+    if let Some((name, v)) = values.iter().find(|(_, v)| v.is_nan() || *v <= 0.0) {
+        return Err(at(format!(
+            "amplitude {name} = {}; expected four positive amplitudes in an equal-current \
+             record",
+            shown_number(*v)
+        )));
+    }
+    for (name, v) in &values[1..] {
+        let ratio = v / a.vx1;
+        if !(1.0 / MAX_GAIN_RATIO..=MAX_GAIN_RATIO).contains(&ratio) {
+            return Err(at(format!(
+                "{name}/vx1 = {} is an outlier: the channels of an equal-current record carry \
+                 the same current, so their amplitudes agree within a factor {MAX_GAIN_RATIO}; \
+                 remove or correct this record",
+                shown_number(ratio)
+            )));
+        }
+    }
+    Ok(())
 }

@@ -68,6 +68,7 @@ mod gains;
 mod locate;
 mod map;
 mod options;
+mod point_rows;
 mod provenance;
 mod report;
 mod report_tables;
@@ -89,6 +90,7 @@ pub use gains::{estimate_gains, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
 pub use map::{map_table, MapModel, MapRequest, MapSource, MapTable};
 pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust};
+pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
 pub use report::{report_content, write_report, ReportFiles, ReportRequest};
 pub use residuals::{ImageResiduals, Residual, ResidualTable};
@@ -98,7 +100,7 @@ pub use simulate::{
     SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
 };
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
-pub use table::{deg, num, StatusCount, Table};
+pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
 
 pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, Warning};

@@ -2,16 +2,18 @@
 //! frame (one calibrated sensor) or from the rays of a rig of sensors with
 //! known poses in a world frame. The table `psdcal locate` writes.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use nalgebra::Matrix3;
-use psdcal_io::{Points, RigFile, RigObservations};
+use nalgebra::{Matrix3, Vector2};
+use psdcal_io::{RigFile, RigObservations};
 use psdcal_locate::{LocateOptions, Measurement, Plane, Rig, RigSensor};
 
 use crate::aoa::measurement;
 use crate::error::Result;
+use crate::point_rows::answer_points;
 use crate::sensor::{covariance_warning, LoadedSensor};
-use crate::table::{deg, empty, num, refuse_existing_columns, StatusCount, Table};
+use crate::table::{deg, empty, num, StatusCount, Table};
 
 /// Where the emitters are located.
 #[derive(Debug, Clone, PartialEq)]
@@ -27,11 +29,9 @@ pub enum LocateTarget {
     Rig(PathBuf),
 }
 
-/// The located emitters.
+/// The located emitters (the table is written as it is computed).
 #[derive(Debug, Clone)]
 pub struct LocateTable {
-    /// The table.
-    pub table: Table,
     /// Status counts and per-row warnings.
     pub count: StatusCount,
     /// Rows answered (points or emitters).
@@ -72,15 +72,23 @@ fn covariance_fields(c: &Matrix3<f64>) -> [String; 7] {
     ]
 }
 
-/// Locates the emitters of `points` on `target`.
+/// Locates the emitters of `points` on `target` and writes the table to
+/// `out` (standard output when `None`); on a plane the points are streamed.
 pub fn locate_table(
     target: &LocateTarget,
     points: &Path,
     options: &LocateOptions,
+    out: Option<&Path>,
 ) -> Result<LocateTable> {
     match target {
-        LocateTarget::Plane { calibration, plane } => on_plane(calibration, plane, points, options),
-        LocateTarget::Rig(rig) => with_rig(rig, points, options),
+        LocateTarget::Plane { calibration, plane } => {
+            on_plane(calibration, plane, points, options, out)
+        }
+        LocateTarget::Rig(rig) => {
+            let (located, table) = with_rig(rig, points, options)?;
+            table.write_to(out)?;
+            Ok(located)
+        }
     }
 }
 
@@ -89,97 +97,109 @@ fn on_plane(
     plane: &Plane,
     points: &Path,
     options: &LocateOptions,
+    out: Option<&Path>,
 ) -> Result<LocateTable> {
     let loaded = LoadedSensor::read(calibration)?;
-    let points = Points::read(points)?;
-    let mut added: Vec<String> = Vec::new();
-    if points.amplitudes {
-        added.extend(["x_mm".into(), "y_mm".into()]);
-    }
-    added.extend(["alpha_x_deg".into(), "alpha_y_deg".into()]);
-    added.extend(position_columns("sensor"));
-    added.push("range_mm".into());
-    added.extend(covariance_columns("sensor"));
-    added.push("status".into());
-    refuse_existing_columns(&points, &added)?;
-    let mut count = StatusCount::default();
-    let mut values = Vec::with_capacity(points.rows.len());
-    for row in &points.rows {
-        let at = format!("{}:{}", points.source, row.line_no);
-        let mut out = Vec::with_capacity(added.len());
-        match loaded
-            .sensor
-            .locate_on_plane(&measurement(&row.input), plane, options)
-        {
-            Ok(loc) => {
-                let a = &loc.aoa.aoa;
-                if points.amplitudes {
-                    out.extend([num(a.measured.x), num(a.measured.y)]);
-                }
-                let p = loc.intersection.position;
-                out.extend([
-                    deg(a.alpha.x),
-                    deg(a.alpha.y),
-                    num(p.x),
-                    num(p.y),
-                    num(p.z),
-                    num(loc.intersection.range_mm),
-                ]);
-                out.extend(covariance_fields(&loc.covariance()));
-                out.push(count.answered_with(&at, &loc.cautions));
-            }
-            Err(e) => {
-                out.extend(empty(added.len() - 1));
-                out.push(e.status().to_string());
-                count.failed(&e, &at);
-            }
+    let added = |amplitudes: bool| {
+        let mut added: Vec<String> = Vec::new();
+        if amplitudes {
+            added.extend(["x_mm".into(), "y_mm".into()]);
         }
-        values.push(out);
-    }
+        added.extend(["alpha_x_deg".into(), "alpha_y_deg".into()]);
+        added.extend(position_columns("sensor"));
+        added.push("range_mm".into());
+        added.extend(covariance_columns("sensor"));
+        added.push("status".into());
+        added
+    };
+    let sensor = &loaded.sensor;
+    let answer = answer_points(points, out, added, |m| {
+        let loc = sensor.locate_on_plane(m, plane, options)?;
+        let a = &loc.aoa.aoa;
+        let mut values = Vec::with_capacity(16);
+        if matches!(m, Measurement::Amplitudes(_)) {
+            values.extend([num(a.measured.x), num(a.measured.y)]);
+        }
+        let p = loc.intersection.position;
+        values.extend([
+            deg(a.alpha.x),
+            deg(a.alpha.y),
+            num(p.x),
+            num(p.y),
+            num(p.z),
+            num(loc.intersection.range_mm),
+        ]);
+        values.extend(covariance_fields(&loc.covariance()));
+        Ok((values, loc.cautions.clone()))
+    })?;
     let what = format!(
         "point{} of {} on the plane {:?}.P = {} mm (sensor frame of {})",
-        if points.rows.len() == 1 { "" } else { "s" },
-        points.source,
+        if answer.rows == 1 { "" } else { "s" },
+        answer.source,
         plane.normal().as_slice(),
         plane.offset_mm(),
         calibration.display()
     );
     Ok(LocateTable {
-        table: Table::extending(&points, &added, values),
-        count,
-        rows: points.rows.len(),
+        count: answer.count,
+        rows: answer.rows,
         what,
         warnings: covariance_warning(&loaded).into_iter().collect(),
     })
 }
 
-/// The rig of a rig file: every calibration read, the shared views checked.
+/// The rig of a rig file: every calibration read (each file once).
 fn load_rig(path: &Path, warnings: &mut Vec<String>) -> Result<(RigFile, Rig)> {
     let file = RigFile::read(path)?;
+    let mut loaded: HashMap<&Path, LoadedSensor> = HashMap::new();
     let mut sensors = Vec::with_capacity(file.sensors.len());
     for record in &file.sensors {
-        let loaded = LoadedSensor::read(&record.calibration_path)?;
-        warnings.extend(covariance_warning(&loaded));
+        let path = record.calibration_path.as_path();
+        let sensor = match loaded.get(path) {
+            Some(known) => known.sensor.clone(),
+            None => {
+                let new = LoadedSensor::read(path)?;
+                warnings.extend(covariance_warning(&new));
+                let sensor = new.sensor.clone();
+                loaded.insert(path, new);
+                sensor
+            }
+        };
         sensors.push(RigSensor {
             id: record.id.clone(),
-            sensor: loaded.sensor,
+            sensor,
             world_from_sensor: record.world_from_sensor,
         });
     }
     let rig = Rig::new(sensors)?;
-    if rig.view_pairs().is_empty() {
-        warnings.push(format!(
-            "{}: no two sensors share a field of view (no point in front of two sensors falls on \
-             both active areas); emitters whose rays do not meet in view get status \
-             no_shared_view: check each pose and whether it is world_from_sensor or \
-             sensor_from_world",
-            file.source
-        ));
-    }
     Ok((file, rig))
 }
 
-fn with_rig(rig_path: &Path, points: &Path, options: &LocateOptions) -> Result<LocateTable> {
+/// The warning when no two sensors that observe one emitter together share
+/// a field of view (only those pairs are checked: linear in the emitters).
+fn shared_view_warning(rig: &Rig, emitters: &[Vec<usize>], file: &RigFile) -> Option<String> {
+    let any_shared = emitters.iter().any(|sensors| {
+        sensors
+            .iter()
+            .enumerate()
+            .any(|(a, &i)| sensors[a + 1..].iter().any(|&j| rig.shares_view(i, j)))
+    });
+    (!any_shared).then(|| {
+        format!(
+            "{}: no two sensors that observe an emitter together share a field of view (no point \
+             in front of both falls on both active areas); emitters whose rays do not meet in \
+             view get status no_shared_view: check each pose and whether it is \
+             world_from_sensor or sensor_from_world",
+            file.source
+        )
+    })
+}
+
+fn with_rig(
+    rig_path: &Path,
+    points: &Path,
+    options: &LocateOptions,
+) -> Result<(LocateTable, Table)> {
     let mut warnings = Vec::new();
     let (file, rig) = load_rig(rig_path, &mut warnings)?;
     let observations = RigObservations::read(points)?;
@@ -191,14 +211,30 @@ fn with_rig(rig_path: &Path, points: &Path, options: &LocateOptions) -> Result<L
     let mut count = StatusCount::default();
     let mut rows = Vec::new();
     let emitters = observations.emitters();
+    let index = file.index();
+    // check_against guarantees every sensor exists.
+    let sensor_of = |i: usize| {
+        index
+            .get(observations.rows[i].sensor.as_str())
+            .copied()
+            .unwrap_or(usize::MAX)
+    };
+    let observed: Vec<Vec<usize>> = emitters
+        .iter()
+        .map(|(_, indices)| indices.iter().map(|&i| sensor_of(i)).collect())
+        .collect();
+    warnings.extend(shared_view_warning(&rig, &observed, &file));
     for (emitter, indices) in &emitters {
         let seen: Vec<(usize, Measurement)> = indices
             .iter()
             .map(|&i| {
                 let row = &observations.rows[i];
-                // check_against guarantees the sensor exists.
-                let k = file.index_of(&row.sensor).unwrap_or(usize::MAX);
-                (k, measurement(&row.input))
+                let k = sensor_of(i);
+                let m = measurement(&row.input);
+                (
+                    k,
+                    m.unwrap_or(Measurement::Point(Vector2::new(f64::NAN, f64::NAN))),
+                )
             })
             .collect();
         let sensor_ids: Vec<&str> = indices
@@ -240,11 +276,11 @@ fn with_rig(rig_path: &Path, points: &Path, options: &LocateOptions) -> Result<L
         rig.sensors().len(),
         file.source
     );
-    Ok(LocateTable {
-        table: Table { header, rows },
+    let located = LocateTable {
         count,
         rows: emitters.len(),
         what,
         warnings,
-    })
+    };
+    Ok((located, Table { header, rows }))
 }

@@ -163,6 +163,7 @@ pub fn map_table(request: &MapRequest) -> Result<MapTable> {
         }
         rows.push(out);
     }
+    refuse_unusable_map(&map, &count)?;
     let source_text = match &request.source {
         MapSource::Errors(e) => e
             .iter()
@@ -180,4 +181,39 @@ pub fn map_table(request: &MapRequest) -> Result<MapTable> {
         max_aoa_deg: map.max_aoa_error().map(f64::to_degrees),
         max_position_mm: map.max_position_error(),
     })
+}
+
+/// A map whose every grid point fails, or whose values overflow, is an
+/// error: the request (parameter errors, k, distance) cannot be mapped.
+fn refuse_unusable_map(map: &psdcal_locate::ErrorMap, count: &StatusCount) -> Result<()> {
+    if count.unanswered() == count.rows() {
+        let first = count.warnings.first().cloned().unwrap_or_default();
+        return Err(Error::Options(format!(
+            "no grid point can be mapped ({first}); give parameter errors that keep the model \
+             valid (e.g. |Δf| below f) or a smaller --k-sigma"
+        )));
+    }
+    let overflow = map.cells.iter().any(|cell| match &cell.values {
+        Ok(v) => ![
+            v.alpha.x,
+            v.alpha.y,
+            v.aoa_error.x,
+            v.aoa_error.y,
+            v.aoa_error_total,
+            v.position_error.x,
+            v.position_error.y,
+            v.position_error_total,
+        ]
+        .iter()
+        .all(|x| x.is_finite()),
+        Err(_) => false,
+    });
+    if overflow {
+        return Err(Error::Options(
+            "the map's errors overflow (not finite numbers); give a smaller --distance, \
+             --k-sigma or parameter errors"
+                .to_string(),
+        ));
+    }
+    Ok(())
 }

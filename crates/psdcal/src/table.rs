@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::io::{self, Write};
 use std::path::Path;
 
-use psdcal_io::{write_atomic, IoError, Location, Points};
+use psdcal_io::{write_atomic, IoError};
 use psdcal_locate::{status_of, Caution, LocateError};
 
 use crate::error::Result;
@@ -21,19 +21,6 @@ pub struct Table {
 }
 
 impl Table {
-    /// The rows of `points` (every input column, text unchanged) followed
-    /// by the added columns and their values.
-    pub fn extending(points: &Points, added: &[String], values: Vec<Vec<String>>) -> Self {
-        let header = points.header.iter().chain(added).cloned().collect();
-        let rows = points
-            .rows
-            .iter()
-            .zip(values)
-            .map(|(row, extra)| row.fields.iter().cloned().chain(extra).collect())
-            .collect();
-        Self { header, rows }
-    }
-
     /// Writes the table as CSV.
     pub fn write_csv<W: Write>(&self, out: W) -> io::Result<()> {
         let mut writer = csv::WriterBuilder::new().flexible(true).from_writer(out);
@@ -67,11 +54,7 @@ impl Table {
 /// A number for a CSV field (shortest round-trip form; a non-finite value
 /// is written empty, never NaN).
 pub fn num(v: f64) -> String {
-    if v.is_finite() {
-        v.to_string()
-    } else {
-        String::new()
-    }
+    psdcal_io::number_text(v)
 }
 
 /// Degrees of an angle in radians, for a CSV field.
@@ -84,28 +67,18 @@ pub fn empty(n: usize) -> Vec<String> {
     vec![String::new(); n]
 }
 
-/// Refuses input that already has a column the answer adds.
-pub fn refuse_existing_columns(points: &Points, added: &[String]) -> Result<(), IoError> {
-    if let Some(name) = added.iter().find(|name| points.has_column(name)) {
-        return Err(IoError::Structure {
-            at: Location::line(&points.source, points.header_line),
-            message: format!(
-                "the input already has a column '{name}', which the answer adds; expected input \
-                 without the columns {}",
-                added.join(", ")
-            ),
-        });
-    }
-    Ok(())
-}
+/// At most this many per-row warnings are kept (the others are counted).
+pub const MAX_ROW_WARNINGS: usize = 20;
 
-/// Counts of each status, and the warnings of the rows that are not `ok`.
+/// Counts of each status, and the warnings of the first rows that are not
+/// `ok` (at most [`MAX_ROW_WARNINGS`], so memory stays flat).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct StatusCount {
     counts: BTreeMap<String, usize>,
     rows: usize,
     answered: usize,
-    /// One line per row that is not `ok`.
+    not_ok: usize,
+    /// One line per row that is not `ok`, for the first of them.
     pub warnings: Vec<String>,
 }
 
@@ -118,8 +91,26 @@ impl StatusCount {
             *self.counts.entry(code.to_string()).or_default() += 1;
         }
         if let Some(w) = warning {
-            self.warnings.push(w);
+            self.warn(w);
         }
+    }
+
+    fn warn(&mut self, warning: String) {
+        self.not_ok += 1;
+        if self.warnings.len() < MAX_ROW_WARNINGS {
+            self.warnings.push(warning);
+        }
+    }
+
+    /// Rows whose status is not `ok` (each has a warning, the first ones
+    /// kept in [`StatusCount::warnings`]).
+    pub fn not_ok(&self) -> usize {
+        self.not_ok
+    }
+
+    /// Rows counted.
+    pub fn rows(&self) -> usize {
+        self.rows
     }
 
     /// Records a row answered with `cautions` (none: `ok`) at `at`, and
@@ -137,7 +128,7 @@ impl StatusCount {
     pub fn failed(&mut self, error: &LocateError, at: &str) {
         self.rows += 1;
         *self.counts.entry(error.status().to_string()).or_default() += 1;
-        self.warnings.push(format!("{at}: {error}; no answer"));
+        self.warn(format!("{at}: {error}; no answer"));
     }
 
     /// Rows without an answer.

@@ -173,7 +173,8 @@ impl<'de> Deserialize<'de> for StdDevs {
                     }
                     if value < 0.0 {
                         return Err(de::Error::custom(format!(
-                            "std.{name} must be zero or positive, found {value}"
+                            "std.{name} must be zero or positive, found {}",
+                            super::rules::shown(value)
                         )));
                     }
                     entries.push((name, value));

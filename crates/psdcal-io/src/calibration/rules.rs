@@ -17,8 +17,11 @@ impl Calibration {
         check_version(u64::from(self.version))?;
         check_positive("sensor.lx_mm", self.sensor.lx_mm)?;
         check_positive("sensor.ly_mm", self.sensor.ly_mm)?;
+        check_at_most("sensor.lx_mm", self.sensor.lx_mm, MAX_SENSOR_MM)?;
+        check_at_most("sensor.ly_mm", self.sensor.ly_mm, MAX_SENSOR_MM)?;
         let i = &self.intrinsics;
         check_positive("intrinsics.f_mm", i.f_mm)?;
+        check_at_most("intrinsics.f_mm", i.f_mm, MAX_FOCAL_MM)?;
         for (name, value) in [
             ("intrinsics.cx_mm", i.cx_mm),
             ("intrinsics.cy_mm", i.cy_mm),
@@ -26,6 +29,8 @@ impl Calibration {
         ] {
             check_finite(name, value)?;
         }
+        check_at_most("|intrinsics.cx_mm|", i.cx_mm.abs(), MAX_SENSOR_MM)?;
+        check_at_most("|intrinsics.cy_mm|", i.cy_mm.abs(), MAX_SENSOR_MM)?;
         let d = &self.distortion;
         for (name, value) in [
             ("k1", d.k1),
@@ -128,7 +133,7 @@ impl Calibration {
 /// A number for messages: its value when finite, else a word.
 pub(super) fn shown(value: f64) -> String {
     if value.is_finite() {
-        value.to_string()
+        crate::number_text::number_text(value)
     } else {
         "a non-finite value".to_string()
     }
@@ -162,6 +167,24 @@ pub(super) fn check_finite(name: &str, value: f64) -> Result<(), String> {
         Ok(())
     } else {
         Err(format!("{name} must be a finite number"))
+    }
+}
+
+/// The largest active-area side and optical-centre offset accepted, mm (a
+/// PSD is millimetres across: a larger value is a unit or typing error).
+pub(super) const MAX_SENSOR_MM: f64 = 1000.0;
+/// The largest focal length accepted, mm.
+pub(super) const MAX_FOCAL_MM: f64 = 100_000.0;
+
+pub(super) fn check_at_most(name: &str, value: f64, max: f64) -> Result<(), String> {
+    if value <= max {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name} is {}, beyond the plausible {}; expected a value in mm (check the unit)",
+            shown(value),
+            shown(max)
+        ))
     }
 }
 
@@ -205,7 +228,8 @@ pub(super) fn de_positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Err
         Ok(value)
     } else {
         Err(de::Error::custom(format!(
-            "expected a positive number of mm, found {value}"
+            "expected a positive number of mm, found {}",
+            shown(value)
         )))
     }
 }

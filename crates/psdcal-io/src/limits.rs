@@ -1,0 +1,137 @@
+//! Bounds on what psdcal reads (docs/formats.md, "Limits"): no input can
+//! make a reader use unbounded memory or print an unbounded message.
+//!
+//! - A **line** of a CSV file holds at most [`MAX_LINE_BYTES`] bytes.
+//! - A **file** read whole (the CSV files of a data set, calibration.json,
+//!   gains.json, rig.json, truth.json, rig_points.csv) holds at most
+//!   [`max_file_bytes`] bytes: 512 MiB unless the program raises it with
+//!   [`set_max_file_bytes`] (`psdcal --max-input-mb`). Streamed tables
+//!   (points.csv for `correct`, `aoa` and `locate` on a plane) are read row
+//!   by row in constant memory and have no size limit.
+//! - A message quotes at most [`MAX_EXCERPT_CHARS`] characters of a file.
+//!
+//! Future readers (raw recordings) use the same bounds: [`read_bounded`] for
+//! whole files, [`crate::csv_lines`]'s line reader for text.
+
+use std::fs::File;
+use std::io::Read;
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::error::{IoError, Location};
+
+/// The longest CSV line accepted, bytes (1 MiB).
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+/// The default largest file read whole, bytes (512 MiB).
+pub const DEFAULT_MAX_FILE_BYTES: u64 = 512 << 20;
+/// The most characters of a file's content quoted in a message.
+pub const MAX_EXCERPT_CHARS: usize = 60;
+
+static MAX_FILE_BYTES: AtomicU64 = AtomicU64::new(DEFAULT_MAX_FILE_BYTES);
+
+/// The largest file read whole, bytes.
+pub fn max_file_bytes() -> u64 {
+    MAX_FILE_BYTES.load(Ordering::Relaxed)
+}
+
+/// Sets the largest file read whole, bytes, for this process (at least 1
+/// KiB).
+pub fn set_max_file_bytes(bytes: u64) {
+    MAX_FILE_BYTES.store(bytes.max(1024), Ordering::Relaxed);
+}
+
+/// The error of a file past the size limit.
+pub(crate) fn too_large(source: &str, limit: u64) -> IoError {
+    IoError::TooLarge {
+        at: Location::file(source),
+        message: format!(
+            "the file is larger than {}; expected a smaller file (raise the limit with \
+             --max-input-mb)",
+            bytes_text(limit)
+        ),
+    }
+}
+
+/// `512 MiB`, `1.5 KiB`, `100 bytes`.
+pub(crate) fn bytes_text(bytes: u64) -> String {
+    const MIB: u64 = 1 << 20;
+    if bytes >= MIB && bytes.is_multiple_of(MIB) {
+        format!("{} MiB", bytes / MIB)
+    } else if bytes >= 1024 {
+        format!("{:.1} KiB", bytes as f64 / 1024.0)
+    } else {
+        format!("{bytes} bytes")
+    }
+}
+
+/// Reads a whole file, refusing one past [`max_file_bytes`] (counted while
+/// reading, so devices and pipes are bounded too).
+pub fn read_bounded(path: &Path) -> Result<Vec<u8>, IoError> {
+    let source = path.display().to_string();
+    let file = File::open(path).map_err(|e| IoError::Read {
+        file: source.clone(),
+        source: e,
+    })?;
+    read_all_bounded(&source, file)
+}
+
+/// Reads everything from `reader`, refusing more than [`max_file_bytes`].
+pub fn read_all_bounded(source: &str, reader: impl Read) -> Result<Vec<u8>, IoError> {
+    read_all_limited(source, reader, max_file_bytes())
+}
+
+/// Reads everything from `reader`, refusing more than `limit` bytes.
+fn read_all_limited(source: &str, reader: impl Read, limit: u64) -> Result<Vec<u8>, IoError> {
+    let mut bytes = Vec::new();
+    reader
+        .take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| IoError::Read {
+            file: source.to_string(),
+            source: e,
+        })?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(source, limit));
+    }
+    Ok(bytes)
+}
+
+/// Text shown in a message: at most [`MAX_EXCERPT_CHARS`] characters, then
+/// `…` when shortened.
+pub(crate) fn excerpt(text: &str) -> String {
+    let mut shown: String = text.chars().take(MAX_EXCERPT_CHARS).collect();
+    if text.chars().nth(MAX_EXCERPT_CHARS).is_some() {
+        shown.push('…');
+    }
+    shown
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounded_reads_refuse_endless_input() {
+        let e = read_all_limited("zero", std::io::repeat(0), 4 << 20).unwrap_err();
+        assert!(matches!(e, IoError::TooLarge { .. }), "{e}");
+        assert_eq!(
+            e.to_string(),
+            "zero: the file is larger than 4 MiB; expected a smaller file (raise the limit \
+             with --max-input-mb)"
+        );
+        assert_eq!(read_all_limited("s", &b"abc"[..], 3).unwrap(), b"abc");
+        assert!(read_all_limited("s", &b"abcd"[..], 3).is_err());
+        assert_eq!(max_file_bytes(), DEFAULT_MAX_FILE_BYTES);
+    }
+
+    #[test]
+    fn excerpts_are_short() {
+        let long = "é".repeat(1000);
+        let shown = excerpt(&long);
+        assert_eq!(shown.chars().count(), MAX_EXCERPT_CHARS + 1);
+        assert!(shown.ends_with('…'));
+        assert_eq!(excerpt("a, b"), "a, b");
+        assert_eq!(bytes_text(1 << 20), "1 MiB");
+        assert_eq!(bytes_text(1536), "1.5 KiB");
+    }
+}
