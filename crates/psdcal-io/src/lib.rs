@@ -6,8 +6,8 @@
 //! - [`Observations`] — observations.csv, measured impact points per image;
 //! - [`Signals`] — signals.csv, electrode amplitudes, converted to
 //!   observations with the pin-cushion formulas of docs/model.md §1;
-//! - [`Points`] — points.csv, points to correct, written back with their
-//!   original columns ([`correct_points`]);
+//! - [`Points`] — points.csv, points to correct or answer, read row by row
+//!   (the facade writes each answer after the row's original columns);
 //! - [`Calibration`] — calibration.json, versioned, read with
 //!   [`read_calibration`] and written with [`write_calibration`];
 //! - [`RigFile`] — rig.json, sensors with poses in a world frame, and
@@ -27,7 +27,6 @@
 
 mod atomic;
 mod calibration;
-mod correct;
 mod coverage;
 mod csv_fields;
 mod csv_lines;
@@ -55,7 +54,6 @@ pub use calibration::{
     GainsRecord, ImageFit, InputFile, IntrinsicsRecord, Provenance, SensorSize, Software, StdDevs,
     ValidRegionRecord, CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
 };
-pub use correct::{correct_points, Correction, IDEAL_COLUMNS, MEASURED_COLUMNS};
 pub use coverage::{Bounds, Coverage};
 pub use error::{ColumnRef, IoError, Location};
 pub use export::{

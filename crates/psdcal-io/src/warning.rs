@@ -84,26 +84,6 @@ pub enum Warning {
         /// Active area side along y, mm.
         ly_mm: f64,
     },
-    /// A point to correct lies outside the calibration's valid region
-    /// (docs/model.md §8.2): past a fold of the correction, where it has no
-    /// unique ideal point; it was not corrected.
-    PointOutsideValidRegion {
-        /// Points file.
-        file: String,
-        /// Line of the row.
-        line: usize,
-        /// The point, mm.
-        x_mm: f64,
-        /// The point, mm.
-        y_mm: f64,
-        /// Its distance from the optical centre, mm.
-        distance_mm: f64,
-        /// How far the valid region reaches in its direction, mm.
-        limit_mm: f64,
-        /// Whether the region ends there at a fold (`false`: at the edge of
-        /// the checked zone, far off the active area).
-        fold: bool,
-    },
 }
 
 impl Warning {
@@ -114,8 +94,7 @@ impl Warning {
             | Warning::TooFewPoints { file, .. }
             | Warning::TooFewImages { file, .. }
             | Warning::ShortLineGroup { file, .. }
-            | Warning::PointOutsideArea { file, .. }
-            | Warning::PointOutsideValidRegion { file, .. } => file,
+            | Warning::PointOutsideArea { file, .. } => file,
         }
     }
 
@@ -124,8 +103,7 @@ impl Warning {
         match self {
             Warning::PointOffSensor { line, .. }
             | Warning::TooFewPoints { line, .. }
-            | Warning::PointOutsideArea { line, .. }
-            | Warning::PointOutsideValidRegion { line, .. } => Some(*line),
+            | Warning::PointOutsideArea { line, .. } => Some(*line),
             Warning::ShortLineGroup { lines, .. } => lines.first().copied(),
             Warning::TooFewImages { .. } => None,
         }
@@ -194,23 +172,6 @@ impl Warning {
                 "{at}: point ({x_mm}, {y_mm}) mm is off the {lx_mm} x {ly_mm} mm active area, \
                  where the model was not fitted"
             ),
-            Warning::PointOutsideValidRegion {
-                x_mm,
-                y_mm,
-                distance_mm,
-                limit_mm,
-                fold,
-                ..
-            } => format!(
-                "{at}: point ({x_mm}, {y_mm}) mm is outside the calibration's valid region \
-                 (outside_valid_region): {distance_mm:.4} mm from the optical centre, where the \
-                 region ends {limit_mm:.4} mm from it ({})",
-                if *fold {
-                    "past a fold of the distortion correction"
-                } else {
-                    "far off the active area"
-                }
-            ),
         }
     }
 
@@ -222,7 +183,6 @@ impl Warning {
             Warning::TooFewImages { .. } => "checked anyway",
             Warning::ShortLineGroup { .. } => "it cannot constrain straightness",
             Warning::PointOutsideArea { .. } => "corrected anyway",
-            Warning::PointOutsideValidRegion { .. } => "not corrected (empty fields)",
         }
     }
 }

@@ -4,7 +4,8 @@
 //! (docs/model.md §1) with the calibration's sensor size and gains. Like
 //! `aoa`, every row gets a `status`: `ok`, `off_active_area` (corrected
 //! anyway: the model was not fitted there), or a code with empty values
-//! (`non_finite_input`, `no_light`, …).
+//! (`non_finite_input`, `no_light`, `outside_valid_region` past a fold of the
+//! correction, …).
 
 use std::path::Path;
 
@@ -43,6 +44,8 @@ pub fn correct(calibration: &Path, points: &Path, out: Option<&Path>) -> Result<
     let sensor = &loaded.sensor;
     let answer = answer_points(points, out, added_columns, |m| {
         let measured = sensor.measured_point(m)?.point;
+        // Past a fold of the correction there is no unique ideal point.
+        sensor.check_valid_region(&measured)?;
         let aoa = angle_of_arrival(&sensor.model, &measured)?;
         let mut values = Vec::with_capacity(4);
         if matches!(m, Measurement::Amplitudes(_)) {
