@@ -20,8 +20,9 @@
 //!    shifted by the change of `l1`, so the sum the data see is kept) and
 //!    compared with the cold start there; the sweep continues from the lower
 //!    of the two. The profile is the lower of the sweeps at each point.
-//! 3. *Restarts*: from every local minimum of the profile, the lowest
-//!    points and the plain start, a full refinement with `l1` freed.
+//! 3. *Restarts*: from every local minimum of the profile and the lowest
+//!    points not next to one, a full refinement with `l1` freed (the plain
+//!    start enters the profile at its grid point).
 //! 4. *Final check*: a fit with `l1` free cannot end above a fit with `l1`
 //!    held, so a profile point below the winner (beyond the solver's
 //!    tolerance) is restarted too, until none is.
@@ -138,7 +139,7 @@ const PROFILE_TOLERANCE: f64 = 1e-4;
 
 /// Iteration budget of a profile point (an unconverged point is still an
 /// upper bound of the profile there, which is all the final check needs).
-const PROFILE_ITERATIONS: usize = 10;
+const PROFILE_ITERATIONS: usize = 6;
 
 /// Rounds of the final check.
 const FINAL_CHECK_ROUNDS: usize = 3;
@@ -236,13 +237,19 @@ pub fn refine_global(
         .collect();
     let mut order: Vec<usize> = (0..grid.len()).filter(|&k| costs[k].is_finite()).collect();
     order.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
-    seeds.extend(order.iter().copied().take(global.restarts));
-    seeds.sort_unstable();
-    seeds.dedup();
-    let mut finals: Vec<Refined> = Vec::new();
-    if let Some(r) = search.free(&model, poses) {
-        finals.push(r);
+    // The lowest points that are not next to a seed already (a neighbour of
+    // a profile minimum lies in its basin); the plain start is in the
+    // profile at its grid point.
+    for &k in &order {
+        if seeds.len() >= global.restarts.max(1) + 1 {
+            break;
+        }
+        if !seeds.iter().any(|&s| s.abs_diff(k) <= 1) {
+            seeds.push(k);
+        }
     }
+    seeds.sort_unstable();
+    let mut finals: Vec<Refined> = Vec::new();
     for &k in &seeds {
         if let Some(r) = profile[k]
             .as_ref()
