@@ -238,6 +238,9 @@ struct PointTerm {
     c: Matrix2<f64>,
 }
 
+/// The sensor-parameter covariance, the pose blocks and `σ_m²`.
+type Sandwich = (DMatrix<f64>, Vec<Matrix6<f64>>, f64);
+
 /// The sandwich covariance of the unweighted template-plane estimate
 /// (docs/model.md §4.6): with `B_j = ∂r_j/∂m_j`, `C̃_j = B_j B_jᵀ`,
 /// `σ_m² = Σ r_jᵀ C̃_j⁻¹ r_j / dof`,
@@ -251,7 +254,7 @@ fn sandwich(
     ne: &NormalEquations,
     s_inv: &DMatrix<f64>,
     dof: usize,
-) -> Result<(DMatrix<f64>, Vec<Matrix6<f64>>, f64), CalibError> {
+) -> Result<Sandwich, CalibError> {
     let p = problem.columns().len();
     let data = problem.data();
     let mut jac = state.model.jacobian_buffer();

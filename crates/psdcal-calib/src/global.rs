@@ -150,8 +150,7 @@ fn psd_corrected(data: &CalibrationData, l1: f64, l2: f64) -> CalibrationData {
     out.amplitudes = None;
     for image in &mut out.images {
         for o in &mut image.points {
-            o.measured =
-                psdcal_model::stages::psd_radial::PsdRadial::eval(l1, l2, &o.measured, None);
+            o.measured = psdcal_model::stages::psd_radial::PsdRadial::eval(l1, l2, &o.measured, None);
         }
     }
     out
@@ -206,22 +205,16 @@ pub fn refine_global(
     // grid point.
     let l1_start = model.get("l1").unwrap_or(0.0);
     let nearest = (0..grid.len())
-        .min_by(|&a, &b| {
-            (grid[a] - l1_start)
-                .abs()
-                .total_cmp(&(grid[b] - l1_start).abs())
-        })
+        .min_by(|&a, &b| (grid[a] - l1_start).abs().total_cmp(&(grid[b] - l1_start).abs()))
         .unwrap_or(0);
     let plain = search.fixed_at(&model, poses, grid[nearest]);
     let up = search.sweep(grid, (0..grid.len()).collect(), &cold, (nearest, &plain));
-    let down = search.sweep(
-        grid,
-        (0..grid.len()).rev().collect(),
-        &cold,
-        (nearest, &plain),
-    );
-    let profile: Vec<Option<Refined>> =
-        up.into_iter().zip(down).map(|(a, b)| lower(a, b)).collect();
+    let down = search.sweep(grid, (0..grid.len()).rev().collect(), &cold, (nearest, &plain));
+    let profile: Vec<Option<Refined>> = up
+        .into_iter()
+        .zip(down)
+        .map(|(a, b)| lower(a, b))
+        .collect();
     let costs: Vec<f64> = profile
         .iter()
         .map(|r| r.as_ref().map_or(f64::INFINITY, |r| r.cost))
@@ -244,10 +237,7 @@ pub fn refine_global(
         finals.push(r);
     }
     for &k in &seeds {
-        if let Some(r) = profile[k]
-            .as_ref()
-            .and_then(|p| search.free(&p.model, &p.poses))
-        {
+        if let Some(r) = profile[k].as_ref().and_then(|p| search.free(&p.model, &p.poses)) {
             finals.push(r);
         }
     }

@@ -131,6 +131,9 @@ impl Refined {
     }
 }
 
+/// One point's residual, `∂r/∂pose` and `∂r/∂m`.
+pub(crate) type PointLinearization = (Vector2<f64>, SMatrix<f64, 2, 6>, Matrix2<f64>);
+
 /// What the refinement estimates: the model and one pose per image.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitState {
@@ -271,7 +274,7 @@ impl<'a> CalibrationProblem<'a> {
         rotation: &psdcal_model::RotationJacobian,
         jac: &mut ChainJacobian,
         a: &mut [f64],
-    ) -> Result<(Vector2<f64>, SMatrix<f64, 2, 6>, Matrix2<f64>), ModelError> {
+    ) -> Result<PointLinearization, ModelError> {
         let obs = &self.data.images[i].points[k];
         let xy = self.data.template[obs.led];
         let (m, dm_dg) = self.measured(&state.model, i, k)?;

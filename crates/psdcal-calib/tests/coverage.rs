@@ -9,7 +9,7 @@
 //! probability 0.27 %; the test asks 97 %, which the measured figure (99.7 %
 //! on 775 pairs, EXPERIMENTS.md) clears with room for the sample here. The
 //! check must not flag its way to a pass: at most 5 % of the wide trials
-//! (measured 3 of 158: two wrong minima, one at ρ = 0.5) may be flagged,
+//! (measured 2 of 158: two wrong minima) may be flagged,
 //! and every hard lens-1 trial, whose 3σ coverage is 0.905 (k1 0.675), must
 //! be. Release mode: `cargo test --release -p psdcal-calib --test coverage`.
 //!

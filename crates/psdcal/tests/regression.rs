@@ -15,9 +15,7 @@ use psdcal::{calibrate, CalibrationOptions, DataSet, DataSetFiles, LoadOptions, 
 use psdcal_model::Param;
 
 fn data(name: &str) -> DataSet {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name);
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name);
     let files = DataSetFiles {
         template: dir.join("template.csv"),
         points: PointSource::Observations(dir.join("observations.csv")),
@@ -32,14 +30,7 @@ const TRUE_L1: f64 = -1.3058e-3;
 fn l1_freed_finds_the_global_minimum() {
     let set = data("l1-wrong-minimum");
     let free = CalibrationOptions {
-        free: vec![
-            Param::F,
-            Param::Cx,
-            Param::Cy,
-            Param::K1,
-            Param::K2,
-            Param::L1,
-        ],
+        free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2, Param::L1],
         ..CalibrationOptions::default()
     };
     let held = CalibrationOptions {
@@ -56,13 +47,7 @@ fn l1_freed_finds_the_global_minimum() {
     );
     // The wrong minimum had 0.70 mm²; held at the truth the fit has 0.178.
     assert!(a.result.cost < 0.2, "cost {}", a.result.cost);
-    let truth = [
-        ("f", 25.0),
-        ("cx", 0.5),
-        ("cy", -0.7),
-        ("k1", 2e-3),
-        ("l1", TRUE_L1),
-    ];
+    let truth = [("f", 25.0), ("cx", 0.5), ("cy", -0.7), ("k1", 2e-3), ("l1", TRUE_L1)];
     for (name, value) in truth {
         let estimate = a.result.model.get(name).unwrap();
         let sd = a.result.covariance.std(name).unwrap();
