@@ -18,10 +18,12 @@ use psdcal_model::stages::gains::GAIN_NAMES;
 use psdcal_model::{ChannelGains, Model, Param, Pose, SensorModel};
 use serde::Serialize;
 
+use crate::bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
 use crate::covariance::{covariance, Covariance};
 use crate::data::CalibrationData;
 use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
+use crate::linearity::{check_linearity, LinearityCheck};
 use crate::refine::{
     refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
 };
@@ -46,6 +48,19 @@ pub struct CalibrateOptions {
     /// freed (the standard chain with zero distortion by default; a chain
     /// with more stages, e.g. a PSD map, carries them into the fit).
     pub base: Model,
+    /// How the covariance is estimated (linear by default).
+    pub uncertainty: Uncertainty,
+}
+
+/// How [`calibrate`] estimates the covariance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Uncertainty {
+    /// Analytic ([`crate::covariance`]): the sandwich for the unweighted
+    /// template-plane fit, `σ² (JᵀJ)⁻¹` otherwise.
+    #[default]
+    Linear,
+    /// Case bootstrap by image ([`crate::bootstrap`]).
+    Bootstrap(BootstrapOptions),
 }
 
 impl Default for CalibrateOptions {
@@ -58,6 +73,7 @@ impl Default for CalibrateOptions {
             refine: RefineOptions::default(),
             global: GlobalOptions::default(),
             base: Model::standard(&SensorModel::pinhole(8.0, 0.0, 0.0)),
+            uncertainty: Uncertainty::Linear,
         }
     }
 }
@@ -91,6 +107,11 @@ pub struct CalibrationResult {
     pub global: Option<GlobalReport>,
     /// Uncertainty of the estimate.
     pub covariance: Covariance,
+    /// Whether the linear covariance holds at ±3σ ([`crate::linearity`]):
+    /// the verdict behind the diagnostic `uncertainty_unreliable`.
+    pub linearity: LinearityCheck,
+    /// The bootstrap's report, when the covariance is a bootstrap's.
+    pub bootstrap: Option<BootstrapReport>,
     /// Fit statistics.
     pub statistics: FitStatistics,
     /// Everything the user should know (identifiability, start, outliers).
@@ -191,6 +212,7 @@ pub fn calibrate(
         });
     }
     let covariance = covariance(data, &refined, &options.refine)?;
+    let linearity = check_linearity(data, &refined, &options.refine)?;
     if let Some(sd) = covariance.std("f") {
         let f = refined.model.get("f").unwrap_or(f64::NAN);
         if sd > MAX_RELATIVE_STD_F * f {
@@ -203,6 +225,14 @@ pub fn calibrate(
             });
         }
     }
+    let (covariance, bootstrap) = match options.uncertainty {
+        Uncertainty::Linear => (covariance, None),
+        Uncertainty::Bootstrap(boot) => {
+            let (c, report) =
+                bootstrap_covariance(data, &refined, &options.refine, &covariance, &boot)?;
+            (c, Some(report))
+        }
+    };
     let statistics = fit_statistics(
         data,
         &refined.model,
@@ -250,6 +280,8 @@ pub fn calibrate(
         refine: refined.report,
         global,
         covariance,
+        linearity,
+        bootstrap,
         statistics,
         warnings,
     })

@@ -15,12 +15,14 @@
 //! and pairs whose correlation exceeds 0.98 in magnitude (p1/p2 with cx/cy,
 //! k1 with l1 when the centres nearly coincide), are reported as warnings.
 
-use nalgebra::Matrix6;
+use nalgebra::{DMatrix, Matrix2, Matrix6, SMatrix};
 use psdcal_model::ParameterCovariance;
+use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::{CalibrationProblem, FitState, RefineOptions, Refined};
+use crate::refine::{CalibrationProblem, CostKind, FitState, RefineOptions, Refined};
 use crate::CalibError;
+use psdcal_solver::normal_equations::NormalEquations;
 use psdcal_solver::solver;
 
 use psdcal_model::stages::gains::GAIN_NAMES;
@@ -29,6 +31,39 @@ use psdcal_model::stages::gains::GAIN_NAMES;
 pub const CORRELATION_WARNING: f64 = 0.98;
 /// Variance inflation above which a parameter is flagged as poorly determined.
 pub const INFLATION_WARNING: f64 = 1e4;
+
+/// How a [`Covariance`] was estimated (calibration.json's `fit.uncertainty`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "method")]
+pub enum CovarianceMethod {
+    /// `σ² (JᵀJ)⁻¹`, one σ² for every residual coordinate: noise-weighted
+    /// fits (whitened residuals), the image-plane cost and robust fits.
+    Linear,
+    /// The sandwich `σ_m² S⁻¹ (Σ Ãᵀ B Bᵀ Ã) S⁻¹` of the unweighted
+    /// template-plane fit: isotropic point noise on the sensor propagated
+    /// into the template plane through each point's back-projection
+    /// (docs/model.md §4.6).
+    Sandwich,
+    /// The sample covariance of refits on images resampled with
+    /// replacement ([`crate::bootstrap`]).
+    Bootstrap {
+        /// Number of resamples.
+        resamples: usize,
+        /// Base seed: resample `b` draws from `ChaCha8Rng::seed_from_u64(seed + b)`.
+        seed: u64,
+    },
+}
+
+impl CovarianceMethod {
+    /// The method's name: `linear`, `sandwich` or `bootstrap`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Linear => "linear",
+            Self::Sandwich => "sandwich",
+            Self::Bootstrap { .. } => "bootstrap",
+        }
+    }
+}
 
 /// The covariance of a calibration's estimate: psdcal-model's
 /// [`ParameterCovariance`] of the freed parameters (dereferenced to, for
@@ -41,12 +76,16 @@ pub struct Covariance {
     pub parameters: ParameterCovariance,
     /// Per image, the 6 × 6 covariance of `(rvec, t)`.
     pub pose_blocks: Vec<Matrix6<f64>>,
-    /// The residual variance σ² per coordinate (cost units: mm²).
+    /// The residual variance σ² per coordinate (cost units: mm²; for the
+    /// sandwich, the variance of the measured point per coordinate on the
+    /// sensor, mm²).
     pub sigma2: f64,
     /// Degrees of freedom `2·points − parameters`.
     pub dof: usize,
     /// Identifiability warnings (empty when the data pin everything down).
     pub warnings: Vec<String>,
+    /// How it was estimated.
+    pub method: CovarianceMethod,
 }
 
 impl std::ops::Deref for Covariance {
@@ -67,12 +106,36 @@ impl Covariance {
     }
 }
 
+/// The analytic method [`covariance`] uses for a fit: the sandwich for the
+/// unweighted template-plane cost without a robust loss (the default fit,
+/// whose residuals are not equally noisy), [`CovarianceMethod::Linear`]
+/// otherwise (whitened residuals, the image plane, robust weights).
+pub fn analytic_method(refined: &Refined, options: &RefineOptions) -> CovarianceMethod {
+    if options.cost == CostKind::Template && refined.weights.is_none() && options.robust.is_none() {
+        CovarianceMethod::Sandwich
+    } else {
+        CovarianceMethod::Linear
+    }
+}
+
 /// The covariance at a refinement's solution (its model, poses, cost and
-/// point weights) for the cost and freed parameters of `options`.
+/// point weights) for the cost and freed parameters of `options`, by
+/// [`analytic_method`].
 pub fn covariance(
     data: &CalibrationData,
     refined: &Refined,
     options: &RefineOptions,
+) -> Result<Covariance, CalibError> {
+    covariance_with(data, refined, options, analytic_method(refined, options))
+}
+
+/// The covariance by an analytic `method` (`Linear` or `Sandwich`; a
+/// `Bootstrap` method is computed by [`crate::bootstrap`] and refused here).
+pub fn covariance_with(
+    data: &CalibrationData,
+    refined: &Refined,
+    options: &RefineOptions,
+    method: CovarianceMethod,
 ) -> Result<Covariance, CalibError> {
     let names = options.free_names();
     let problem = CalibrationProblem::new(
@@ -98,7 +161,6 @@ pub fn covariance(
         });
     }
     let dof = observations - parameters;
-    let sigma2 = cost / dof as f64;
     let (s_inv, pose_inv) = ne.inverse_blocks().ok_or_else(|| CalibError::Degenerate {
         reason: "the information matrix is singular: some freed parameter is not determined by the data \
                  (fix it, or add images that vary the template pose)"
@@ -116,15 +178,42 @@ pub fn covariance(
             }
         }
     }
-    // S⁻¹ is symmetric up to rounding: store it exactly symmetric.
-    let matrix = s_inv * sigma2;
+    let (matrix, pose_blocks, sigma2) = match method {
+        CovarianceMethod::Linear => {
+            let sigma2 = cost / dof as f64;
+            let blocks = pose_inv.into_iter().map(|b| b * sigma2).collect();
+            (s_inv * sigma2, blocks, sigma2)
+        }
+        CovarianceMethod::Sandwich => sandwich(&problem, &state, &ne, &s_inv, dof)?,
+        CovarianceMethod::Bootstrap { .. } => {
+            return Err(CalibError::InvalidInput {
+                reason: "a bootstrap covariance comes from psdcal_calib::bootstrap".into(),
+            })
+        }
+    };
+    // The matrix is symmetric up to rounding: store it exactly symmetric.
     let matrix = (&matrix + matrix.transpose()) * 0.5;
     let estimated =
         ParameterCovariance::new(names.clone(), matrix).map_err(|e| CalibError::Numerical {
             stage: "covariance",
             reason: e.to_string(),
         })?;
+    warnings.extend(correlation_warnings(&estimated));
+    Ok(Covariance {
+        parameters: estimated,
+        pose_blocks,
+        sigma2,
+        dof,
+        warnings,
+        method,
+    })
+}
+
+/// Warnings for pairs correlated beyond [`CORRELATION_WARNING`].
+pub(crate) fn correlation_warnings(estimated: &ParameterCovariance) -> Vec<String> {
+    let names = estimated.names();
     let corr = estimated.correlation();
+    let mut warnings = Vec::new();
     for i in 0..names.len() {
         for j in (i + 1)..names.len() {
             if corr[(i, j)].abs() > CORRELATION_WARNING {
@@ -137,12 +226,94 @@ pub fn covariance(
             }
         }
     }
-    let cov = Covariance {
-        parameters: estimated,
-        pose_blocks: pose_inv.into_iter().map(|b| b * sigma2).collect(),
-        sigma2,
-        dof,
-        warnings,
+    warnings
+}
+
+/// One point's linearisation: `Ã = A − P V_i⁻¹ W_iᵀ` (2 × p, the sensor
+/// Jacobian with the pose eliminated), `P = ∂r/∂pose` and `C̃ = B Bᵀ`
+/// (the residual's covariance per unit of point variance).
+struct PointTerm {
+    a_tilde: DMatrix<f64>,
+    p: SMatrix<f64, 2, 6>,
+    c: Matrix2<f64>,
+}
+
+/// The sensor-parameter covariance, the pose blocks and `σ_m²`.
+type Sandwich = (DMatrix<f64>, Vec<Matrix6<f64>>, f64);
+
+/// The sandwich covariance of the unweighted template-plane estimate
+/// (docs/model.md §4.6): with `B_j = ∂r_j/∂m_j`, `C̃_j = B_j B_jᵀ`,
+/// `σ_m² = Σ r_jᵀ C̃_j⁻¹ r_j / dof`,
+/// `Cov(θ) = σ_m² S⁻¹ (Σ Ã_jᵀ C̃_j Ã_j) S⁻¹`, and for pose `i`
+/// `σ_m² V_i⁻¹ (W_iᵀ K W_i − W_iᵀ X_i − X_iᵀ W_i + Y_i) V_i⁻¹` with
+/// `K = Σ g_j C̃_j g_jᵀ`, `g_j = S⁻¹ Ã_jᵀ`, `X_i = Σ_{j∈i} g_j C̃_j P_j`,
+/// `Y_i = Σ_{j∈i} P_jᵀ C̃_j P_j`.
+fn sandwich(
+    problem: &CalibrationProblem<'_>,
+    state: &FitState,
+    ne: &NormalEquations,
+    s_inv: &DMatrix<f64>,
+    dof: usize,
+) -> Result<Sandwich, CalibError> {
+    let p = problem.columns().len();
+    let data = problem.data();
+    let mut jac = state.model.jacobian_buffer();
+    let mut a = vec![0.0; 2 * p];
+    let mut weighted_sum = 0.0;
+    let mut images: Vec<Vec<PointTerm>> = Vec::with_capacity(data.images.len());
+    let singular = || CalibError::Degenerate {
+        reason: "a pose is not determined by its image's points".into(),
     };
-    Ok(cov)
+    let mut v_inv = Vec::with_capacity(data.images.len());
+    for (i, image) in data.images.iter().enumerate() {
+        let rotation = state.poses[i].rotation_jacobian();
+        let vi = ne.v[i].cholesky().ok_or_else(singular)?.inverse();
+        let wvt = (&ne.w[i] * vi).transpose(); // V_i⁻¹ W_iᵀ (6 × p)
+        let mut terms = Vec::with_capacity(image.points.len());
+        for k in 0..image.points.len() {
+            let (r, pj, b) = problem
+                .linearize(state, i, k, &rotation, &mut jac, &mut a)
+                .map_err(|e| crate::refine::point_error(data, i, image.points[k].led, e))?;
+            let c = b * b.transpose();
+            let c_inv = c.try_inverse().ok_or_else(|| CalibError::Numerical {
+                stage: "covariance",
+                reason: format!(
+                    "image '{}': a point's back-projection is singular",
+                    image.id
+                ),
+            })?;
+            weighted_sum += (r.transpose() * c_inv * r)[(0, 0)];
+            let a_mat = DMatrix::from_column_slice(2, p, &a);
+            let pd = DMatrix::from_column_slice(2, 6, pj.as_slice());
+            let a_tilde = a_mat - pd * &wvt;
+            terms.push(PointTerm { a_tilde, p: pj, c });
+        }
+        images.push(terms);
+        v_inv.push(vi);
+    }
+    let sigma2 = weighted_sum / dof as f64;
+    // K = Σ g C̃ gᵀ with g = S⁻¹ Ãᵀ, i.e. S⁻¹ (Σ Ãᵀ C̃ Ã) S⁻¹.
+    let mut meat = DMatrix::zeros(p, p);
+    for t in images.iter().flatten() {
+        let c = DMatrix::from_column_slice(2, 2, t.c.as_slice());
+        meat += t.a_tilde.transpose() * c * &t.a_tilde;
+    }
+    let k = s_inv * meat * s_inv;
+    let mut blocks = Vec::with_capacity(images.len());
+    for (i, terms) in images.iter().enumerate() {
+        let mut x = DMatrix::zeros(p, 6);
+        let mut y = Matrix6::zeros();
+        for t in terms {
+            let c = DMatrix::from_column_slice(2, 2, t.c.as_slice());
+            let pd = DMatrix::from_column_slice(2, 6, t.p.as_slice());
+            let g = s_inv * t.a_tilde.transpose();
+            x += g * &c * &pd;
+            y += t.p.transpose() * t.c * t.p;
+        }
+        let w = &ne.w[i];
+        let inner = w.transpose() * &k * w - w.transpose() * &x - x.transpose() * w;
+        let inner = Matrix6::from_iterator(inner.iter().copied()) + y;
+        blocks.push(v_inv[i] * inner * v_inv[i] * sigma2);
+    }
+    Ok((k * sigma2, blocks, sigma2))
 }

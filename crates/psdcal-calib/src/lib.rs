@@ -21,16 +21,20 @@ pub use homography::{fit_homography, Homography, HomographyFit, HomographyOption
 pub use initialize::{initialize, InitOptions, InitReport, InitRoute, Initialization};
 pub use preliminary::{estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport};
 pub use zhang::{closed_form, pose_from_homography, ClosedFormSolution};
+pub mod bootstrap;
 pub mod covariance;
 pub mod electrical;
 pub mod global;
+pub mod linearity;
 pub mod refine;
 pub mod report;
 pub mod weighting;
 
-pub use covariance::{covariance, Covariance};
+pub use bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
+pub use covariance::{covariance, Covariance, CovarianceMethod};
 pub use electrical::{equal_current_gains, GainEstimate};
 pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
+pub use linearity::{check_linearity, LinearityCheck, ParameterLinearity, UncertaintyVerdict};
 pub use psdcal_solver::{self as solver, normal_equations};
 pub use psdcal_solver::{Problem, Solution, SolverOptions, SolverReport};
 pub use refine::{
@@ -42,4 +46,5 @@ pub use weighting::{point_covariance, NoiseModel, PointWeights};
 pub mod calibrate;
 pub use calibrate::{
     calibrate, CalibrateOptions, CalibrationResult, CalibrationSummary, ParameterSummary,
+    Uncertainty,
 };

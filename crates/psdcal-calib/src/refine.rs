@@ -131,6 +131,9 @@ impl Refined {
     }
 }
 
+/// One point's residual, `∂r/∂pose` and `∂r/∂m`.
+pub(crate) type PointLinearization = (Vector2<f64>, SMatrix<f64, 2, 6>, Matrix2<f64>);
+
 /// What the refinement estimates: the model and one pose per image.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitState {
@@ -206,6 +209,11 @@ impl<'a> CalibrationProblem<'a> {
         &self.columns
     }
 
+    /// The data set.
+    pub fn data(&self) -> &'a CalibrationData {
+        self.data
+    }
+
     fn point_error(&self, image: usize, k: usize, e: ModelError) -> CalibError {
         point_error(self.data, image, self.data.images[image].points[k].led, e)
     }
@@ -254,8 +262,11 @@ impl<'a> CalibrationProblem<'a> {
         })
     }
 
-    /// Residual, `∂r/∂θ_free` (2×p, column-major into `a`) and `∂r/∂pose`.
-    fn linearize(
+    /// Residual, `∂r/∂θ_free` (2×p, column-major into `a`), `∂r/∂pose` and
+    /// `∂r/∂m` (how noise on the measured point enters the residual: the
+    /// back-projection's Jacobian for the template-plane cost, `−I` for the
+    /// image plane), unweighted.
+    pub(crate) fn linearize(
         &self,
         state: &FitState,
         i: usize,
@@ -263,7 +274,7 @@ impl<'a> CalibrationProblem<'a> {
         rotation: &psdcal_model::RotationJacobian,
         jac: &mut ChainJacobian,
         a: &mut [f64],
-    ) -> Result<(Vector2<f64>, SMatrix<f64, 2, 6>), ModelError> {
+    ) -> Result<PointLinearization, ModelError> {
         let obs = &self.data.images[i].points[k];
         let xy = self.data.template[obs.led];
         let (m, dm_dg) = self.measured(&state.model, i, k)?;
@@ -296,7 +307,7 @@ impl<'a> CalibrationProblem<'a> {
                 }
             }
         }
-        Ok((r, b))
+        Ok((r, b, gain_map))
     }
 }
 
@@ -327,7 +338,7 @@ impl Problem for CalibrationProblem<'_> {
             for k in 0..image.points.len() {
                 let w = self.weights.map(|w| *w.get(i, k));
                 if let Some(rotation) = &rotation {
-                    let (mut r, mut b) = self
+                    let (mut r, mut b, _) = self
                         .linearize(state, i, k, rotation, &mut jac, &mut a)
                         .map_err(|e| self.point_error(i, k, e))?;
                     if let Some(w) = w {

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::{ArgGroup, Args, CommandFactory, Parser, Subcommand};
 pub use psdcal::PointSource;
-use psdcal::{CalibrationOptions, Param, PsdGeometry, Robust};
+use psdcal::{CalibrationOptions, Param, PsdGeometry, Robust, Uncertainty};
 use psdcal_model::UnknownParam;
 
 use crate::choice::{CostArg, NoiseArg, PreliminaryArg};
@@ -144,6 +144,11 @@ pub struct CalibrateArgs {
     /// Robust loss: huber:SCALE or cauchy:SCALE (SCALE in mm of the cost)
     #[arg(long, value_name = "LOSS:SCALE", value_parser = parse_robust)]
     pub robust: Option<Robust>,
+    /// Covariance of the estimate: linear (analytic, the default) or
+    /// bootstrap:N[:SEED] (N ≥ 10 refits of images resampled with
+    /// replacement; seed 1 by default), where the linear one is not enough
+    #[arg(long, value_name = "METHOD", default_value = "linear", value_parser = parse_uncertainty)]
+    pub uncertainty: Uncertainty,
     /// Value of a fixed parameter, NAME=VALUE (repeatable), e.g. l1=-1.3058e-3
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment, allow_negative_numbers = true)]
     pub set: Vec<(Param, f64)>,
@@ -321,6 +326,7 @@ impl Cli {
                         },
                         normalize: !args.no_normalize,
                         robust: args.robust,
+                        uncertainty: args.uncertainty,
                     },
                 })
             }
@@ -377,6 +383,46 @@ fn parse_robust(text: &str) -> Result<Robust, String> {
         "huber" => Ok(Robust::Huber { scale }),
         "cauchy" => Ok(Robust::Cauchy { scale }),
         other => Err(format!("unknown loss '{other}' (expected huber or cauchy)")),
+    }
+}
+
+/// `--uncertainty linear`, `bootstrap:N` or `bootstrap:N:SEED`.
+fn parse_uncertainty(text: &str) -> Result<Uncertainty, String> {
+    let mut parts = text.split(':');
+    match parts
+        .next()
+        .map(|p| p.trim().to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("linear") if parts.next().is_none() => Ok(Uncertainty::Linear),
+        Some("bootstrap") => {
+            let number = |part: Option<&str>, what: &str| -> Result<Option<u64>, String> {
+                part.map(|p| {
+                    p.trim()
+                        .parse::<u64>()
+                        .map_err(|_| format!("expected a whole number for the {what}, found '{p}'"))
+                })
+                .transpose()
+            };
+            let resamples = number(parts.next(), "resamples")?
+                .ok_or("expected bootstrap:N, e.g. bootstrap:200")?;
+            if resamples < 10 {
+                return Err(format!(
+                    "the bootstrap needs at least 10 resamples, not {resamples}"
+                ));
+            }
+            let seed = number(parts.next(), "seed")?.unwrap_or(1);
+            if parts.next().is_some() {
+                return Err(format!("expected bootstrap:N[:SEED], found '{text}'"));
+            }
+            Ok(Uncertainty::Bootstrap {
+                resamples: resamples as usize,
+                seed,
+            })
+        }
+        _ => Err(format!(
+            "expected linear or bootstrap:N[:SEED], found '{text}'"
+        )),
     }
 }
 

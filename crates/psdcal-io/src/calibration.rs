@@ -59,8 +59,8 @@ mod v2;
 
 pub use provenance::{Diagnostic, InputFile, Provenance};
 pub use records::{
-    CostKind, Covariance, FitSummary, GainsRecord, ImageFit, IntrinsicsRecord, SensorSize,
-    Software, StdDevs,
+    BootstrapRecord, CostKind, Covariance, FitSummary, GainsRecord, ImageFit, IntrinsicsRecord,
+    SensorSize, Software, StdDevs,
 };
 pub use region::ValidRegionRecord;
 use rules::{de_format, de_version};

@@ -50,9 +50,10 @@ mod warning;
 
 pub use atomic::{write_atomic, write_atomic_bytes};
 pub use calibration::{
-    read_calibration, write_calibration, Calibration, CostKind, Covariance, Diagnostic, FitSummary,
-    GainsRecord, ImageFit, InputFile, IntrinsicsRecord, Provenance, SensorSize, Software, StdDevs,
-    ValidRegionRecord, CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
+    read_calibration, write_calibration, BootstrapRecord, Calibration, CostKind, Covariance,
+    Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile, IntrinsicsRecord, Provenance,
+    SensorSize, Software, StdDevs, ValidRegionRecord, CALIBRATION_FORMAT, CALIBRATION_VERSION,
+    GAIN_NAMES,
 };
 pub use coverage::{Bounds, Coverage};
 pub use error::{ColumnRef, IoError, Location};

@@ -11,7 +11,8 @@ use psdcal_calib::{
     InitRoute, NoiseModel, Observation, RefineOptions, RobustLoss,
 };
 use psdcal_io::{
-    Calibration, Covariance, FitSummary, GainsRecord, ImageFit, IoError, Location, StdDevs,
+    BootstrapRecord, Calibration, Covariance, FitSummary, GainsRecord, ImageFit, IoError, Location,
+    StdDevs,
 };
 use psdcal_locate::CalibratedSensor;
 use psdcal_model::stages::gains::GAIN_NAMES;
@@ -19,7 +20,7 @@ use psdcal_model::{Amplitudes, Param, SensorModel};
 
 use crate::dataset::DataSet;
 use crate::fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
-use crate::options::{CalibrationOptions, Cost, Noise, Preliminary, Robust};
+use crate::options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
 
 /// The calibration's input from a validated data set; with
 /// `with_amplitudes`, the amplitudes behind every point (for the gains).
@@ -111,6 +112,15 @@ pub fn calibrate_options(options: &CalibrationOptions) -> CalibrateOptions {
             ..RefineOptions::default()
         },
         base: base.into(),
+        uncertainty: match options.uncertainty {
+            Uncertainty::Linear => psdcal_calib::Uncertainty::Linear,
+            Uncertainty::Bootstrap { resamples, seed } => {
+                psdcal_calib::Uncertainty::Bootstrap(psdcal_calib::BootstrapOptions {
+                    resamples,
+                    seed,
+                })
+            }
+        },
         ..CalibrateOptions::default()
     }
 }
@@ -163,6 +173,17 @@ pub fn record(
         points: stats.points,
         images: stats.images,
         termination: format!("{:?}", result.refine.termination),
+        uncertainty: result.covariance.method.name().to_string(),
+        bootstrap: match (result.covariance.method, &result.bootstrap) {
+            (psdcal_calib::CovarianceMethod::Bootstrap { resamples, seed }, Some(report)) => {
+                Some(BootstrapRecord {
+                    resamples,
+                    failed: report.failed,
+                    seed,
+                })
+            }
+            _ => None,
+        },
     };
     file.images = data
         .images

@@ -89,7 +89,7 @@ pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
 pub use gains::{estimate_gains, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
 pub use map::{map_table, MapModel, MapRequest, MapSource, MapTable};
-pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust};
+pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
 pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
 pub use report::{report_content, write_report, ReportFiles, ReportRequest};

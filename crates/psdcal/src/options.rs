@@ -59,6 +59,24 @@ pub enum Robust {
     },
 }
 
+/// How the covariance of the estimate is computed (docs/model.md §4.6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(tag = "method", rename_all = "kebab-case")]
+pub enum Uncertainty {
+    /// Analytic: the sandwich for the unweighted template-plane fit,
+    /// `σ² (JᵀJ)⁻¹` otherwise.
+    #[default]
+    Linear,
+    /// Case bootstrap by image: `resamples` refits of images drawn with
+    /// replacement, resample `b` from `ChaCha8Rng::seed_from_u64(seed + b)`.
+    Bootstrap {
+        /// Number of resamples (at least 10).
+        resamples: usize,
+        /// Base seed.
+        seed: u64,
+    },
+}
+
 /// Everything a calibration can be told.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CalibrationOptions {
@@ -80,6 +98,8 @@ pub struct CalibrationOptions {
     pub normalize: bool,
     /// A robust loss.
     pub robust: Option<Robust>,
+    /// How the covariance is computed.
+    pub uncertainty: Uncertainty,
 }
 
 impl Default for CalibrationOptions {
@@ -95,6 +115,7 @@ impl Default for CalibrationOptions {
             preliminary: Preliminary::Auto,
             normalize: true,
             robust: None,
+            uncertainty: Uncertainty::Linear,
         }
     }
 }

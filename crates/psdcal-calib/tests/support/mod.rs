@@ -5,6 +5,7 @@
 //! `psdcal-testkit`; this module turns them into `CalibrationData`.
 #![allow(dead_code)]
 
+pub mod coverage;
 mod data;
 pub mod robustness;
 pub mod wide;

@@ -303,6 +303,30 @@ pub struct FitSummary {
     pub images: usize,
     /// Why the optimiser stopped.
     pub termination: String,
+    /// How the covariance was estimated (docs/model.md §4.6): `linear`
+    /// (`σ² (JᵀJ)⁻¹`), `sandwich` (the unweighted template-plane fit's,
+    /// point noise propagated) or `bootstrap`. Files written before it
+    /// existed read as `linear`.
+    #[serde(default = "linear_uncertainty")]
+    pub uncertainty: String,
+    /// The bootstrap's resamples and base seed, when `uncertainty` is `bootstrap`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bootstrap: Option<BootstrapRecord>,
+}
+
+/// The bootstrap behind a covariance (calibration.json's `fit.bootstrap`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct BootstrapRecord {
+    /// Resamples asked for.
+    pub resamples: usize,
+    /// Resamples whose refit failed (left out).
+    pub failed: usize,
+    /// Base seed (resample `b` from `ChaCha8Rng::seed_from_u64(seed + b)`).
+    pub seed: u64,
+}
+
+fn linear_uncertainty() -> String {
+    "linear".to_string()
 }
 
 impl Default for FitSummary {
@@ -317,6 +341,8 @@ impl Default for FitSummary {
             points: 0,
             images: 0,
             termination: "not fitted".to_string(),
+            uncertainty: linear_uncertainty(),
+            bootstrap: None,
         }
     }
 }

@@ -58,6 +58,12 @@ fn sample() -> Calibration {
         points: 42,
         images: 3,
         termination: "relative cost change below 1e-12".into(),
+        uncertainty: "bootstrap".into(),
+        bootstrap: Some(BootstrapRecord {
+            resamples: 50,
+            failed: 1,
+            seed: 9,
+        }),
     };
     cal.images = vec![
         ImageFit::new(
