@@ -46,7 +46,7 @@ use crate::sensor::PsdGeometry;
 use crate::ModelError;
 
 /// Rays of a region computed by [`ValidRegion::of_model`].
-pub const REGION_RAYS: usize = 180;
+pub const REGION_RAYS: usize = 90;
 /// Fewest rays a region may have (a region read from a file).
 pub const MIN_REGION_RAYS: usize = 8;
 /// The checked zone: the active area scaled by this factor about the

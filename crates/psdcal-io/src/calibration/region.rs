@@ -2,7 +2,7 @@
 //! §8.2): where the measured → ideal map is one-to-one.
 //!
 //! ```text
-//! "valid_region": {"centre_mm": [0.5, -0.7], "rays": 180,
+//! "valid_region": {"centre_mm": [0.5, -0.7], "rays": 90,
 //!                  "radius_mm": [6.25, 6.2509, ...], "whole_active_area": true}
 //! ```
 //!

@@ -155,11 +155,11 @@ fn the_valid_region_is_written_when_stored_and_read_back_exactly() {
     let v = json(&cal);
     let region = &v["valid_region"];
     assert_eq!(region["centre_mm"], serde_json::json!([0.5, -0.7]));
-    assert_eq!(region["rays"], 180);
+    assert_eq!(region["rays"], 90);
     assert_eq!(region["whole_active_area"], false);
     let r_star = 1.0 / (3.0f64 * 0.02).sqrt();
     let radii = region["radius_mm"].as_array().unwrap();
-    assert_eq!(radii.len(), 180);
+    assert_eq!(radii.len(), 90);
     assert!(radii
         .iter()
         .all(|r| (r.as_f64().unwrap() - r_star).abs() < 1e-9));
@@ -196,7 +196,7 @@ fn a_valid_region_that_contradicts_itself_is_refused() {
     assert!(read(&bad).contains("valid_region.whole_active_area is true but its radii say false"));
     let mut bad = v.clone();
     bad["valid_region"]["rays"] = serde_json::json!(12);
-    assert!(read(&bad).contains("valid_region.rays is 12 but valid_region.radius_mm has 180"));
+    assert!(read(&bad).contains("valid_region.rays is 12 but valid_region.radius_mm has 90"));
     let mut bad = v.clone();
     bad["valid_region"]["radius_mm"][7] = serde_json::json!(-1.0);
     assert!(
