@@ -351,7 +351,7 @@ impl Problem {
     fn refined(&self, f: f64, cx: f64, cy: f64) -> Result<Profile, CalibError> {
         let settings = SolverOptions {
             max_iterations: REFINED_ITERATIONS,
-            cost_tolerance: 1e-8,
+            cost_tolerance: 1e-6,
             step_tolerance: 1e-8,
             initial_lambda: 1e-3,
             exact_cost: 1e-3 * self.floor,
