@@ -23,7 +23,6 @@ use crate::data::CalibrationData;
 use crate::refine::{CalibrationProblem, CostKind, FitState, RefineOptions, Refined};
 use crate::CalibError;
 use psdcal_solver::normal_equations::NormalEquations;
-use psdcal_solver::solver;
 
 use psdcal_model::stages::gains::GAIN_NAMES;
 
@@ -138,18 +137,7 @@ pub fn covariance_with(
     method: CovarianceMethod,
 ) -> Result<Covariance, CalibError> {
     let names = options.free_names();
-    let problem = CalibrationProblem::new(
-        data,
-        options.cost,
-        &refined.model,
-        &names,
-        refined.weights.as_ref(),
-    )?;
-    let state = FitState {
-        model: refined.model.clone(),
-        poses: refined.poses.clone(),
-    };
-    let ne = solver::normal_equations(&problem, &state, options.robust)?;
+    let (problem, state, ne) = crate::refine::at_solution(data, refined, options)?;
     let (columns, poses, cost) = (problem.columns(), &refined.poses, refined.cost);
     let parameters = columns.len() + 6 * poses.len();
     let observations = 2 * data.point_count();

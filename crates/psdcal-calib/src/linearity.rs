@@ -22,7 +22,7 @@ use psdcal_solver::solver::{self, Problem};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::{CalibrationProblem, FitState, RefineOptions, Refined};
+use crate::refine::{RefineOptions, Refined};
 use crate::CalibError;
 
 /// Largest accepted `|ρ − 1|` (module documentation). Chosen from the
@@ -97,18 +97,7 @@ pub fn check_linearity(
     options: &RefineOptions,
 ) -> Result<LinearityCheck, CalibError> {
     let names = options.free_names();
-    let problem = CalibrationProblem::new(
-        data,
-        options.cost,
-        &refined.model,
-        &names,
-        refined.weights.as_ref(),
-    )?;
-    let state = FitState {
-        model: refined.model.clone(),
-        poses: refined.poses.clone(),
-    };
-    let ne = solver::normal_equations(&problem, &state, options.robust)?;
+    let (problem, state, ne) = crate::refine::at_solution(data, refined, options)?;
     let base = solver::cost(&problem, &state, options.robust)?;
     let observations = 2 * data.point_count();
     let unknowns = names.len() + 6 * refined.poses.len();

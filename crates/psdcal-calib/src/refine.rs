@@ -37,7 +37,7 @@ use psdcal_model::{ChainJacobian, Model, ModelError, Param, Pose, SensorModel};
 use crate::data::CalibrationData;
 use crate::weighting::{NoiseModel, PointWeights};
 use crate::CalibError;
-use psdcal_solver::normal_equations::{ResidualTerm, Step};
+use psdcal_solver::normal_equations::{NormalEquations, ResidualTerm, Step};
 use psdcal_solver::solver::{self, Problem, SolverOptions};
 
 pub use psdcal_solver::solver::{RobustLoss, SolverReport as RefineReport, Termination};
@@ -309,6 +309,30 @@ impl<'a> CalibrationProblem<'a> {
         }
         Ok((r, b, gain_map))
     }
+}
+
+/// The fit of `refined` at its solution: its problem (the freed parameters
+/// of `options`, `refined`'s weights), its state, and the undamped normal
+/// equations there (what the covariance and the linearity check start from).
+pub(crate) fn at_solution<'a>(
+    data: &'a CalibrationData,
+    refined: &'a Refined,
+    options: &RefineOptions,
+) -> Result<(CalibrationProblem<'a>, FitState, NormalEquations), CalibError> {
+    let names = options.free_names();
+    let problem = CalibrationProblem::new(
+        data,
+        options.cost,
+        &refined.model,
+        &names,
+        refined.weights.as_ref(),
+    )?;
+    let state = FitState {
+        model: refined.model.clone(),
+        poses: refined.poses.clone(),
+    };
+    let ne = solver::normal_equations(&problem, &state, options.robust)?;
+    Ok((problem, state, ne))
 }
 
 impl Problem for CalibrationProblem<'_> {
