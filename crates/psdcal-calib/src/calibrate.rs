@@ -3,7 +3,9 @@
 //! form or focal search), Levenberg–Marquardt on the template-plane cost
 //! (P29) with the global search over `l1` when it is freed
 //! ([`crate::global`]), the covariance ([`crate::covariance`]) and the fit
-//! statistics ([`crate::report`]).
+//! statistics ([`crate::report`]), then the diagnostics
+//! ([`crate::diagnostics`]: misfit, gain imbalance, local minima,
+//! unreliable uncertainty).
 //!
 //! Fixed parameters keep the values of [`CalibrateOptions::base`] (zero
 //! distortion by default, or e.g. an `l1` known from a PSD scan). Freed
@@ -15,11 +17,12 @@
 //! [`MAX_RELATIVE_STD_F`] of its value (nearly parallel template poses).
 
 use psdcal_model::stages::gains::GAIN_NAMES;
-use psdcal_model::{ChannelGains, Model, Param, Pose, SensorModel};
+use psdcal_model::{ChannelGains, Diagnostic, DiagnosticCode, Model, Param, Pose, SensorModel};
 use serde::Serialize;
 
 use crate::covariance::{covariance, Covariance};
 use crate::data::CalibrationData;
+use crate::diagnostics::{diagnose, DiagnosticOptions};
 use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
 use crate::refine::{
@@ -46,6 +49,8 @@ pub struct CalibrateOptions {
     /// freed (the standard chain with zero distortion by default; a chain
     /// with more stages, e.g. a PSD map, carries them into the fit).
     pub base: Model,
+    /// What the diagnostics may use beyond the fit (a known point noise).
+    pub diagnostics: DiagnosticOptions,
 }
 
 impl Default for CalibrateOptions {
@@ -58,6 +63,7 @@ impl Default for CalibrateOptions {
             refine: RefineOptions::default(),
             global: GlobalOptions::default(),
             base: Model::standard(&SensorModel::pinhole(8.0, 0.0, 0.0)),
+            diagnostics: DiagnosticOptions::default(),
         }
     }
 }
@@ -95,6 +101,9 @@ pub struct CalibrationResult {
     pub statistics: FitStatistics,
     /// Everything the user should know (identifiability, start, outliers).
     pub warnings: Vec<String>,
+    /// What the fit noticed about itself, with stable codes
+    /// ([`crate::diagnostics`]; calibration.json's `diagnostics`).
+    pub diagnostics: Vec<Diagnostic>,
 }
 
 /// Calibrates a sensor from `data`.
@@ -214,10 +223,22 @@ pub fn calibrate(
     if let Some(note) = &init.report.preliminary_note {
         warnings.push(note.clone());
     }
+    let mut diagnostics = diagnose(
+        data,
+        &refined,
+        &options.refine,
+        &covariance,
+        global.as_ref(),
+        &options.diagnostics,
+    )
+    .diagnostics;
     if statistics.unprojectable > 0 {
-        warnings.push(format!(
-            "{} point(s) cannot be reprojected onto the sensor with the fitted model (outside its valid region)",
-            statistics.unprojectable
+        diagnostics.push(Diagnostic::warning(
+            DiagnosticCode::OutsideValidRegion,
+            format!(
+                "{} point(s) fall outside the fitted model's valid region (they cannot be reprojected)",
+                statistics.unprojectable
+            ),
         ));
     }
     if !statistics.outliers.is_empty() {
@@ -252,6 +273,7 @@ pub fn calibrate(
         covariance,
         statistics,
         warnings,
+        diagnostics,
     })
 }
 
@@ -328,6 +350,8 @@ pub struct CalibrationSummary {
     pub global: Option<GlobalReport>,
     /// Warnings.
     pub warnings: Vec<String>,
+    /// Diagnostics with stable codes (calibration.json's `diagnostics`).
+    pub diagnostics: Vec<Diagnostic>,
 }
 
 impl CalibrationResult {
@@ -368,6 +392,7 @@ impl CalibrationResult {
             dof: self.covariance.dof,
             global: self.global.clone(),
             warnings: self.warnings.clone(),
+            diagnostics: self.diagnostics.clone(),
         }
     }
 }

@@ -170,7 +170,8 @@ pub fn refine_global(
         return Ok((refine(data, &model, poses, options)?, None));
     }
     let grid = &global.l1_grid;
-    if grid.is_empty() || grid.windows(2).any(|w| !(w[0] < w[1])) {
+    let ascending = |w: &[f64]| w[0].partial_cmp(&w[1]) == Some(std::cmp::Ordering::Less);
+    if grid.is_empty() || !grid.windows(2).all(ascending) {
         return Err(CalibError::InvalidInput {
             reason: "the l1 grid of the global search must be non-empty and ascending".into(),
         });

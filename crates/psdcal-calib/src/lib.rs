@@ -22,6 +22,7 @@ pub use initialize::{initialize, InitOptions, InitReport, InitRoute, Initializat
 pub use preliminary::{estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport};
 pub use zhang::{closed_form, pose_from_homography, ClosedFormSolution};
 pub mod covariance;
+pub mod diagnostics;
 pub mod electrical;
 pub mod global;
 pub mod refine;
@@ -29,6 +30,7 @@ pub mod report;
 pub mod weighting;
 
 pub use covariance::{covariance, Covariance};
+pub use diagnostics::{diagnose, DiagnosticOptions, DiagnosticReport};
 pub use electrical::{equal_current_gains, GainEstimate};
 pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
 pub use psdcal_solver::{self as solver, normal_equations};

@@ -176,6 +176,9 @@ pub struct CalibrationReport {
     pub images: Table,
     /// Per image: residuals recomputed from the data, if given.
     pub recomputed: Option<Table>,
+    /// What the calibration noticed about itself, one line each
+    /// (`code (severity): message`); empty when it noticed nothing.
+    pub diagnostics: Vec<String>,
 }
 
 /// The page of a report; `svgs` are its plots' SVG texts, in order.
@@ -185,6 +188,14 @@ pub fn calibration_page(report: &CalibrationReport, svgs: &[String]) -> Page {
     page.push(Block::Heading("Parameters".into()));
     page.push(Block::Table(report.parameters.clone()));
     page.push(Block::Table(report.fit.clone()));
+    page.push(Block::Heading("Diagnostics".into()));
+    if report.diagnostics.is_empty() {
+        page.push(Block::Paragraph(
+            "The calibration raised no diagnostic.".into(),
+        ));
+    } else {
+        page.push(Block::List(report.diagnostics.clone()));
+    }
     page.push(Block::Heading("Plots".into()));
     page.push(Block::Figures(
         svgs.iter()

@@ -173,6 +173,7 @@ pub fn record(
             ImageFit::new(&image.id, pose, s.rms_template_mm, image.points.len())
         })
         .collect();
+    file.diagnostics = result.diagnostics.clone();
     file
 }
 
@@ -247,6 +248,7 @@ pub fn fit_report(r: &CalibrationResult) -> FitReport {
             })
             .collect(),
         warnings: r.warnings.clone(),
+        diagnostics: r.diagnostics.clone(),
     }
 }
 
