@@ -4,22 +4,23 @@
 //!
 //! **Residual structure** (`model_misfit`, `gain_imbalance_suspected`). The
 //! image-plane residuals `r = project(θ, pose_i, X_j) − m_ij` at the solution
-//! (whitened when the fit was noise-weighted) are tested for a smooth field
+//! (unweighted, whatever cost was minimised) are tested for a smooth field
 //! shared by all images that the model does not contain: the Gauss–Newton
 //! cost decrease `Δ` of adding the field's coefficients `β` to the model
 //! (`r ≈ J δ + B β`, the poses and freed parameters re-optimised with them)
 //! is compared with the residual variance by an F-test. `Δ` comes from the
-//! problem's own arrow-shaped normal equations with the field's columns
+//! image-plane problem's arrow-shaped normal equations with the fields' columns
 //! appended to the freed parameters: with `S` the Schur complement (poses
 //! eliminated) and `g` the reduced gradient, `Δ = gᵀ S⁺ g`, the pseudo-inverse
 //! over the eigenvalues of the unit-diagonal `S` above [`RANK_CUTOFF`] of the
 //! largest (a field direction the model already has adds nothing and no
 //! degree of freedom). Two fields:
 //!
-//! - the **cubic field**: per axis, the ten monomials `uᵃ vᵇ`, `a + b ≤ 3`,
-//!   `u = 2x/Lx`, `v = 2y/Ly` (20 columns). It contains the first-order effect
-//!   of unequal gains, of an unmodelled PSD distortion `l1 h²` about (0, 0) and
-//!   of a missing `k3`/tangential term;
+//! - the **cubic field**: per axis, the seven monomials `uᵃ vᵇ` of degree 2
+//!   and 3, `u = 2x/Lx`, `v = 2y/Ly` (14 columns; degrees 0 and 1 are the
+//!   poses' and `f, cx, cy`'s). It contains an unmodelled PSD distortion
+//!   `l1 h²` about (0, 0) (the part `k1` about `(cx, cy)` cannot absorb), a
+//!   missing `k3` or tangential term, and most of the effect of unequal gains;
 //! - the **gain field**: the three columns `∂m/∂(g_x2, g_y1, g_y2)` of the
 //!   impact-point formula (docs/model.md §1.1) at unit gains and the forward
 //!   currents of the point — exactly how a small imbalance moves each point
@@ -27,12 +28,16 @@
 //!   bilinear shares `q_k`).
 //!
 //! The fields are evaluated at each point's prediction
-//! `project(θ, pose_i, X_j)`, not at the noisy measured point: a column
-//! evaluated at `m` carries `∂field/∂m · noise`, correlated with the
+//! `m̂ = m + r = project(θ, pose_i, X_j)`, not at the noisy measured point: a
+//! column evaluated at `m` carries `∂field/∂m · noise`, correlated with the
 //! residual's own noise, and a field direction nearly inside the model's
-//! span (where the clean part cancels) would pick that up as structure. The
-//! test is run at the image-plane optimum (a few iterations from the
-//! solution when the fit minimised another cost or a weighted one).
+//! span (where the clean part cancels) picks that up as structure (measured:
+//! F ≈ 15–20 on clean 40 dB data, F ≈ 1 at the prediction). The image plane
+//! is used, not the fit's template plane, for the same reason: the
+//! template-plane Jacobian itself depends on the noisy measured point. At a
+//! template-plane or weighted solution the image-plane gradient over the
+//! freed parameters and poses is not exactly zero; `Δ_base` (the decrease the
+//! model alone would still make) is subtracted.
 //!
 //! With `n` coordinates, `P` parameters after adding the field and `q` its
 //! effective columns, `F = (Δ_field − Δ_base)/q ÷ (SS − Δ_field)/(n − P)`.
@@ -41,8 +46,8 @@
 //! - `F` exceeds the F(q, n − P) quantile at `p = 1e-6` ([`SIGNIFICANCE_Z`],
 //!   by Paulson's normal approximation of F): about one false alarm in a
 //!   million fits of a correct model under Gaussian noise, which leaves room
-//!   for the approximations (heteroscedastic channel noise, template-plane
-//!   fits whose image-plane gradient is not exactly zero);
+//!   for the approximations (heteroscedastic channel noise, unweighted
+//!   residuals, a template-plane solution);
 //! - the field explains at least [`MIN_EXPLAINED`] = 10 % of the residual
 //!   sum of squares left by the model (`(Δ_field − Δ_base)/(SS − Δ_base)`):
 //!   the systematic part is at least a third of the noise in RMS, so that a
@@ -51,8 +56,8 @@
 //!
 //! `gain_imbalance_suspected` is raised when the gains are not fitted, the
 //! gain field is significant and it explains at least [`GAIN_SHARE`] (3/4)
-//! of what the cubic field explains; `model_misfit` when the cubic field is significant
-//! and is not explained by the gain field (the cubic field tested against
+//! of what the cubic field explains; `model_misfit` when the cubic field is
+//! significant and is not explained by the gain field (the cubic field tested against
 //! the gain field as base, same rules). With a known point noise σ
 //! ([`DiagnosticOptions::point_sigma_mm`]), `model_misfit` is also raised
 //! when the unweighted image-plane residual exceeds what σ explains: `SS/σ²`
@@ -73,9 +78,11 @@
 //! on the last digits of `JᵀJ`). (b) Curvature: along the
 //! [`CURVATURE_DIRECTIONS`] least-determined principal directions of the
 //! covariance (eigenvectors of the unit-diagonal information with the
-//! smallest eigenvalues) the parameters are moved by ±3σ, the poses
-//! re-optimised, and the cost increase compared with the quadratic
-//! prediction `9σ²`: a ratio outside [1/2.25, 2.25] means the 3σ half-width
+//! smallest eigenvalues) the parameters are moved by ±3σ and the poses by
+//! their Gauss–Newton response `−V_i⁻¹ W_iᵀ δθ` (from the same image-plane
+//! linearisation), and the fit's cost increase compared with the quadratic
+//! prediction `9σ²`; outside the band below the poses are re-optimised (LM,
+//! relative tolerance 1e-6) and the ratio taken again: a ratio outside [1/2.25, 2.25] means the 3σ half-width
 //! of the profile differs from the linearised one by more than a factor 1.5
 //! (`1/1.5²`, `1.5²`); a move that leaves the model's domain, or whose poses
 //! cannot be re-optimised, counts as a failure. (A ±25 % band flagged one
@@ -324,12 +331,8 @@ fn structure(
         gain_explains = g.significant() && (gain.0 - base.0) >= GAIN_SHARE * (cubic.0 - base.0);
     }
     if gain_explains {
-        let advice = if data.has_amplitudes() {
-            "fit the gains from the signals: --fit f,cx,cy,k1,k2,gains"
-        } else {
-            "calibrate from the electrode signals (signals.csv) with --fit f,cx,cy,k1,k2,gains, \
-             or measure the gains (psdcal gains) and give them with --gains"
-        };
+        let advice = "fit the gains from the electrode signals (--signals signals.csv --fit \
+                      f,cx,cy,k1,k2,gains), or measure them (psdcal gains) and give them with --gains";
         let t = report.gain.unwrap_or(FIELD_NONE);
         report.diagnostics.push(Diagnostic::warning(
             DiagnosticCode::GainImbalanceSuspected,

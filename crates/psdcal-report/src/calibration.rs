@@ -210,3 +210,39 @@ pub fn calibration_page(report: &CalibrationReport, svgs: &[String]) -> Page {
     }
     page
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(diagnostics: Vec<String>) -> CalibrationReport {
+        let table = Table {
+            caption: String::new(),
+            headers: Vec::new(),
+            rows: Vec::new(),
+        };
+        CalibrationReport {
+            title: "t".into(),
+            sources: Vec::new(),
+            parameters: table.clone(),
+            fit: table.clone(),
+            plots: Vec::new(),
+            images: table,
+            recomputed: None,
+            diagnostics,
+        }
+    }
+
+    #[test]
+    fn the_page_lists_the_diagnostics_escaped_or_says_there_are_none() {
+        let html = calibration_page(&report(Vec::new()), &[]).render();
+        assert!(html.contains("<h2>Diagnostics</h2>"));
+        assert!(html.contains("raised no diagnostic"));
+        let line = "model_misfit (warning): residual <structure> & more".to_string();
+        let html = calibration_page(&report(vec![line]), &[]).render();
+        assert!(
+            html.contains("<li>model_misfit (warning): residual &lt;structure&gt; &amp; more</li>")
+        );
+        assert!(!html.contains("raised no diagnostic"));
+    }
+}
