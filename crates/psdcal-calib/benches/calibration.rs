@@ -9,7 +9,9 @@
 //! noise the paper's 40 dB chain produces (about 0.3 µm per coordinate,
 //! tests/refine.rs): `start/12x14` (`initialize` only), `solve/12x14`
 //! (`refine` from that start, as `calibrate` runs it), `calibrate/12x14`
-//! (start, solve, covariance, statistics) and `calibrate/1000x20`.
+//! (start, solve, covariance, statistics, diagnostics) and
+//! `calibrate/1000x20`; `diagnose/12x14` is the diagnostics alone (their
+//! share of `calibrate/12x14`).
 
 #[path = "../tests/support/mod.rs"]
 mod support;
@@ -129,6 +131,30 @@ fn start_solve_calibrate(c: &mut Criterion) {
     group.bench_function("12x14", |b| {
         b.iter(|| calibrate(black_box(&s.data), &options).unwrap())
     });
+    group.finish();
+    let r = calibrate(&s.data, &options).unwrap();
+    let refined = psdcal_calib::Refined {
+        model: r.model.clone(),
+        poses: r.poses.clone(),
+        cost: r.cost,
+        weights: None,
+        report: r.refine.clone(),
+    };
+    let mut group = c.benchmark_group("diagnose");
+    group.bench_function("12x14", |b| {
+        b.iter(|| {
+            psdcal_calib::diagnose(
+                black_box(&s.data),
+                &refined,
+                &options.refine,
+                &r.covariance,
+                r.global.as_ref(),
+                &options.diagnostics,
+            )
+        })
+    });
+    group.finish();
+    let mut group = c.benchmark_group("calibrate");
     group.sample_size(10);
     let large = support::scenario_with(truth, 20, 1000, SIGMA_40DB_MM, 2);
     group.throughput(Throughput::Elements(1000));

@@ -3,7 +3,9 @@
 //! form or focal search), Levenberg–Marquardt on the template-plane cost
 //! (P29) with the global search over `l1` when it is freed
 //! ([`crate::global`]), the covariance ([`crate::covariance`]) and the fit
-//! statistics ([`crate::report`]).
+//! statistics ([`crate::report`]), then the diagnostics
+//! ([`crate::diagnostics`]: misfit, gain imbalance, local minima,
+//! unreliable uncertainty).
 //!
 //! Fixed parameters keep the values of [`CalibrateOptions::base`] (zero
 //! distortion by default, or e.g. an `l1` known from a PSD scan). Freed
@@ -15,12 +17,13 @@
 //! [`MAX_RELATIVE_STD_F`] of its value (nearly parallel template poses).
 
 use psdcal_model::stages::gains::GAIN_NAMES;
-use psdcal_model::{ChannelGains, Model, Param, Pose, SensorModel};
+use psdcal_model::{ChannelGains, Diagnostic, DiagnosticCode, Model, Param, Pose, SensorModel};
 use serde::Serialize;
 
 use crate::bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
 use crate::covariance::{covariance, Covariance};
 use crate::data::CalibrationData;
+use crate::diagnostics::{diagnose, DiagnosticOptions};
 use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
 use crate::linearity::{check_linearity, LinearityCheck};
@@ -50,6 +53,8 @@ pub struct CalibrateOptions {
     pub base: Model,
     /// How the covariance is estimated (linear by default).
     pub uncertainty: Uncertainty,
+    /// What the diagnostics may use beyond the fit (a known point noise).
+    pub diagnostics: DiagnosticOptions,
 }
 
 /// How [`calibrate`] estimates the covariance.
@@ -74,6 +79,7 @@ impl Default for CalibrateOptions {
             global: GlobalOptions::default(),
             base: Model::standard(&SensorModel::pinhole(8.0, 0.0, 0.0)),
             uncertainty: Uncertainty::Linear,
+            diagnostics: DiagnosticOptions::default(),
         }
     }
 }
@@ -116,6 +122,9 @@ pub struct CalibrationResult {
     pub statistics: FitStatistics,
     /// Everything the user should know (identifiability, start, outliers).
     pub warnings: Vec<String>,
+    /// What the fit noticed about itself, with stable codes
+    /// ([`crate::diagnostics`]; calibration.json's `diagnostics`).
+    pub diagnostics: Vec<Diagnostic>,
 }
 
 /// Calibrates a sensor from `data`.
@@ -244,10 +253,35 @@ pub fn calibrate(
     if let Some(note) = &init.report.preliminary_note {
         warnings.push(note.clone());
     }
+    let mut diagnostics = diagnose(
+        data,
+        &refined,
+        &options.refine,
+        &covariance,
+        global.as_ref(),
+        &options.diagnostics,
+    )
+    .diagnostics;
+    // The linearity check at ±3σ of every freed parameter (the verdict the
+    // Monte Carlo coverage test calibrates).
+    if let crate::linearity::UncertaintyVerdict::Unreliable { reason } = &linearity.verdict {
+        if !diagnostics
+            .iter()
+            .any(|d| d.code == DiagnosticCode::UncertaintyUnreliable)
+        {
+            diagnostics.push(Diagnostic::warning(
+                DiagnosticCode::UncertaintyUnreliable,
+                reason.clone(),
+            ));
+        }
+    }
     if statistics.unprojectable > 0 {
-        warnings.push(format!(
-            "{} point(s) cannot be reprojected onto the sensor with the fitted model (outside its valid region)",
-            statistics.unprojectable
+        diagnostics.push(Diagnostic::warning(
+            DiagnosticCode::OutsideValidRegion,
+            format!(
+                "{} point(s) fall outside the fitted model's valid region (they cannot be reprojected)",
+                statistics.unprojectable
+            ),
         ));
     }
     if !statistics.outliers.is_empty() {
@@ -284,6 +318,7 @@ pub fn calibrate(
         bootstrap,
         statistics,
         warnings,
+        diagnostics,
     })
 }
 
@@ -360,6 +395,8 @@ pub struct CalibrationSummary {
     pub global: Option<GlobalReport>,
     /// Warnings.
     pub warnings: Vec<String>,
+    /// Diagnostics with stable codes (calibration.json's `diagnostics`).
+    pub diagnostics: Vec<Diagnostic>,
 }
 
 impl CalibrationResult {
@@ -400,6 +437,7 @@ impl CalibrationResult {
             dof: self.covariance.dof,
             global: self.global.clone(),
             warnings: self.warnings.clone(),
+            diagnostics: self.diagnostics.clone(),
         }
     }
 }

@@ -23,6 +23,7 @@ pub use preliminary::{estimate_preliminary, Preliminary, PreliminaryOptions, Pre
 pub use zhang::{closed_form, pose_from_homography, ClosedFormSolution};
 pub mod bootstrap;
 pub mod covariance;
+pub mod diagnostics;
 pub mod electrical;
 pub mod global;
 pub mod linearity;
@@ -32,6 +33,7 @@ pub mod weighting;
 
 pub use bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
 pub use covariance::{covariance, Covariance, CovarianceMethod};
+pub use diagnostics::{diagnose, DiagnosticOptions, DiagnosticReport};
 pub use electrical::{equal_current_gains, GainEstimate};
 pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
 pub use linearity::{check_linearity, LinearityCheck, ParameterLinearity, UncertaintyVerdict};

@@ -26,6 +26,9 @@ pub fn run(config: &CalibrateConfig, output: Output) -> anyhow::Result<()> {
     for warning in &calibrated.report.warnings {
         eprintln!("warning: {warning}");
     }
+    for diagnostic in &calibrated.report.diagnostics {
+        eprintln!("warning: {}", diagnostic.message);
+    }
     match output {
         Output::Quiet => {}
         Output::Json => println!("{}", calibrated.summary_json()?),

@@ -208,3 +208,76 @@ fn noise_weighted_self_calibration_is_recorded() {
     assert!(!run.status.success());
     assert!(stderr(&run).contains("channel-snr"), "{}", stderr(&run));
 }
+
+/// Unequal gains fitted without gains: `gain_imbalance_suspected` on stderr
+/// (`warning: …`), in `--json` and in calibration.json; fitted with the
+/// gains, not raised.
+#[test]
+fn imbalance_without_gains_is_diagnosed() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim");
+    let p = |f: &str| sim.join(f).display().to_string();
+    let run = psdcal([
+        "-q",
+        "simulate",
+        "--lens",
+        "1",
+        "--snr",
+        "60",
+        "--imbalance",
+        "--images",
+        "12",
+        "--seed",
+        "3",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let codes = |v: &serde_json::Value| -> Vec<String> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|d| d["code"].as_str().unwrap().to_string())
+            .collect()
+    };
+    let cal = p("plain.json");
+    let run = psdcal([
+        "calibrate",
+        "--json",
+        "-t",
+        &p("template.csv"),
+        "-s",
+        &p("signals.csv"),
+        "--out",
+        &cal,
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let err = stderr(&run);
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("warning: ") && l.contains("--fit f,cx,cy,k1,k2,gains")),
+        "{err}"
+    );
+    let summary: serde_json::Value = serde_json::from_str(&stdout(&run)).unwrap();
+    assert!(codes(&summary["diagnostics"]).contains(&"gain_imbalance_suspected".to_string()));
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cal).unwrap()).unwrap();
+    assert_eq!(file["diagnostics"], summary["diagnostics"]);
+
+    let cal = p("gains.json");
+    let run = psdcal([
+        "calibrate",
+        "--json",
+        "-t",
+        &p("template.csv"),
+        "-s",
+        &p("signals.csv"),
+        "--fit",
+        "f,cx,cy,k1,k2,gains",
+        "--out",
+        &cal,
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let summary: serde_json::Value = serde_json::from_str(&stdout(&run)).unwrap();
+    assert!(!codes(&summary["diagnostics"]).contains(&"gain_imbalance_suspected".to_string()));
+}

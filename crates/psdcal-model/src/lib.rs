@@ -28,6 +28,7 @@ pub mod paper_setup;
 
 pub mod camera;
 pub mod covariance;
+pub mod diagnostic;
 pub mod distortion;
 mod error;
 pub mod fit;
@@ -42,6 +43,7 @@ pub mod stages;
 pub mod valid_region;
 
 pub use covariance::{CovarianceError, ParameterCovariance};
+pub use diagnostic::{Diagnostic, DiagnosticCode, Severity};
 pub use distortion::CorrectionJacobian;
 pub use error::ModelError;
 pub use fit::{CostKind, MIN_IMAGES, MIN_POINTS_PER_IMAGE};

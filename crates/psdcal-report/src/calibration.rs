@@ -176,6 +176,9 @@ pub struct CalibrationReport {
     pub images: Table,
     /// Per image: residuals recomputed from the data, if given.
     pub recomputed: Option<Table>,
+    /// What the calibration noticed about itself, one line each
+    /// (`code (severity): message`); empty when it noticed nothing.
+    pub diagnostics: Vec<String>,
 }
 
 /// The page of a report; `svgs` are its plots' SVG texts, in order.
@@ -185,6 +188,14 @@ pub fn calibration_page(report: &CalibrationReport, svgs: &[String]) -> Page {
     page.push(Block::Heading("Parameters".into()));
     page.push(Block::Table(report.parameters.clone()));
     page.push(Block::Table(report.fit.clone()));
+    page.push(Block::Heading("Diagnostics".into()));
+    if report.diagnostics.is_empty() {
+        page.push(Block::Paragraph(
+            "The calibration raised no diagnostic.".into(),
+        ));
+    } else {
+        page.push(Block::List(report.diagnostics.clone()));
+    }
     page.push(Block::Heading("Plots".into()));
     page.push(Block::Figures(
         svgs.iter()
@@ -198,4 +209,40 @@ pub fn calibration_page(report: &CalibrationReport, svgs: &[String]) -> Page {
         page.push(Block::Table(t.clone()));
     }
     page
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(diagnostics: Vec<String>) -> CalibrationReport {
+        let table = Table {
+            caption: String::new(),
+            headers: Vec::new(),
+            rows: Vec::new(),
+        };
+        CalibrationReport {
+            title: "t".into(),
+            sources: Vec::new(),
+            parameters: table.clone(),
+            fit: table.clone(),
+            plots: Vec::new(),
+            images: table,
+            recomputed: None,
+            diagnostics,
+        }
+    }
+
+    #[test]
+    fn the_page_lists_the_diagnostics_escaped_or_says_there_are_none() {
+        let html = calibration_page(&report(Vec::new()), &[]).render();
+        assert!(html.contains("<h2>Diagnostics</h2>"));
+        assert!(html.contains("raised no diagnostic"));
+        let line = "model_misfit (warning): residual <structure> & more".to_string();
+        let html = calibration_page(&report(vec![line]), &[]).render();
+        assert!(
+            html.contains("<li>model_misfit (warning): residual &lt;structure&gt; &amp; more</li>")
+        );
+        assert!(!html.contains("raised no diagnostic"));
+    }
 }

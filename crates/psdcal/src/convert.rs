@@ -194,6 +194,7 @@ pub fn record(
             ImageFit::new(&image.id, pose, s.rms_template_mm, image.points.len())
         })
         .collect();
+    file.diagnostics = result.diagnostics.clone();
     file
 }
 
@@ -268,6 +269,7 @@ pub fn fit_report(r: &CalibrationResult) -> FitReport {
             })
             .collect(),
         warnings: r.warnings.clone(),
+        diagnostics: r.diagnostics.clone(),
     }
 }
 

@@ -81,6 +81,9 @@ pub struct FitReport {
     pub per_image: Vec<ImageRow>,
     /// What the user should know.
     pub warnings: Vec<String>,
+    /// What the fit noticed about itself, with stable codes (docs/formats.md;
+    /// calibration.json's `diagnostics`).
+    pub diagnostics: Vec<psdcal_model::Diagnostic>,
 }
 
 impl fmt::Display for FitReport {

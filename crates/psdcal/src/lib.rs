@@ -106,5 +106,6 @@ pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, Warning};
 pub use psdcal_locate::LocateError;
 pub use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, Plane, MAX_GRID};
+pub use psdcal_model::{Diagnostic, DiagnosticCode, Severity};
 pub use psdcal_model::{Param, PsdGeometry};
 pub use psdcal_sim::{Lens, TemplateKind};

@@ -142,5 +142,10 @@ pub(crate) fn tables(
         plots,
         images,
         recomputed,
+        diagnostics: calibration
+            .diagnostics
+            .iter()
+            .map(|d| format!("{} ({}): {}", d.code, d.severity.as_str(), d.message))
+            .collect(),
     }
 }

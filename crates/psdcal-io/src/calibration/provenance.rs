@@ -28,13 +28,6 @@ pub struct InputFile {
     pub sha256: String,
 }
 
-/// Something the fit noticed (docs/formats.md lists the stable codes).
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Diagnostic {
-    /// Stable identifier, e.g. `local_minimum_suspected`.
-    pub code: String,
-    /// `info`, `warning` or `error`.
-    pub severity: String,
-    /// What it means for this calibration.
-    pub message: String,
-}
+/// Something the fit noticed (docs/formats.md lists the stable codes): the
+/// one definition, psdcal-model's.
+pub use psdcal_model::diagnostic::Diagnostic;

@@ -209,3 +209,28 @@ fn a_valid_region_that_contradicts_itself_is_refused() {
     bad["valid_region"]["rays"] = serde_json::json!(2);
     assert!(read(&bad).contains("expected at least 8"), "{}", read(&bad));
 }
+
+#[test]
+fn diagnostics_round_trip_with_their_stable_codes() {
+    use psdcal_model::{Diagnostic, DiagnosticCode};
+    let mut cal = sample();
+    cal.diagnostics = vec![
+        Diagnostic::warning(DiagnosticCode::GainImbalanceSuspected, "fit the gains"),
+        Diagnostic::info(DiagnosticCode::LocalMinimumSuspected, "found once"),
+    ];
+    let v = json(&cal);
+    assert_eq!(
+        v["diagnostics"],
+        serde_json::json!([
+            {"code": "gain_imbalance_suspected", "severity": "warning", "message": "fit the gains"},
+            {"code": "local_minimum_suspected", "severity": "info", "message": "found once"}
+        ])
+    );
+    let text = cal.to_json_string("c.json").unwrap();
+    let back = Calibration::from_json_str("c.json", &text).unwrap();
+    assert_eq!(back.diagnostics, cal.diagnostics);
+    // An unknown code is refused with the file's name.
+    let bad = text.replace("gain_imbalance_suspected", "gain_trouble");
+    let err = Calibration::from_json_str("c.json", &bad).unwrap_err();
+    assert!(err.to_string().contains("c.json"), "{err}");
+}
