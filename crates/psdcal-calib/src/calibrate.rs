@@ -262,19 +262,6 @@ pub fn calibrate(
         &options.diagnostics,
     )
     .diagnostics;
-    // The linearity check at ±3σ of every freed parameter (the verdict the
-    // Monte Carlo coverage test calibrates).
-    if let crate::linearity::UncertaintyVerdict::Unreliable { reason } = &linearity.verdict {
-        if !diagnostics
-            .iter()
-            .any(|d| d.code == DiagnosticCode::UncertaintyUnreliable)
-        {
-            diagnostics.push(Diagnostic::warning(
-                DiagnosticCode::UncertaintyUnreliable,
-                reason.clone(),
-            ));
-        }
-    }
     if statistics.unprojectable > 0 {
         diagnostics.push(Diagnostic::warning(
             DiagnosticCode::OutsideValidRegion,

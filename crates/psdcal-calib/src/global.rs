@@ -241,7 +241,7 @@ pub fn refine_global(
     // a profile minimum lies in its basin); the plain start is in the
     // profile at its grid point.
     for &k in &order {
-        if seeds.len() >= global.restarts.max(1) + 1 {
+        if seeds.len() > global.restarts.max(1) {
             break;
         }
         if !seeds.iter().any(|&s| s.abs_diff(k) <= 1) {
