@@ -131,3 +131,66 @@ pub fn print_row_warnings(count: &psdcal::StatusCount) {
         eprintln!("warning: {more} more rows with a status other than ok (see the status column)");
     }
 }
+
+/// What a points command (`aoa`, `correct`) answered, and how to say it.
+pub struct PointsSummary<'a> {
+    /// The command's name (`aoa`, `correct`).
+    pub command: &'a str,
+    /// The summary line's opening (`aoa:`, `corrected`).
+    pub verb: &'a str,
+    /// The calibration file.
+    pub calibration: &'a std::path::Path,
+    /// Where the table went (`None`: standard output).
+    pub out: Option<&'a std::path::Path>,
+    /// Command-specific JSON fields.
+    pub extra: serde_json::Value,
+    /// Whether the text summary names the added columns.
+    pub name_columns: bool,
+}
+
+/// Prints the row warnings and the summary of a points command: one line
+/// (on standard error when the table is on standard output) or JSON.
+pub fn print_points_answer(
+    answer: &psdcal::PointsAnswer,
+    summary: &PointsSummary<'_>,
+    output: crate::cli::Output,
+) -> anyhow::Result<()> {
+    use crate::cli::Output;
+    print_row_warnings(&answer.count);
+    let line = format!(
+        "{} {} point{} of {} with {}: {}",
+        summary.verb,
+        answer.rows,
+        if answer.rows == 1 { "" } else { "s" },
+        answer.source,
+        summary.calibration.display(),
+        answer.count.summary()
+    );
+    match (output, summary.out) {
+        (Output::Quiet, _) => {}
+        (Output::Json, out) => {
+            let mut json = serde_json::json!({
+                "command": summary.command,
+                "calibration": summary.calibration.display().to_string(),
+                "points": answer.source,
+                "out": out.map(|p| p.display().to_string()),
+                "from_amplitudes": answer.amplitudes,
+                "added_columns": answer.added,
+                "rows": answer.count.to_json(),
+            });
+            if let (Some(map), Some(extra)) = (json.as_object_mut(), summary.extra.as_object()) {
+                map.extend(extra.clone());
+            }
+            println!("{}", serde_json::to_string_pretty(&json)?);
+        }
+        (Output::Text, Some(out)) if summary.name_columns => println!(
+            "{line}; wrote {} (added {})",
+            out.display(),
+            answer.added.join(", ")
+        ),
+        (Output::Text, Some(out)) => println!("{line}; wrote {}", out.display()),
+        // The table is on standard output: the summary goes to standard error.
+        (Output::Text, None) => eprintln!("{line}"),
+    }
+    Ok(())
+}
