@@ -554,15 +554,18 @@ fn local_minima(global: &GlobalReport, sigma2: f64, report: &mut DiagnosticRepor
                 next.l1, next.cost, best.l1, best.cost
             ),
         ));
-    } else if global.winner_found() == 1 && global.refinements > 1 {
-        report.diagnostics.push(Diagnostic::info(
-            DiagnosticCode::LocalMinimumSuspected,
-            format!(
-                "only one of {} refinements of the l1 search reached the minimum kept: a lower \
-                 one may have been missed",
-                global.refinements
-            ),
-        ));
+    } else {
+        // The full refinements (l1 freed) of the search, not its profile's.
+        let restarts: usize = global.minima.iter().map(|m| m.found).sum();
+        if global.winner_found() == 1 && restarts > 1 {
+            report.diagnostics.push(Diagnostic::info(
+                DiagnosticCode::LocalMinimumSuspected,
+                format!(
+                    "only one of {restarts} full refinements of the l1 search reached the minimum \
+                     kept: a lower one may have been missed"
+                ),
+            ));
+        }
     }
 }
 

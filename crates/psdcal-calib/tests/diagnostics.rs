@@ -311,7 +311,7 @@ fn competing_minima_are_local_minimum_suspected() {
         "{:?}",
         d.diagnostics
     );
-    // Δχ² = 100 but the winner found once out of six refinements: an info.
+    // Δχ² = 100 but the winner reached by one of two full refinements: an info.
     let d = run(&global(r.cost + 100.0 * sigma2, 1));
     let found: Vec<_> = d
         .diagnostics
