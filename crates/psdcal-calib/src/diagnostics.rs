@@ -189,14 +189,7 @@ pub fn diagnose(
     if let Some(g) = global {
         local_minima(g, covariance.sigma2, &mut report);
     }
-    uncertainty(
-        data,
-        refined,
-        options,
-        covariance,
-        linearised.as_ref(),
-        &mut report,
-    );
+    uncertainty(covariance, &mut report);
     report
 }
 
@@ -570,14 +563,7 @@ fn local_minima(global: &GlobalReport, sigma2: f64, report: &mut DiagnosticRepor
 }
 
 /// The uncertainty diagnostics: conditioning and curvature.
-fn uncertainty(
-    data: &CalibrationData,
-    refined: &Refined,
-    options: &RefineOptions,
-    covariance: &Covariance,
-    lin: Option<&Linearised>,
-    report: &mut DiagnosticReport,
-) {
+fn uncertainty(covariance: &Covariance, report: &mut DiagnosticReport) {
     let sigma = covariance.matrix();
     let p = sigma.nrows();
     if p == 0 {
@@ -610,8 +596,6 @@ fn uncertainty(
                  vary the template poses more"
             ),
         ));
-        return;
     }
     // The curvature at ±3σ is the linearity check's ([`crate::linearity`]).
-    let _ = (data, refined, options, lin);
 }

@@ -56,20 +56,20 @@ impl GainsFile {
             y2: self.y2,
         }
     }
+
+    /// Whether the gains and their standard deviations are all finite.
+    pub fn is_finite(&self) -> bool {
+        let s = &self.std;
+        [self.x2, self.y1, self.y2, s.g_x2, s.g_y1, s.g_y2]
+            .iter()
+            .all(|v| v.is_finite())
+    }
 }
 
 /// Writes gains.json atomically.
 pub fn write_gains(path: impl AsRef<Path>, file: &GainsFile) -> Result<(), IoError> {
     let path = path.as_ref();
-    let values = [
-        file.x2,
-        file.y1,
-        file.y2,
-        file.std.g_x2,
-        file.std.g_y1,
-        file.std.g_y2,
-    ];
-    if values.iter().any(|v| !v.is_finite()) || file.gains().validate().is_err() {
+    if !file.is_finite() || file.gains().validate().is_err() {
         return Err(IoError::Invalid {
             at: Location::file(&path.display().to_string()),
             message: "the gains or their standard deviations are not positive finite numbers; \

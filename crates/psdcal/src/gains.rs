@@ -74,15 +74,7 @@ pub fn estimate_gains(signals: &Path, method: GainsMethod) -> Result<GainsFile> 
         },
         records: estimate.records,
     };
-    let values = [
-        file.x2,
-        file.y1,
-        file.y2,
-        file.std.g_x2,
-        file.std.g_y1,
-        file.std.g_y2,
-    ];
-    if values.iter().any(|v| !v.is_finite()) {
+    if !file.is_finite() {
         return Err(Error::Input(format!(
             "{}: the records give no finite gains; expected equal-current records with \
              amplitudes of the same order",
