@@ -17,18 +17,21 @@
 //! [`MAX_RELATIVE_STD_F`] of its value (nearly parallel template poses).
 
 use psdcal_model::stages::gains::GAIN_NAMES;
-use psdcal_model::{ChannelGains, Diagnostic, DiagnosticCode, Model, Param, Pose, SensorModel};
+use psdcal_model::{
+    ChannelGains, Diagnostic, DiagnosticCode, Model, Param, Pose, SensorModel, ValidRegion,
+};
 use serde::Serialize;
 
 use crate::bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
-use crate::covariance::{covariance, Covariance};
+use crate::covariance::{analytic_method, covariance_at, Covariance};
 use crate::data::CalibrationData;
-use crate::diagnostics::{diagnose, DiagnosticOptions};
+use crate::diagnostics::{diagnose_structure, diagnose_uncertainty, DiagnosticOptions};
 use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
-use crate::linearity::{check_linearity, LinearityCheck};
+use crate::linearity::{check_linearity_at, LinearityCheck};
+use crate::misplaced::misplaced_led;
 use crate::refine::{
-    refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
+    refine, AtSolution, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
 };
 use crate::report::{fit_statistics, FitStatistics};
 use crate::weighting::NoiseModel;
@@ -89,6 +92,8 @@ impl Default for CalibrateOptions {
 pub struct CalibrationResult {
     /// The estimated model (every stage; the gains when they were freed).
     pub model: Model,
+    /// Where the estimated model's correction is one-to-one (docs/model.md §8.2).
+    pub valid_region: ValidRegion,
     /// The estimated relative channel gains, when they were freed.
     pub gains: Option<ChannelGains>,
     /// Which start won the gain estimation, when the gains were freed.
@@ -129,6 +134,35 @@ pub struct CalibrationResult {
 
 /// Calibrates a sensor from `data`.
 pub fn calibrate(
+    data: &CalibrationData,
+    options: &CalibrateOptions,
+) -> Result<CalibrationResult, CalibError> {
+    calibrate_as_given(data, options).map_err(|e| blame_misplaced_led(data, e))
+}
+
+/// A failure that a misplaced LED explains is reported as such
+/// ([`crate::misplaced`]): the fit's own message would blame the poses.
+fn blame_misplaced_led(data: &CalibrationData, error: CalibError) -> CalibError {
+    let fit_failed = matches!(
+        error,
+        CalibError::Degenerate { .. }
+            | CalibError::NotConverged { .. }
+            | CalibError::Numerical { .. }
+            | CalibError::NonPositiveFocalSquared { .. }
+    );
+    match fit_failed.then(|| misplaced_led(data)).flatten() {
+        Some(m) => CalibError::MisplacedLed {
+            led: m.led,
+            score: m.score,
+            next_score: m.next_score,
+            images: m.images,
+            cause: error.to_string(),
+        },
+        None => error,
+    }
+}
+
+fn calibrate_as_given(
     data: &CalibrationData,
     options: &CalibrateOptions,
 ) -> Result<CalibrationResult, CalibError> {
@@ -220,8 +254,34 @@ pub fn calibrate(
             ),
         });
     }
-    let covariance = covariance(data, &refined, &options.refine)?;
-    let linearity = check_linearity(data, &refined, &options.refine)?;
+    // What the finished fit is asked runs on two threads (the results do
+    // not depend on it): one linearisation at the solution serves the
+    // covariance and the linearity check; the fit statistics, the residual
+    // structure tests and the valid region need no covariance.
+    let (after_fit, (statistics, mut diagnosed, valid_region)) = rayon::join(
+        || -> Result<_, CalibError> {
+            let at = AtSolution::new(data, &refined, &options.refine)?;
+            let method = analytic_method(&refined, &options.refine);
+            Ok((
+                covariance_at(&at, data, &refined, &options.refine, method)?,
+                check_linearity_at(&at, data, &refined, &options.refine)?,
+            ))
+        },
+        || {
+            (
+                fit_statistics(
+                    data,
+                    &refined.model,
+                    &refined.poses,
+                    options.refine.cost,
+                    options.refine.robust,
+                ),
+                diagnose_structure(data, &refined, &options.refine, &options.diagnostics),
+                ValidRegion::of_model(&refined.model, &data.geometry),
+            )
+        },
+    );
+    let (covariance, linearity) = after_fit?;
     if let Some(sd) = covariance.std("f") {
         let f = refined.model.get("f").unwrap_or(f64::NAN);
         if sd > MAX_RELATIVE_STD_F * f {
@@ -242,26 +302,12 @@ pub fn calibrate(
             (c, Some(report))
         }
     };
-    let statistics = fit_statistics(
-        data,
-        &refined.model,
-        &refined.poses,
-        options.refine.cost,
-        options.refine.robust,
-    );
     let mut warnings = covariance.warnings.clone();
     if let Some(note) = &init.report.preliminary_note {
         warnings.push(note.clone());
     }
-    let mut diagnostics = diagnose(
-        data,
-        &refined,
-        &options.refine,
-        &covariance,
-        global.as_ref(),
-        &options.diagnostics,
-    )
-    .diagnostics;
+    diagnose_uncertainty(&mut diagnosed, &covariance, global.as_ref());
+    let mut diagnostics = diagnosed.diagnostics;
     if statistics.unprojectable > 0 {
         diagnostics.push(Diagnostic::warning(
             DiagnosticCode::OutsideValidRegion,
@@ -291,6 +337,7 @@ pub fn calibrate(
         gains: fitted_gains,
         gain_start,
         model: refined.model,
+        valid_region,
         poses: refined.poses,
         free,
         cost_kind: options.refine.cost,

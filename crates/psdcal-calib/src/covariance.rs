@@ -20,7 +20,7 @@ use psdcal_model::ParameterCovariance;
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::{CalibrationProblem, CostKind, FitState, RefineOptions, Refined};
+use crate::refine::{AtSolution, CalibrationProblem, CostKind, FitState, RefineOptions, Refined};
 use crate::CalibError;
 use psdcal_solver::normal_equations::NormalEquations;
 
@@ -136,8 +136,20 @@ pub fn covariance_with(
     options: &RefineOptions,
     method: CovarianceMethod,
 ) -> Result<Covariance, CalibError> {
+    let at = AtSolution::new(data, refined, options)?;
+    covariance_at(&at, data, refined, options, method)
+}
+
+/// [`covariance_with`] from the fit already linearised at its solution.
+pub(crate) fn covariance_at(
+    at: &AtSolution<'_>,
+    data: &CalibrationData,
+    refined: &Refined,
+    options: &RefineOptions,
+    method: CovarianceMethod,
+) -> Result<Covariance, CalibError> {
     let names = options.free_names();
-    let (problem, state, ne) = crate::refine::at_solution(data, refined, options)?;
+    let (problem, state, ne) = (&at.problem, &at.state, &at.ne);
     let (columns, poses, cost) = (problem.columns(), &refined.poses, refined.cost);
     let parameters = columns.len() + 6 * poses.len();
     let observations = 2 * data.point_count();
@@ -172,7 +184,7 @@ pub fn covariance_with(
             let blocks = pose_inv.into_iter().map(|b| b * sigma2).collect();
             (s_inv * sigma2, blocks, sigma2)
         }
-        CovarianceMethod::Sandwich => sandwich(&problem, &state, &ne, &s_inv, dof)?,
+        CovarianceMethod::Sandwich => sandwich(problem, state, ne, &s_inv, dof)?,
         CovarianceMethod::Bootstrap { .. } => {
             return Err(CalibError::InvalidInput {
                 reason: "a bootstrap covariance comes from psdcal_calib::bootstrap".into(),

@@ -179,18 +179,41 @@ pub fn diagnose(
     global: Option<&GlobalReport>,
     extra: &DiagnosticOptions,
 ) -> DiagnosticReport {
+    let mut report = diagnose_structure(data, refined, options, extra);
+    diagnose_uncertainty(&mut report, covariance, global);
+    report
+}
+
+/// The residual-structure part of [`diagnose`] (`model_misfit`,
+/// `gain_imbalance_suspected`), which needs no covariance: it can run
+/// while the covariance is computed.
+pub fn diagnose_structure(
+    data: &CalibrationData,
+    refined: &Refined,
+    options: &RefineOptions,
+    extra: &DiagnosticOptions,
+) -> DiagnosticReport {
     let mut report = DiagnosticReport::default();
     // One linearisation of the fit's own problem with both fields appended
     // serves the structure tests.
-    let linearised = Linearised::new(data, refined, options);
-    if let Some(lin) = &linearised {
-        structure(data, extra, lin, &mut report);
+    if let Some(lin) = Linearised::new(data, refined, options) {
+        structure(data, extra, &lin, &mut report);
     }
-    if let Some(g) = global {
-        local_minima(g, covariance.sigma2, &mut report);
-    }
-    uncertainty(covariance, &mut report);
     report
+}
+
+/// The rest of [`diagnose`] on `report` from [`diagnose_structure`]:
+/// `local_minimum_suspected` (from the global search, when there was one)
+/// and `uncertainty_unreliable` (from the covariance).
+pub fn diagnose_uncertainty(
+    report: &mut DiagnosticReport,
+    covariance: &Covariance,
+    global: Option<&GlobalReport>,
+) {
+    if let Some(g) = global {
+        local_minima(g, covariance.sigma2, report);
+    }
+    uncertainty(covariance, report);
 }
 
 /// The fit's problem linearised at the solution with the fields appended.

@@ -52,6 +52,26 @@ pub enum CalibError {
         /// Why (termination reason, last cost).
         reason: String,
     },
+    /// The images contradict one LED's template position (a typo in its
+    /// coordinates or its identifier); found when a calibration fails
+    /// ([`crate::misplaced`]).
+    #[error(
+        "the images contradict template LED #{index} (index {led}): without it each image's \
+         homography fits {score:.1} times better, in {images} images (without the next LED: \
+         {next_score:.2} times); check its coordinates and identifier ({cause})"
+    , index = led + 1)]
+    MisplacedLed {
+        /// Its index in the template.
+        led: usize,
+        /// Its score ([`crate::misplaced::MisplacedLed::score`]).
+        score: f64,
+        /// The next LED's score.
+        next_score: f64,
+        /// Images that scored it.
+        images: usize,
+        /// What the calibration said without this check.
+        cause: String,
+    },
     /// The sensor model could not be evaluated.
     #[error(transparent)]
     Model(#[from] ModelError),

@@ -32,7 +32,10 @@
 //! [`GlobalReport::competing`] says whether another minimum is within the
 //! noise of it (the diagnostic `local_minimum_suspected`).
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use psdcal_model::{Model, Param, Pose};
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::data::CalibrationData;
@@ -177,7 +180,7 @@ pub fn refine_global(
             reason: "the l1 grid of the global search must be non-empty and ascending".into(),
         });
     }
-    let mut search = Search {
+    let search = Search {
         data,
         model: &model,
         options,
@@ -192,10 +195,14 @@ pub fn refine_global(
             max_iterations: PROFILE_ITERATIONS,
             ..options.clone()
         },
-        refinements: 0,
+        refinements: AtomicUsize::new(0),
     };
+    // The independent fits of each step run in parallel (rayon); each is
+    // deterministic and the results are combined in grid order, so the
+    // answer does not depend on the number of threads.
     // 1. Cold starts.
     let cold: Vec<Option<Refined>> = (0..grid.len())
+        .into_par_iter()
         .map(|k| {
             (k % global.cold_every.max(1) == 0 || k + 1 == grid.len())
                 .then(|| search.cold(grid[k], &global.init))
@@ -214,12 +221,16 @@ pub fn refine_global(
         })
         .unwrap_or(0);
     let plain = search.fixed_at(&model, poses, grid[nearest]);
-    let up = search.sweep(grid, (0..grid.len()).collect(), &cold, (nearest, &plain));
-    let down = search.sweep(
-        grid,
-        (0..grid.len()).rev().collect(),
-        &cold,
-        (nearest, &plain),
+    let (up, down) = rayon::join(
+        || search.sweep(grid, (0..grid.len()).collect(), &cold, (nearest, &plain)),
+        || {
+            search.sweep(
+                grid,
+                (0..grid.len()).rev().collect(),
+                &cold,
+                (nearest, &plain),
+            )
+        },
     );
     let profile: Vec<Option<Refined>> =
         up.into_iter().zip(down).map(|(a, b)| lower(a, b)).collect();
@@ -249,15 +260,14 @@ pub fn refine_global(
         }
     }
     seeds.sort_unstable();
-    let mut finals: Vec<Refined> = Vec::new();
-    for &k in &seeds {
-        if let Some(r) = profile[k]
-            .as_ref()
-            .and_then(|p| search.free(&p.model, &p.poses))
-        {
-            finals.push(r);
-        }
-    }
+    let mut finals: Vec<Refined> = seeds
+        .par_iter()
+        .filter_map(|&k| {
+            profile[k]
+                .as_ref()
+                .and_then(|p| search.free(&p.model, &p.poses))
+        })
+        .collect();
     // 4. Final check: no profile point (l1 held) may lie below the winner.
     let mut final_check_restarts = 0;
     for _ in 0..FINAL_CHECK_ROUNDS {
@@ -270,22 +280,23 @@ pub fn refine_global(
         if beaten.is_empty() {
             break;
         }
-        for k in beaten {
-            seeds.push(k);
-            final_check_restarts += 1;
-            let start = profile[k].as_ref().expect("finite profile cost");
-            match search.free(&start.model, &start.poses) {
-                Some(r) if r.cost <= start.cost * (1.0 + FINAL_CHECK_MARGIN) => finals.push(r),
-                // A free fit above its own fixed-l1 start (the solver stopped
-                // early in the valley): the profile point itself is the better
-                // answer, refined once more with l1 free from a tighter start.
-                _ => {
-                    if let Some(r) = search.free_tight(&start.model, &start.poses) {
-                        finals.push(r);
-                    }
+        seeds.extend(&beaten);
+        final_check_restarts += beaten.len();
+        let restarted: Vec<Refined> = beaten
+            .par_iter()
+            .filter_map(|&k| {
+                let start = profile[k].as_ref()?;
+                match search.free(&start.model, &start.poses) {
+                    Some(r) if r.cost <= start.cost * (1.0 + FINAL_CHECK_MARGIN) => Some(r),
+                    // A free fit above its own fixed-l1 start (the solver
+                    // stopped early in the valley): the profile point itself
+                    // is the better answer, refined once more with l1 free
+                    // from a tighter start.
+                    _ => search.free_tight(&start.model, &start.poses),
                 }
-            }
-        }
+            })
+            .collect();
+        finals.extend(restarted);
     }
     finals.sort_by(|a, b| a.cost.total_cmp(&b.cost));
     let minima = distinct_minima(&finals);
@@ -302,7 +313,7 @@ pub fn refine_global(
             .map(|(l, c)| (*l, c.is_finite().then_some(*c)))
             .collect(),
         minima,
-        refinements: search.refinements,
+        refinements: search.refinements.load(Ordering::Relaxed),
         cold_starts,
         final_check_restarts,
     };
@@ -315,18 +326,18 @@ struct Search<'a> {
     model: &'a Model,
     options: &'a RefineOptions,
     profile_options: RefineOptions,
-    refinements: usize,
+    refinements: AtomicUsize,
 }
 
 impl Search<'_> {
     /// The fit with `l1` held at `l1`, from `(model, poses)` with `k1`
     /// shifted so that `k1 + l1` is kept.
-    fn fixed_at(&mut self, model: &Model, poses: &[Pose], l1: f64) -> Option<Refined> {
+    fn fixed_at(&self, model: &Model, poses: &[Pose], l1: f64) -> Option<Refined> {
         let mut m = model.clone();
         let k1 = m.get("k1").unwrap_or(0.0) + m.get("l1").unwrap_or(0.0) - l1;
         m.set("k1", k1).ok()?;
         m.set("l1", l1).ok()?;
-        self.refinements += 1;
+        self.refinements.fetch_add(1, Ordering::Relaxed);
         refine(self.data, &m, poses, &self.profile_options)
             .ok()
             .filter(|r| r.cost.is_finite())
@@ -334,7 +345,7 @@ impl Search<'_> {
 
     /// The cold start at `l1`: the whole start on the points corrected for
     /// `l1`, then the fit with `l1` held.
-    fn cold(&mut self, l1: f64, init: &InitOptions) -> Option<Refined> {
+    fn cold(&self, l1: f64, init: &InitOptions) -> Option<Refined> {
         let l2 = self.model.get("l2").unwrap_or(0.0);
         let corrected = psd_corrected(self.data, l1, l2);
         // The paper's start (closed form, preliminary k1, k2, homography
@@ -353,7 +364,7 @@ impl Search<'_> {
             }
         }
         m.set("l1", l1).ok()?;
-        self.refinements += 1;
+        self.refinements.fetch_add(1, Ordering::Relaxed);
         refine(self.data, &m, &start.poses, &self.profile_options)
             .ok()
             .filter(|r| r.cost.is_finite())
@@ -363,7 +374,7 @@ impl Search<'_> {
     /// solution, compared with the cold start and (at its grid point) the
     /// plain start; the lower continues.
     fn sweep(
-        &mut self,
+        &self,
         grid: &[f64],
         order: Vec<usize>,
         cold: &[Option<Refined>],
@@ -388,16 +399,16 @@ impl Search<'_> {
     }
 
     /// The full refinement (every freed parameter, `l1` included).
-    fn free(&mut self, model: &Model, poses: &[Pose]) -> Option<Refined> {
-        self.refinements += 1;
+    fn free(&self, model: &Model, poses: &[Pose]) -> Option<Refined> {
+        self.refinements.fetch_add(1, Ordering::Relaxed);
         refine(self.data, model, poses, self.options)
             .ok()
             .filter(|r| r.cost.is_finite())
     }
 
     /// [`Self::free`] with the cost tolerance tightened a thousandfold.
-    fn free_tight(&mut self, model: &Model, poses: &[Pose]) -> Option<Refined> {
-        self.refinements += 1;
+    fn free_tight(&self, model: &Model, poses: &[Pose]) -> Option<Refined> {
+        self.refinements.fetch_add(1, Ordering::Relaxed);
         let tight = RefineOptions {
             cost_tolerance: self.options.cost_tolerance * 1e-3,
             ..self.options.clone()

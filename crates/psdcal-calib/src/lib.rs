@@ -27,6 +27,7 @@ pub mod diagnostics;
 pub mod electrical;
 pub mod global;
 pub mod linearity;
+pub mod misplaced;
 pub mod refine;
 pub mod report;
 pub mod weighting;

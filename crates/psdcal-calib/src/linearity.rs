@@ -22,7 +22,7 @@ use psdcal_solver::solver::{self, Problem};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::{RefineOptions, Refined};
+use crate::refine::{AtSolution, RefineOptions, Refined};
 use crate::CalibError;
 
 /// Largest accepted `|ρ − 1|` (module documentation). Chosen from the
@@ -96,9 +96,20 @@ pub fn check_linearity(
     refined: &Refined,
     options: &RefineOptions,
 ) -> Result<LinearityCheck, CalibError> {
+    let at = AtSolution::new(data, refined, options)?;
+    check_linearity_at(&at, data, refined, options)
+}
+
+/// [`check_linearity`] from the fit already linearised at its solution.
+pub(crate) fn check_linearity_at(
+    at: &AtSolution<'_>,
+    data: &CalibrationData,
+    refined: &Refined,
+    options: &RefineOptions,
+) -> Result<LinearityCheck, CalibError> {
     let names = options.free_names();
-    let (problem, state, ne) = crate::refine::at_solution(data, refined, options)?;
-    let base = solver::cost(&problem, &state, options.robust)?;
+    let (problem, state, ne) = (&at.problem, &at.state, &at.ne);
+    let base = solver::cost(problem, state, options.robust)?;
     let observations = 2 * data.point_count();
     let unknowns = names.len() + 6 * refined.poses.len();
     if observations <= unknowns || base <= EXACT_VARIANCE * observations as f64 {
@@ -135,8 +146,8 @@ pub fn check_linearity(
                     .collect();
             let step = Step { da, db };
             problem
-                .apply_step(&state, &step)
-                .and_then(|moved| solver::cost(&problem, &moved, options.robust).ok())
+                .apply_step(state, &step)
+                .and_then(|moved| solver::cost(problem, &moved, options.robust).ok())
                 .map_or(f64::NAN, |c| (c - base) / (9.0 * s2))
         };
         parameters.push(ParameterLinearity {

@@ -175,17 +175,23 @@ pub(crate) trait TwoParameterCost {
     /// The residual vector (fixed length for a given problem).
     fn residuals(&self, u: [f64; 2]) -> Result<DVector<f64>, CalibError>;
 
-    /// Its Jacobian (n × 2); central differences unless overridden.
-    fn jacobian(&self, u: [f64; 2], _r: &DVector<f64>) -> Result<DMatrix<f64>, CalibError> {
-        const H: f64 = 1e-6;
+    /// Its Jacobian (n × 2) at `u`, where the residuals are `r`: forward
+    /// differences (two more evaluations; a rough correction does not need
+    /// the last digits) unless overridden.
+    fn jacobian(&self, u: [f64; 2], r: &DVector<f64>) -> Result<DMatrix<f64>, CalibError> {
+        const H: f64 = 1e-7;
         let mut cols = Vec::with_capacity(2);
         for k in 0..2 {
-            let (mut up, mut um) = (u, u);
+            let mut up = u;
             up[k] += H;
-            um[k] -= H;
-            cols.push((self.residuals(up)? - self.residuals(um)?) / (2.0 * H));
+            cols.push((self.residuals(up)? - r) / H);
         }
         Ok(DMatrix::from_columns(&cols))
+    }
+
+    /// Residual evaluations one [`Self::jacobian`] costs.
+    fn jacobian_evaluations(&self) -> usize {
+        2
     }
 }
 
@@ -243,7 +249,8 @@ impl Problem for TwoParameterProblem<'_> {
         self.evaluations.set(self.evaluations.get() + 1);
         if jacobians {
             let j = self.cost.jacobian(*u, &r)?;
-            self.evaluations.set(self.evaluations.get() + 4);
+            self.evaluations
+                .set(self.evaluations.get() + self.cost.jacobian_evaluations());
             if j.iter().any(|v| !v.is_finite()) {
                 return Err(CalibError::Numerical {
                     stage: "preliminary correction",

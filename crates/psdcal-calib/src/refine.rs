@@ -245,7 +245,7 @@ impl<'a> CalibrationProblem<'a> {
     }
 
     /// [`Self::residual`] with image `i`'s rotation matrix computed once.
-    fn residual_using(
+    pub(crate) fn residual_using(
         &self,
         state: &FitState,
         i: usize,
@@ -311,28 +311,38 @@ impl<'a> CalibrationProblem<'a> {
     }
 }
 
-/// The fit of `refined` at its solution: its problem (the freed parameters
-/// of `options`, `refined`'s weights), its state, and the undamped normal
-/// equations there (what the covariance and the linearity check start from).
-pub(crate) fn at_solution<'a>(
-    data: &'a CalibrationData,
-    refined: &'a Refined,
-    options: &RefineOptions,
-) -> Result<(CalibrationProblem<'a>, FitState, NormalEquations), CalibError> {
-    let names = options.free_names();
-    let problem = CalibrationProblem::new(
-        data,
-        options.cost,
-        &refined.model,
-        &names,
-        refined.weights.as_ref(),
-    )?;
-    let state = FitState {
-        model: refined.model.clone(),
-        poses: refined.poses.clone(),
-    };
-    let ne = solver::normal_equations(&problem, &state, options.robust)?;
-    Ok((problem, state, ne))
+/// The fit of a refinement at its solution: its problem (the freed
+/// parameters of the options, the refinement's weights), its state, and the
+/// undamped normal equations there — what the covariance and the linearity
+/// check start from, built once for both.
+pub(crate) struct AtSolution<'a> {
+    pub problem: CalibrationProblem<'a>,
+    pub state: FitState,
+    pub ne: NormalEquations,
+}
+
+impl<'a> AtSolution<'a> {
+    /// Linearises `refined`'s fit for the cost and freed parameters of `options`.
+    pub(crate) fn new(
+        data: &'a CalibrationData,
+        refined: &'a Refined,
+        options: &RefineOptions,
+    ) -> Result<Self, CalibError> {
+        let names = options.free_names();
+        let problem = CalibrationProblem::new(
+            data,
+            options.cost,
+            &refined.model,
+            &names,
+            refined.weights.as_ref(),
+        )?;
+        let state = FitState {
+            model: refined.model.clone(),
+            poses: refined.poses.clone(),
+        };
+        let ne = solver::normal_equations(&problem, &state, options.robust)?;
+        Ok(Self { problem, state, ne })
+    }
 }
 
 impl Problem for CalibrationProblem<'_> {

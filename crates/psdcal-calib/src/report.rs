@@ -89,18 +89,25 @@ pub fn fit_statistics(
         // Only a gains stage without amplitudes fails here: nothing to measure.
         return FitStatistics::empty(data);
     };
-    let mut all: Vec<PointError> = Vec::with_capacity(data.point_count());
-    let mut outliers = Vec::new();
+    // Per point: (template error, image error, image index, point index);
+    // the ids are cloned only for the points reported.
+    type Scored = (f64, Option<f64>, usize, usize);
+    let mut all: Vec<Scored> = Vec::with_capacity(data.point_count());
+    let mut outliers: Vec<Scored> = Vec::new();
     let mut per_image = Vec::with_capacity(data.images.len());
     let (mut sum_t, mut sum_m, mut n_m, mut unprojectable) = (0.0, 0.0, 0usize, 0usize);
     for (i, image) in data.images.iter().enumerate() {
         let (mut img_t, mut img_m, mut img_n_m) = (0.0, 0.0, 0usize);
-        for (k, obs) in image.points.iter().enumerate() {
+        let rotation = state.poses[i].rotation();
+        for k in 0..image.points.len() {
             let e_t = template
-                .residual(&state, i, k)
+                .residual_using(&state, i, k, &rotation)
                 .map(|r| r.norm())
                 .unwrap_or(f64::INFINITY);
-            let e_m = image_plane.residual(&state, i, k).ok().map(|r| r.norm());
+            let e_m = image_plane
+                .residual_using(&state, i, k, &rotation)
+                .ok()
+                .map(|r| r.norm());
             img_t += e_t * e_t;
             match e_m {
                 Some(e) => {
@@ -109,22 +116,16 @@ pub fn fit_statistics(
                 }
                 None => unprojectable += 1,
             }
-            let point = PointError {
-                image: image.id.clone(),
-                led: obs.led,
-                template_mm: e_t,
-                image_mm: e_m,
-            };
             if let Some(loss) = robust {
                 let e = match cost {
                     CostKind::Template => Some(e_t),
                     CostKind::Image => e_m,
                 };
                 if e.is_none_or(|e| loss.weight(e * e) < 0.5) {
-                    outliers.push(point.clone());
+                    outliers.push((e_t, e_m, i, k));
                 }
             }
-            all.push(point);
+            all.push((e_t, e_m, i, k));
         }
         let n = image.points.len().max(1) as f64;
         per_image.push(ImageStats {
@@ -142,9 +143,23 @@ pub fn fit_statistics(
         n_m += img_n_m;
     }
     let points = data.point_count();
-    all.sort_by(|a, b| b.template_mm.total_cmp(&a.template_mm));
+    let worst_first = |list: &mut Vec<Scored>| {
+        list.sort_by(|a, b| b.0.total_cmp(&a.0));
+    };
+    let named = |list: &[Scored]| -> Vec<PointError> {
+        list.iter()
+            .map(|&(template_mm, image_mm, i, k)| PointError {
+                image: data.images[i].id.clone(),
+                led: data.images[i].points[k].led,
+                template_mm,
+                image_mm,
+            })
+            .collect()
+    };
+    worst_first(&mut all);
     all.truncate(WORST_POINTS);
-    outliers.sort_by(|a, b| b.template_mm.total_cmp(&a.template_mm));
+    worst_first(&mut outliers);
+    let (all, outliers) = (named(&all), named(&outliers));
     FitStatistics {
         residual_mm2: sum_t,
         rms_template_mm: (sum_t / points.max(1) as f64).sqrt(),

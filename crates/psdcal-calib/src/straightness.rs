@@ -182,6 +182,10 @@ impl TwoParameterCost for StraightnessCost {
             }),
         }
     }
+
+    fn jacobian_evaluations(&self) -> usize {
+        1
+    }
 }
 
 #[cfg(test)]

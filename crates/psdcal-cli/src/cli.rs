@@ -4,9 +4,11 @@
 use std::path::PathBuf;
 
 use clap::{ArgGroup, Args, CommandFactory, Parser, Subcommand};
+use psdcal::option_text::{
+    parse_assignment, parse_fit, parse_robust, parse_uncertainty, positive_mm, side_mm, FitList,
+};
 pub use psdcal::PointSource;
 use psdcal::{CalibrationOptions, Param, PsdGeometry, Robust, Uncertainty};
-use psdcal_model::UnknownParam;
 
 use crate::choice::{CostArg, NoiseArg, PreliminaryArg};
 
@@ -170,10 +172,6 @@ pub struct CalibrateArgs {
     pub strict: bool,
 }
 
-/// The parameters named by `--fit`, and whether `gains` was named.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FitList(pub Vec<Param>, pub bool);
-
 /// Arguments of `psdcal correct`.
 #[derive(Debug, Args)]
 pub struct CorrectArgs {
@@ -280,27 +278,26 @@ impl Cli {
             Command::Calibrate(args) => {
                 let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;
-                if args.gains.is_some() && (fit_gains || !matches!(points, PointSource::Signals(_)))
-                {
-                    return Err(Cli::command().error(
-                        clap::error::ErrorKind::ArgumentConflict,
-                        "--gains FILE holds known gains fixed: it needs --signals and excludes 'gains' in --fit",
-                    ));
-                }
-                if fit_gains && !matches!(points, PointSource::Signals(_)) {
-                    return Err(Cli::command().error(
-                        clap::error::ErrorKind::ArgumentConflict,
-                        "--fit ...,gains needs the electrode amplitudes: give --signals signals.csv",
-                    ));
-                }
-                for (p, _) in &args.set {
-                    if free.contains(p) {
-                        return Err(Cli::command().error(
-                            clap::error::ErrorKind::ArgumentConflict,
-                            format!("--set {p}=... fixes {p}, but --fit also frees it; drop one of them"),
-                        ));
-                    }
-                }
+                let options = CalibrationOptions {
+                    free,
+                    fit_gains,
+                    fixed: args.set,
+                    focal_guess: args.focal_guess,
+                    cost: args.cost.into(),
+                    noise: args.noise.into(),
+                    preliminary: if args.no_preliminary {
+                        psdcal::Preliminary::Off
+                    } else {
+                        args.preliminary.into()
+                    },
+                    normalize: !args.no_normalize,
+                    robust: args.robust,
+                    uncertainty: args.uncertainty,
+                };
+                let signals = matches!(points, PointSource::Signals(_));
+                options.check(signals, args.gains.is_some()).map_err(|m| {
+                    Cli::command().error(clap::error::ErrorKind::ArgumentConflict, m)
+                })?;
                 Job::Calibrate(CalibrateConfig {
                     template: args.template,
                     points,
@@ -312,22 +309,7 @@ impl Cli {
                     out: args.out,
                     residuals: args.residuals,
                     gains_file: args.gains,
-                    options: CalibrationOptions {
-                        free,
-                        fit_gains,
-                        fixed: args.set,
-                        focal_guess: args.focal_guess,
-                        cost: args.cost.into(),
-                        noise: args.noise.into(),
-                        preliminary: if args.no_preliminary {
-                            psdcal::Preliminary::Off
-                        } else {
-                            args.preliminary.into()
-                        },
-                        normalize: !args.no_normalize,
-                        robust: args.robust,
-                        uncertainty: args.uncertainty,
-                    },
+                    options,
                 })
             }
             Command::Correct(args) => {
@@ -350,94 +332,6 @@ impl Cli {
 }
 
 /// `--fit`: comma-separated parameter names, each at most once.
-fn parse_fit(text: &str) -> Result<FitList, String> {
-    let mut out: Vec<Param> = Vec::new();
-    let mut gains = false;
-    for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        if name.eq_ignore_ascii_case("gains") {
-            if gains {
-                return Err("'gains' is listed twice".into());
-            }
-            gains = true;
-            continue;
-        }
-        let p: Param = name.parse().map_err(|e: UnknownParam| e.to_string())?;
-        if out.contains(&p) {
-            return Err(format!("'{p}' is listed twice"));
-        }
-        out.push(p);
-    }
-    if out.is_empty() {
-        return Err("expected at least one parameter, e.g. f,cx,cy,k1,k2".into());
-    }
-    Ok(FitList(out, gains))
-}
-
-/// `--robust huber:0.1` or `cauchy:0.1`.
-fn parse_robust(text: &str) -> Result<Robust, String> {
-    let (kind, scale) = text
-        .split_once(':')
-        .ok_or_else(|| format!("expected LOSS:SCALE such as huber:0.1, found '{text}'"))?;
-    let scale = positive_mm(scale)?;
-    match kind.trim().to_ascii_lowercase().as_str() {
-        "huber" => Ok(Robust::Huber { scale }),
-        "cauchy" => Ok(Robust::Cauchy { scale }),
-        other => Err(format!("unknown loss '{other}' (expected huber or cauchy)")),
-    }
-}
-
-/// `--uncertainty linear`, `bootstrap:N` or `bootstrap:N:SEED`.
-fn parse_uncertainty(text: &str) -> Result<Uncertainty, String> {
-    let mut parts = text.split(':');
-    match parts
-        .next()
-        .map(|p| p.trim().to_ascii_lowercase())
-        .as_deref()
-    {
-        Some("linear") if parts.next().is_none() => Ok(Uncertainty::Linear),
-        Some("bootstrap") => {
-            let number = |part: Option<&str>, what: &str| -> Result<Option<u64>, String> {
-                part.map(|p| {
-                    p.trim()
-                        .parse::<u64>()
-                        .map_err(|_| format!("expected a whole number for the {what}, found '{p}'"))
-                })
-                .transpose()
-            };
-            let resamples = number(parts.next(), "resamples")?
-                .ok_or("expected bootstrap:N, e.g. bootstrap:200")?;
-            if resamples < 10 {
-                return Err(format!(
-                    "the bootstrap needs at least 10 resamples, not {resamples}"
-                ));
-            }
-            let seed = number(parts.next(), "seed")?.unwrap_or(1);
-            if parts.next().is_some() {
-                return Err(format!("expected bootstrap:N[:SEED], found '{text}'"));
-            }
-            Ok(Uncertainty::Bootstrap {
-                resamples: resamples as usize,
-                seed,
-            })
-        }
-        _ => Err(format!(
-            "expected linear or bootstrap:N[:SEED], found '{text}'"
-        )),
-    }
-}
-
-/// `--set NAME=VALUE`.
-fn parse_assignment(text: &str) -> Result<(Param, f64), String> {
-    let (name, value) = text
-        .split_once('=')
-        .ok_or_else(|| format!("expected NAME=VALUE such as l1=-1.3e-3, found '{text}'"))?;
-    let p: Param = name.parse().map_err(|e: UnknownParam| e.to_string())?;
-    match value.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok((p, v)),
-        _ => Err(format!("expected a finite number for {p}, found '{value}'")),
-    }
-}
-
 /// Where a data set's points come from: exactly one of `--observations`
 /// and `--signals` (clap's group makes one required; this refuses both).
 fn point_source(
@@ -450,33 +344,6 @@ fn point_source(
         _ => Err(Cli::command().error(
             clap::error::ErrorKind::ArgumentConflict,
             "give exactly one of --observations and --signals",
-        )),
-    }
-}
-
-/// The longest length an option accepts, mm (1 000 km): beyond it results
-/// overflow or mean a unit error.
-pub(crate) const MAX_LENGTH_MM: f64 = 1e9;
-/// The largest active-area side, mm.
-pub(crate) const MAX_SIDE_MM: f64 = 1000.0;
-
-/// A positive, finite length in mm, at most [`MAX_LENGTH_MM`].
-pub(crate) fn positive_mm(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 && v <= MAX_LENGTH_MM => Ok(v),
-        _ => Err(format!(
-            "expected a positive length in mm up to 1e9, found '{text}'"
-        )),
-    }
-}
-
-/// An active-area side: a positive length in mm, at most [`MAX_SIDE_MM`].
-pub(crate) fn side_mm(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 && v <= MAX_SIDE_MM => Ok(v),
-        _ => Err(format!(
-            "expected the side of the active area, a positive length in mm up to 1000, found \
-             '{text}'"
         )),
     }
 }

@@ -4,13 +4,15 @@
 use std::path::PathBuf;
 
 use clap::{ArgGroup, Args, CommandFactory};
-use nalgebra::Vector3;
-use psdcal::{LocateOptions, Param, Plane, MAX_GRID};
+use psdcal::option_text::{
+    angle_deg, grid_size, non_negative_mm, parse_error_list, parse_plane, positive_mm,
+    within_k_sigma,
+};
+use psdcal::{LocateOptions, Param, Plane};
 pub use psdcal::{LocateTarget, MapModel, MapSource};
-use psdcal_model::UnknownParam;
 
 use crate::choice::LensArg;
-use crate::cli::{positive_mm, Cli, Output, MAX_LENGTH_MM};
+use crate::cli::{Cli, Output};
 
 pub const AOA_EXAMPLES: &str = include_str!("../help/aoa.txt");
 
@@ -56,7 +58,7 @@ pub struct LocateArgs {
     pub distance: Option<f64>,
     /// Plane n.P = d in the sensor frame: NX,NY,NZ,D (D in mm, not 0)
     #[arg(long, value_name = "NX,NY,NZ,D", value_parser = parse_plane, allow_hyphen_values = true)]
-    pub plane: Option<PlaneSpec>,
+    pub plane: Option<Plane>,
     /// Rig file: sensors with calibrations and poses in a world frame (README 'Rig files')
     #[arg(long, value_name = "FILE")]
     pub rig: Option<PathBuf>,
@@ -92,7 +94,7 @@ pub struct MapArgs {
     #[arg(long = "error", value_name = "NAME=VALUE", value_parser = parse_error_list, allow_hyphen_values = true)]
     pub errors: Vec<Vec<(Param, f64)>>,
     /// Use the calibration's covariance at K standard deviations instead of --error
-    #[arg(long, value_name = "K", value_parser = positive_number, allow_negative_numbers = true)]
+    #[arg(long, value_name = "K", value_parser = within_k_sigma, allow_negative_numbers = true)]
     pub k_sigma: Option<f64>,
     /// Distance S of the plane parallel to the sensor, mm
     #[arg(long, value_name = "MM", default_value = "5000", value_parser = positive_mm, allow_negative_numbers = true)]
@@ -106,13 +108,6 @@ pub struct MapArgs {
     /// Output CSV (written atomically); standard output when absent
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
-}
-
-/// A plane `n·P = d` as given on the command line.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlaneSpec {
-    pub normal: Vector3<f64>,
-    pub offset_mm: f64,
 }
 
 /// Validated configuration of `psdcal aoa`.
@@ -181,22 +176,20 @@ impl LocateArgs {
         if self.unweighted && self.rig.is_none() {
             return Err(conflict("--unweighted applies to --rig only"));
         }
-        let target = match (self.distance, self.plane, self.rig, self.calibration) {
-            (Some(s), None, None, Some(calibration)) => LocateTarget::Plane {
-                calibration,
-                plane: Plane::parallel(s).map_err(|e| conflict(&e.to_string()))?,
-            },
-            (None, Some(p), None, Some(calibration)) => LocateTarget::Plane {
-                calibration,
-                plane: Plane::new(p.normal, p.offset_mm).map_err(|e| conflict(&e.to_string()))?,
-            },
-            (None, None, Some(rig), None) => LocateTarget::Rig(rig),
-            _ => {
-                return Err(conflict(
+        let target =
+            match (self.distance, self.plane, self.rig, self.calibration) {
+                (Some(s), None, None, Some(calibration)) => LocateTarget::Plane {
+                    calibration,
+                    plane: Plane::parallel(s).map_err(|e| conflict(&e.to_string()))?,
+                },
+                (None, Some(plane), None, Some(calibration)) => {
+                    LocateTarget::Plane { calibration, plane }
+                }
+                (None, None, Some(rig), None) => LocateTarget::Rig(rig),
+                _ => return Err(conflict(
                     "give exactly one of --distance, --plane (both with --calibration) and --rig",
-                ))
-            }
-        };
+                )),
+            };
         Ok(LocateConfig {
             target,
             points: self.points,
@@ -262,91 +255,4 @@ impl MapArgs {
             out: self.out,
         })
     }
-}
-
-fn number(text: &str) -> Option<f64> {
-    text.trim().parse::<f64>().ok().filter(|v| v.is_finite())
-}
-
-/// A non-negative, finite length in mm, at most [`MAX_LENGTH_MM`].
-fn non_negative_mm(text: &str) -> Result<f64, String> {
-    match number(text) {
-        Some(v) if (0.0..=MAX_LENGTH_MM).contains(&v) => Ok(v),
-        _ => Err(format!(
-            "expected a length from 0 to 1e9 mm, found '{text}'"
-        )),
-    }
-}
-
-/// The largest `--k-sigma`.
-const MAX_K_SIGMA: f64 = 1000.0;
-
-/// A positive, finite number, at most [`MAX_K_SIGMA`].
-fn positive_number(text: &str) -> Result<f64, String> {
-    match number(text) {
-        Some(v) if v > 0.0 && v <= MAX_K_SIGMA => Ok(v),
-        _ => Err(format!(
-            "expected a positive number up to {MAX_K_SIGMA}, found '{text}'"
-        )),
-    }
-}
-
-/// An angle in degrees, 0 to 90.
-fn angle_deg(text: &str) -> Result<f64, String> {
-    match number(text) {
-        Some(v) if (0.0..=90.0).contains(&v) => Ok(v),
-        _ => Err(format!(
-            "expected an angle from 0 to 90 degrees, found '{text}'"
-        )),
-    }
-}
-
-/// A grid size, 2 to MAX_GRID.
-fn grid_size(text: &str) -> Result<usize, String> {
-    match text.trim().parse::<usize>() {
-        Ok(n) if (2..=MAX_GRID).contains(&n) => Ok(n),
-        _ => Err(format!(
-            "expected 2 to {MAX_GRID} points per side, found '{text}'"
-        )),
-    }
-}
-
-/// `--plane NX,NY,NZ,D`.
-fn parse_plane(text: &str) -> Result<PlaneSpec, String> {
-    let values: Vec<Option<f64>> = text.split(',').map(number).collect();
-    let [Some(nx), Some(ny), Some(nz), Some(d)] = values[..] else {
-        return Err(format!(
-            "expected four numbers NX,NY,NZ,D (the plane n.P = d, sensor frame, d in mm), found \
-             '{text}'"
-        ));
-    };
-    if d.abs() > MAX_LENGTH_MM {
-        return Err(format!(
-            "expected the plane's D within ±1e9 mm, found '{text}'"
-        ));
-    }
-    let normal = Vector3::new(nx, ny, nz);
-    Plane::new(normal, d).map_err(|e| e.to_string())?;
-    Ok(PlaneSpec {
-        normal,
-        offset_mm: d,
-    })
-}
-
-/// `--error f=0.05,cx=0.02`.
-fn parse_error_list(text: &str) -> Result<Vec<(Param, f64)>, String> {
-    let mut out = Vec::new();
-    for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        let (name, value) = item
-            .split_once('=')
-            .ok_or_else(|| format!("expected NAME=VALUE such as f=0.05, found '{item}'"))?;
-        let p: Param = name.parse().map_err(|e: UnknownParam| e.to_string())?;
-        let v = number(value)
-            .ok_or_else(|| format!("expected a finite number for {p}, found '{value}'"))?;
-        out.push((p, v));
-    }
-    if out.is_empty() {
-        return Err("expected NAME=VALUE such as f=0.05".into());
-    }
-    Ok(out)
 }

@@ -30,6 +30,8 @@ pub struct ReportConfig {
     /// `(template, observations)`.
     pub data: Option<(PathBuf, PathBuf)>,
     pub out: PathBuf,
+    /// `out/report.html`, the page (checked against the inputs).
+    pub page: PathBuf,
 }
 
 impl ReportArgs {
@@ -38,6 +40,7 @@ impl ReportArgs {
         ReportConfig {
             calibration: self.calibration,
             data: self.template.zip(self.observations),
+            page: self.out.join("report.html"),
             out: self.out,
         }
     }

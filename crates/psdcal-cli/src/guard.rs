@@ -11,7 +11,8 @@ use crate::cli::Job;
 type Named<'a> = (&'static str, &'a Path);
 
 /// The input and output files of `job` (folders of `simulate`, `study` and
-/// `demo` are not checked: they read no file; `report`'s page is).
+/// `demo` are not checked: they read no file; `report`'s page is, and the
+/// calibrations a rig lists).
 fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
     fn points(p: &PointSource) -> Named<'_> {
         match p {
@@ -64,7 +65,9 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
             if let Some((t, o)) = &c.data {
                 inputs.extend([("--template", t.as_path()), ("--observations", o.as_path())]);
             }
-            (inputs, Vec::new())
+            // The page is the one output whose name an input could have
+            // (the plots are .svg and .png files).
+            (inputs, vec![("--out", c.page.as_path())])
         }
         _ => (Vec::new(), Vec::new()),
     }
@@ -74,5 +77,25 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
 /// one file).
 pub fn check(job: &Job) -> Result<(), psdcal::IoError> {
     let (inputs, outputs) = files(job);
-    psdcal_io::refuse_overwrite(&inputs, &outputs)
+    psdcal_io::refuse_overwrite(&inputs, &outputs)?;
+    // The calibrations a rig lists are inputs too (a rig that cannot be read
+    // is the job's own error, reported when it runs).
+    if let Job::Locate(c) = job {
+        if let LocateTarget::Rig(rig) = &c.target {
+            if let Ok(file) = psdcal_io::read_rig(rig) {
+                let listed: Vec<Named<'_>> = file
+                    .sensors
+                    .iter()
+                    .map(|s| {
+                        (
+                            "a calibration listed in --rig",
+                            s.calibration_path.as_path(),
+                        )
+                    })
+                    .collect();
+                psdcal_io::refuse_overwrite(&listed, &outputs)?;
+            }
+        }
+    }
+    Ok(())
 }

@@ -29,7 +29,7 @@ pub fn print_error(error: &anyhow::Error) {
         format!("{error:#}")
     };
     let what = what.replace('\n', " ");
-    eprintln!("error: {what}; {}", hint(error));
+    eprintln!("error: {what}; {}", psdcal::advice(&**error));
 }
 
 /// Prints warnings on standard error, at most [`MAX_WARNINGS`] of them.
@@ -42,81 +42,6 @@ pub fn print_warnings(warnings: &[Warning]) {
             "warning: {} more warnings not shown (--json lists them all)",
             warnings.len() - MAX_WARNINGS
         );
-    }
-}
-
-/// What the user can do about an error.
-fn hint(error: &anyhow::Error) -> &'static str {
-    if let Some(e) = error.downcast_ref::<psdcal::LocateError>() {
-        return match e {
-            psdcal::LocateError::InvalidInput { .. } | psdcal::LocateError::NonFinite { .. } => {
-                "change the options or the data as the message says"
-            }
-            psdcal::LocateError::InvalidCovariance { .. } => {
-                "write the calibration again with psdcal"
-            }
-            _ => "see 'psdcal locate --help'",
-        };
-    }
-    if let Some(calib) = error.downcast_ref::<psdcal::CalibError>() {
-        return match calib {
-            psdcal::CalibError::TooFewImages { .. } | psdcal::CalibError::TooFewPoints { .. } => {
-                "add template poses (images) with at least 4 LEDs each"
-            }
-            psdcal::CalibError::Degenerate { .. } => {
-                "vary the template's tilt and position between images, or fix the parameters the data cannot determine"
-            }
-            psdcal::CalibError::InvalidInput { .. } => "change the options or the data as the message says",
-            psdcal::CalibError::Model(_) => "check the data and the fixed values (--set)",
-            psdcal::CalibError::NotConverged { .. } => {
-                "give --focal-guess, free fewer parameters (--fit), or add images"
-            }
-            _ => "check the data with 'psdcal check', or give --focal-guess",
-        };
-    }
-    let Some(io) = error.downcast_ref::<IoError>() else {
-        return "see 'psdcal --help'";
-    };
-    match io {
-        IoError::Field { .. } => {
-            "correct that field of the rig file (format: docs/formats.md, 'rig.json')"
-        }
-        IoError::Read { .. } => "check the path and that the file is readable",
-        IoError::Write { .. } => "check that the destination folder exists and is writable",
-        IoError::Encoding { .. } => "save the file as UTF-8 text (CSV or JSON)",
-        IoError::Structure { .. } => "fix the file's header or rows (formats: docs/formats.md)",
-        IoError::Value { .. } => "correct the value on that line",
-        IoError::UnknownLed { .. } => "add the LED to the template or correct its identifier",
-        IoError::Duplicate { .. } => "keep only one of the two rows",
-        IoError::Invalid { .. } => "correct the data (formats: docs/formats.md)",
-        IoError::Amplitudes { .. } => {
-            "check that row's amplitudes (no light reached the sensor, or a channel is broken)"
-        }
-        IoError::Json { file, .. } => json_hint(file),
-        IoError::TooLarge { .. } => {
-            "give a smaller file, or raise the limit with --max-input-mb (docs/formats.md, 'Limits')"
-        }
-        IoError::OutputIsInput { .. } => "write the output to another file",
-        IoError::NewerVersion { .. } => "upgrade psdcal to read this file",
-        IoError::Strict { .. } => "fix the data, or run without --strict to drop it with a warning",
-        _ => "see 'psdcal --help'",
-    }
-}
-
-/// What to do about a JSON file that does not parse, by its kind.
-fn json_hint(file: &str) -> &'static str {
-    let name = std::path::Path::new(file)
-        .file_name()
-        .map(|n| n.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    if name.contains("rig") {
-        "correct the rig file at that line and column (format: docs/formats.md, 'rig.json')"
-    } else if name.contains("gain") {
-        "correct the gains file at that line and column, or write it again with 'psdcal gains'"
-    } else if name.contains("truth") {
-        "correct the truth file at that line and column, or write it again with 'psdcal simulate'"
-    } else {
-        "correct the JSON file at that line and column, or write it again with psdcal (formats: docs/formats.md)"
     }
 }
 

@@ -1,5 +1,6 @@
-//! Issue 17's reproducers, each run again: outputs over inputs, hostile
-//! values, outlier gains records, per-row statuses, huge numbers.
+//! Issue 17's reproducers, each run again: outputs over inputs (the report's page and
+//! a rig's calibrations too), hostile values, outlier gains records, per-row
+//! statuses, huge numbers, a mistyped LED named.
 
 mod common;
 
@@ -270,4 +271,92 @@ fn a_syntax_error_in_a_rig_file_points_to_that_file() {
     let err = stderr(&out);
     assert!(err.contains("rig.json:2:"), "{err}");
     assert!(!err.contains("calibration file"), "{err}");
+}
+
+#[test]
+fn report_and_rig_outputs_that_are_inputs_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    // A calibration named like the report's page, in the report's folder.
+    let page = dir.path().join("report.html");
+    fs::copy(valid("calibration.json"), &page).unwrap();
+    let before = fs::read(&page).unwrap();
+    let out = psdcal([
+        "report",
+        "-c",
+        page.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("overwrite"), "{}", stderr(&out));
+    assert_eq!(fs::read(&page).unwrap(), before);
+    // `locate --rig` writing over a calibration the rig lists.
+    let a = copy(dir.path(), "calibration.json");
+    let b = dir.path().join("b.json");
+    fs::copy(valid("calibration.json"), &b).unwrap();
+    let rig = dir.path().join("rig.json");
+    fs::write(
+        &rig,
+        r#"{"format": "psdcal-rig", "version": 1, "sensors": [
+  {"id": "a", "calibration": "calibration.json",
+   "world_from_sensor": {"rvec": [0, 0, 0], "t_mm": [0, 0, 0]}},
+  {"id": "b", "calibration": "b.json",
+   "world_from_sensor": {"rvec": [0, 0.3, 0], "t_mm": [500, 0, 0]}}]}"#,
+    )
+    .unwrap();
+    let points = dir.path().join("rig_points.csv");
+    fs::write(
+        &points,
+        "sensor,point,x_mm,y_mm\na,1,0.1,0.2\nb,1,0.1,0.2\n",
+    )
+    .unwrap();
+    let before = fs::read(&b).unwrap();
+    let out = psdcal([
+        "locate",
+        "--rig",
+        rig.to_str().unwrap(),
+        "-p",
+        points.to_str().unwrap(),
+        "--out",
+        b.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("listed in --rig"), "{err}");
+    assert_eq!(fs::read(&b).unwrap(), before);
+    assert!(fs::read(&a).is_ok());
+}
+
+#[test]
+fn one_mistyped_led_is_named_not_blamed_on_the_poses() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = fs::read_to_string(valid("template.csv")).unwrap();
+    // The first LED's X with a digit too many.
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let row = lines
+        .iter()
+        .position(|l| l.chars().next().is_some_and(|c| c.is_ascii_digit()))
+        .unwrap();
+    let mut fields: Vec<String> = lines[row].split(',').map(str::to_string).collect();
+    let led = fields[0].clone();
+    fields[1] = format!("{}0", fields[1]);
+    lines[row] = fields.join(",");
+    let t = dir.path().join("template.csv");
+    fs::write(&t, lines.join("\n") + "\n").unwrap();
+    let o = valid("observations.csv").display().to_string();
+    let cal = dir.path().join("cal.json");
+    let out = psdcal([
+        "calibrate",
+        "-t",
+        t.to_str().unwrap(),
+        "-o",
+        &o,
+        "--out",
+        cal.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains(&format!("contradict LED '{led}'")), "{err}");
+    assert!(err.contains(&format!("line {}", row + 1)), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
 }

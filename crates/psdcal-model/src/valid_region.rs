@@ -9,18 +9,22 @@
 //! about the optical centre `c = (cx, cy)`:
 //!
 //! ```text
-//! u_i   = (cos θ_i, sin θ_i),      θ_i = 2π i / N,   i = 0 … N − 1   (N = 360 by default)
+//! u_i   = (cos θ_i, sin θ_i),      θ_i = 2π i / N,   i = 0 … N − 1   (N = 90, REGION_RAYS)
 //! R_i   = the distance from c along u_i to the edge of the checked zone,
 //!         the active area scaled by ZONE_SCALE = 1.5 about the electrical centre
 //! r_i   = sup { t ≤ R_i : det J(c + s u_i) > 1e-12 for every s ∈ [0, t] }
 //! ```
 //!
-//! `r_i` is found by sampling `det J` at `R_i k / 512`, `k = 0 … 512`, and
-//! bisecting the first interval whose right end is not positive (or not
-//! finite) to 1e-12 relative; the stored radius is the bracket's positive end,
-//! so it lies before the fold. A ray that does not fold before the zone's
-//! edge has `r_i = R_i`. A model whose correction is not positive at the
-//! centre itself has an empty region (every `r_i = 0`).
+//! `r_i` is found by stepping along the ray from `c` and bisecting the first
+//! step whose end is not positive (or not finite) to 1e-12 relative; the
+//! stored radius is the bracket's positive end, so it lies before the fold.
+//! The steps adapt to the determinant: at most `R_i / 24`; where `det J`
+//! falls, half the distance at which the secant through the last two samples
+//! reaches zero, but not under `R_i / 1024`. A dip of the determinant toward
+//! zero is thus sampled densely, and a correction that stays far from
+//! folding costs 24 evaluations a ray. A ray that does not fold before the
+//! zone's edge has `r_i = R_i`. A model whose correction is not positive at
+//! the centre itself has an empty region (every `r_i = 0`).
 //!
 //! A point `p` at distance `ρ = |p − c|` in direction `θ ∈ [θ_i, θ_{i+1})` is
 //! inside when
@@ -30,7 +34,7 @@
 //! ```
 //!
 //! the smaller neighbouring radius with a relative margin of 1e-3, so that
-//! between rays (1° apart) the rule stays on the safe side of a smooth
+//! between rays (4° apart) the rule stays on the safe side of a smooth
 //! boundary. `whole_active_area` is true when every point of the active area
 //! is inside by this rule (checked exactly: on each interval between rays the
 //! largest distance from `c` to the active area's far edge is reached at the
@@ -53,8 +57,10 @@ pub const MIN_REGION_RAYS: usize = 8;
 /// electrical centre (points a little off the active area are still
 /// answered, with a caution).
 pub const ZONE_SCALE: f64 = 1.5;
-/// Samples of `det J` per ray before bisection.
-pub const SAMPLES_PER_RAY: usize = 64;
+/// Fewest steps along a ray (the longest step is `reach` over this).
+pub const MAX_STEPS_PER_RAY: usize = 24;
+/// The shortest step is `reach` over this.
+pub const MIN_STEP_FRACTION: usize = 1024;
 /// Smallest determinant of `∂ideal/∂measured` that counts as positive (the
 /// threshold of the inverse distortion, docs/model.md §2.5).
 pub const MIN_FOLD_DET: f64 = 1e-12;
@@ -319,7 +325,10 @@ fn zone_reach(c: &Vector2<f64>, u: &Vector2<f64>, geometry: &PsdGeometry) -> f64
 }
 
 /// The last distance before the first fold along `c + t u`, `t ∈ [0, reach]`
-/// (`reach` when the determinant stays positive).
+/// (`reach` when the determinant stays positive). Adaptive steps (module
+/// documentation): at most `reach / MAX_STEPS_PER_RAY`, at least
+/// `reach / MIN_STEP_FRACTION`, and where the determinant falls, half the
+/// distance at which the last secant would reach zero.
 fn first_fold(
     det: &mut dyn FnMut(&Vector2<f64>) -> f64,
     c: &Vector2<f64>,
@@ -327,10 +336,14 @@ fn first_fold(
     reach: f64,
 ) -> f64 {
     let at = |t: f64| c + u * t;
-    let mut previous = 0.0;
-    for k in 1..=SAMPLES_PER_RAY {
-        let t = reach * k as f64 / SAMPLES_PER_RAY as f64;
-        if !positive(det(&at(t))) {
+    let h_max = reach / MAX_STEPS_PER_RAY as f64;
+    let h_min = reach / MIN_STEP_FRACTION as f64;
+    let (mut previous, mut d_previous) = (0.0, det(c));
+    let mut h = h_max;
+    while previous < reach {
+        let t = (previous + h).min(reach);
+        let d = det(&at(t));
+        if !positive(d) {
             let (mut good, mut bad) = (previous, t);
             while bad - good > 1e-12 * bad.max(1.0) {
                 let mid = 0.5 * (good + bad);
@@ -342,7 +355,13 @@ fn first_fold(
             }
             return good;
         }
-        previous = t;
+        let slope = (d - d_previous) / (t - previous);
+        h = if slope < 0.0 {
+            (0.5 * (d - MIN_FOLD_DET) / -slope).clamp(h_min, h_max)
+        } else {
+            h_max
+        };
+        (previous, d_previous) = (t, d);
     }
     reach
 }

@@ -5,6 +5,7 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use nalgebra::Vector2;
+use psdcal_calib::CalibError;
 use psdcal_calib::{CalibrationData, CalibrationResult};
 use psdcal_io::{write_calibration, Calibration, ValidRegionRecord};
 use psdcal_model::ValidRegion;
@@ -40,12 +41,29 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
         .check(set.signals.is_some(), set.known_gains.is_some())
         .map_err(Error::Options)?;
     let data = convert::calibration_data(set, options.fit_gains);
-    let result = psdcal_calib::calibrate(&data, &convert::calibrate_options(options))
-        .map_err(Error::Calibrate)?;
-    let region = ValidRegion::of_model(&result.model, &data.geometry);
-    check_data_in_region(&result, &data, set, &region)?;
+    let result = psdcal_calib::calibrate(&data, &convert::calibrate_options(options)).map_err(
+        |e| match e {
+            CalibError::MisplacedLed {
+                led,
+                score,
+                next_score,
+                images,
+                cause,
+            } if led < set.template.leds.len() => Error::MisplacedLed {
+                led: set.template.leds[led].id.clone(),
+                template: set.template.source.clone(),
+                line: set.template.leds[led].line_no,
+                score,
+                next_score,
+                images,
+                cause,
+            },
+            e => Error::Calibrate(e),
+        },
+    )?;
+    check_data_in_region(&result, &data, set, &result.valid_region)?;
     let mut record = convert::record(&result, &data, set, options);
-    record.valid_region = Some(ValidRegionRecord::from_region(&region));
+    record.valid_region = Some(ValidRegionRecord::from_region(&result.valid_region));
     record.provenance = Some(provenance("", options.to_json(), &set.inputs));
     let report = convert::fit_report(&result);
     Ok(Calibrated {

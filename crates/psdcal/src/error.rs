@@ -57,6 +57,30 @@ pub enum Error {
         /// The first point outside: image, LED, position and distances.
         first: String,
     },
+    /// The images contradict one LED of the template (psdcal-calib's
+    /// misplaced-LED check, with the LED's identifier and line).
+    #[error(
+        "calibration failed: the images contradict LED '{led}' of {template} (line {line}): \
+         without it, each image's homography fits {score:.1} times better, in {images} images \
+         (without the next LED: {next_score:.2} times). Check its X_mm, Y_mm in the template and \
+         its identifier in the observations (the fit alone said: {cause})"
+    )]
+    MisplacedLed {
+        /// The LED's identifier.
+        led: String,
+        /// The template file.
+        template: String,
+        /// The LED's line in it.
+        line: usize,
+        /// How many times better the images fit without it (median).
+        score: f64,
+        /// The same for the next LED.
+        next_score: f64,
+        /// Images that scored it.
+        images: usize,
+        /// What the calibration said without the check.
+        cause: String,
+    },
     /// Options that cannot work together or values out of range.
     #[error("{0}")]
     Options(String),

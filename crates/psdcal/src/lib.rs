@@ -56,6 +56,7 @@
 //! file is written atomically.
 #![warn(missing_docs)]
 
+mod advice;
 mod aoa;
 mod calibrate;
 mod convert;
@@ -67,6 +68,7 @@ mod fit_report;
 mod gains;
 mod locate;
 mod map;
+pub mod option_text;
 mod options;
 mod point_rows;
 mod provenance;
@@ -77,8 +79,10 @@ mod sensor;
 mod simulate;
 mod study;
 mod study_page;
+mod summary_text;
 mod table;
 
+pub use advice::advice;
 pub use aoa::{aoa_table, measurement, AoaTable};
 pub use calibrate::{calibrate, Calibrated};
 pub use correct::{correct, Corrected};
@@ -100,6 +104,7 @@ pub use simulate::{
     SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
 };
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
+pub use summary_text::summary_text;
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
 
 pub use psdcal_calib::CalibError;

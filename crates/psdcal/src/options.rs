@@ -152,13 +152,31 @@ impl CalibrationOptions {
             return Err("no parameter to estimate; free at least one, e.g. f,cx,cy,k1,k2".into());
         }
         if self.fit_gains && !with_amplitudes {
-            return Err("estimating the gains needs the electrode amplitudes (signals)".into());
+            return Err(
+                "estimating the gains ('gains' in the fitted list) needs the electrode \
+                        amplitudes: give signals.csv instead of observations"
+                    .into(),
+            );
+        }
+        if known_gains && !with_amplitudes {
+            return Err(
+                "known gains (gains.json) are divided out of the electrode amplitudes: \
+                        give signals.csv instead of observations"
+                    .into(),
+            );
         }
         if self.fit_gains && known_gains {
-            return Err("known gains are held fixed: they cannot also be estimated".into());
+            return Err(
+                "known gains (gains.json) are held fixed: drop 'gains' from the fitted \
+                        list, or drop the gains file"
+                    .into(),
+            );
         }
         if let Some((p, _)) = self.fixed.iter().find(|(p, _)| self.free.contains(p)) {
-            return Err(format!("{p} is both fixed and estimated; drop one of them"));
+            return Err(format!(
+                "{p} is both fixed (set to a value) and estimated (in the fitted list); drop one \
+                 of them"
+            ));
         }
         Ok(())
     }

@@ -66,6 +66,14 @@ pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
         )?),
         None => None,
     };
+    let content = report_content(request, &loaded, data.as_ref())?;
+    let svgs: Vec<String> = content
+        .plots
+        .iter()
+        .map(Plot::svg)
+        .collect::<Result<_, _>>()?;
+    // The folder is created only once the page can be drawn: a failure
+    // leaves nothing behind.
     std::fs::create_dir_all(&request.out).map_err(|e| Error::OutputFolder {
         path: request.out.clone(),
         message: format!(
@@ -73,12 +81,6 @@ pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
             request.out.display()
         ),
     })?;
-    let content = report_content(request, &loaded, data.as_ref())?;
-    let svgs: Vec<String> = content
-        .plots
-        .iter()
-        .map(Plot::svg)
-        .collect::<Result<_, _>>()?;
     let page = calibration_page(&content, &svgs);
     let html = request.out.join("report.html");
     write_atomic_bytes(&html, page.render().as_bytes())?;
