@@ -20,7 +20,7 @@ fn lenses() -> [SensorModel; 2] {
 fn correct_templates_blame_no_led() {
     for truth in lenses() {
         for seed in 1..=10 {
-            let s = support::scenario(truth.clone(), 12, SIGMA_MM, seed);
+            let s = support::scenario(truth, 12, SIGMA_MM, seed);
             assert_eq!(
                 misplaced_led(&s.data),
                 None,
@@ -35,7 +35,7 @@ fn correct_templates_blame_no_led() {
 fn one_mistyped_led_is_found() {
     for truth in lenses() {
         for seed in 1..=6u64 {
-            let s = support::scenario(truth.clone(), 12, SIGMA_MM, seed);
+            let s = support::scenario(truth, 12, SIGMA_MM, seed);
             let led = (seed as usize * 5) % s.data.template.len();
             // A dropped or doubled digit, a wrong sign, a swapped coordinate.
             let x = s.data.template[led].x;
@@ -58,7 +58,7 @@ fn one_mistyped_led_is_found() {
 #[test]
 fn a_failed_calibration_names_the_mistyped_led() {
     let truth = SensorModel::paper_lens2();
-    let s = support::scenario(truth.clone(), 12, SIGMA_MM, 3);
+    let s = support::scenario(truth, 12, SIGMA_MM, 3);
     let mut data = s.data.clone();
     data.template[0].x *= 10.0;
     let options = CalibrateOptions::default();
