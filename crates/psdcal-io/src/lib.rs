@@ -10,6 +10,7 @@
 //!   (the facade writes each answer after the row's original columns);
 //! - [`Calibration`] — calibration.json, versioned, read with
 //!   [`read_calibration`] and written with [`write_calibration`];
+//! - [`Scan`] — scan.csv, a lensless scan of the PSD (points or amplitudes);
 //! - [`RigFile`] — rig.json, sensors with poses in a world frame, and
 //!   [`RigObservations`], what they measured per emitter.
 //!
@@ -41,6 +42,7 @@ mod points;
 mod rig;
 mod rig_observations;
 mod same_file;
+mod scan;
 mod signals;
 mod summary;
 mod template;
@@ -71,6 +73,7 @@ pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
 pub use rig::{read_rig, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION};
 pub use rig_observations::{RigObservation, RigObservations};
 pub use same_file::refuse_overwrite;
+pub use scan::{Scan, ScanPoints, ScanReading, ScanRow, SCAN_DUPLICATE_MM};
 pub use signals::{SignalRow, Signals};
 pub use summary::{DataSetSummary, ImageSummary, LineSummary, TemplateSummary};
 pub use template::{Led, LineGroup, Template};
