@@ -57,6 +57,12 @@ pub enum Command {
     /// Estimate the amplifier gains from equal-current records (electrical calibration)
     #[command(after_help = crate::cli_gains::GAINS_EXAMPLES)]
     Gains(crate::cli_gains::GainsArgs),
+    /// The PSD's own non-linearity map from a lensless scan (psd_map.json for calibrate --psd-map)
+    #[command(after_help = crate::cmd_psd_map::PSD_MAP_EXAMPLES)]
+    PsdMap(crate::cmd_psd_map::PsdMapArgs),
+    /// Simulate a lensless raster scan of the PSD (scan.csv for psd-map)
+    #[command(after_help = crate::cmd_psd_map::PSD_MAP_EXAMPLES)]
+    SimulateScan(crate::cmd_simulate_scan::SimulateScanArgs),
     /// Correct measured points (or electrode amplitudes) to ideal points with a calibration
     #[command(after_help = CORRECT_EXAMPLES)]
     Correct(CorrectArgs),
@@ -233,6 +239,8 @@ pub struct CalibrateConfig {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Job {
     Gains(crate::cli_gains::GainsArgs),
+    PsdMap(crate::cmd_psd_map::PsdMapArgs),
+    SimulateScan(crate::cmd_simulate_scan::SimulateScanArgs),
     Simulate(crate::cli_sim::SimulateArgs),
     Study(crate::cli_sim::StudyConfig),
     Demo(crate::cli_sim::DemoArgs),
@@ -270,6 +278,8 @@ impl Cli {
                 })
             }
             Command::Gains(args) => Job::Gains(args),
+            Command::PsdMap(args) => Job::PsdMap(args),
+            Command::SimulateScan(args) => Job::SimulateScan(args),
             Command::Simulate(args) => Job::Simulate(args),
             Command::Study(args) => Job::Study(args.into_config()),
             Command::Demo(args) => Job::Demo(args),

@@ -31,6 +31,11 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
             (inputs, outputs)
         }
         Job::Gains(g) => (vec![("--signals", g.signals.as_path())], out(&g.out)),
+        Job::SimulateScan(s) => (Vec::new(), vec![("--out", s.out.as_path())]),
+        Job::PsdMap(m) => (
+            vec![("--scan", m.scan.as_path())],
+            vec![("--out", m.out.as_path())],
+        ),
         Job::Correct(c) => (
             vec![
                 ("--calibration", c.calibration.as_path()),

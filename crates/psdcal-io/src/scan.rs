@@ -19,6 +19,7 @@ use std::path::Path;
 use nalgebra::Vector2;
 use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
 
+use crate::atomic::write_atomic;
 use crate::csv_table::CsvTable;
 use crate::error::{IoError, Location};
 use crate::signals::impact_point_at;
@@ -194,6 +195,40 @@ impl Scan {
         }
         Ok(out)
     }
+}
+
+/// Writes scan.csv atomically: `x_stage_mm, y_stage_mm`, then `x_mm, y_mm`
+/// when `measured` is given and `vx1, vx2, vy1, vy2` when `amplitudes` is
+/// (numbers in shortest round-trip form).
+pub fn write_scan(
+    path: impl AsRef<Path>,
+    stage: &[Vector2<f64>],
+    measured: Option<&[Vector2<f64>]>,
+    amplitudes: Option<&[Amplitudes]>,
+) -> Result<(), IoError> {
+    use std::io::Write;
+    let n = |v: f64| crate::number_text::number_text(v);
+    write_atomic(path, |w| {
+        let mut header = vec!["x_stage_mm", "y_stage_mm"];
+        if measured.is_some() {
+            header.extend(["x_mm", "y_mm"]);
+        }
+        if amplitudes.is_some() {
+            header.extend(["vx1", "vx2", "vy1", "vy2"]);
+        }
+        writeln!(w, "{}", header.join(","))?;
+        for (i, s) in stage.iter().enumerate() {
+            let mut row = vec![n(s.x), n(s.y)];
+            if let Some(m) = measured.and_then(|m| m.get(i)) {
+                row.extend([n(m.x), n(m.y)]);
+            }
+            if let Some(a) = amplitudes.and_then(|a| a.get(i)) {
+                row.extend([n(a.vx1), n(a.vx2), n(a.vy1), n(a.vy2)]);
+            }
+            writeln!(w, "{}", row.join(","))?;
+        }
+        Ok(())
+    })
 }
 
 #[cfg(test)]
