@@ -155,6 +155,10 @@ pub struct CalibrateArgs {
     /// replacement; seed 1 by default), where the linear one is not enough
     #[arg(long, value_name = "METHOD", default_value = "linear", value_parser = parse_uncertainty)]
     pub uncertainty: Uncertainty,
+    /// The PSD's non-linearity map from `psdcal psd-map`, first in the
+    /// model and held fixed (its uncertainty carried)
+    #[arg(long, value_name = "FILE")]
+    pub psd_map: Option<PathBuf>,
     /// Value of a fixed parameter, NAME=VALUE (repeatable), e.g. l1=-1.3058e-3
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment, allow_negative_numbers = true)]
     pub set: Vec<(Param, f64)>,
@@ -337,6 +341,7 @@ impl Cli {
                         normalize: !args.no_normalize,
                         robust: args.robust,
                         uncertainty: args.uncertainty,
+                        psd_map: args.psd_map,
                     },
                 })
             }

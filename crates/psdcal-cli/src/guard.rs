@@ -26,6 +26,7 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
         Job::Calibrate(c) => {
             let mut inputs = vec![("--template", c.template.as_path()), points(&c.points)];
             inputs.extend(c.gains_file.iter().map(|p| ("--gains", p.as_path())));
+            inputs.extend(c.options.psd_map.iter().map(|p| ("--psd-map", p.as_path())));
             let mut outputs = vec![("--out", c.out.as_path())];
             outputs.extend(c.residuals.iter().map(|p| ("--residuals", p.as_path())));
             (inputs, outputs)

@@ -57,8 +57,8 @@ pub use atomic::{write_atomic, write_atomic_bytes};
 pub use calibration::{
     read_calibration, write_calibration, BootstrapRecord, Calibration, CostKind, Covariance,
     Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile, IntrinsicsRecord, Provenance,
-    SensorSize, Software, StdDevs, ValidRegionRecord, CALIBRATION_FORMAT, CALIBRATION_VERSION,
-    GAIN_NAMES,
+    PsdMapStageCovariance, PsdMapStageRecord, SensorSize, Software, StdDevs, ValidRegionRecord,
+    CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
 };
 pub use coverage::{Bounds, Coverage};
 pub use error::{ColumnRef, IoError, Location};

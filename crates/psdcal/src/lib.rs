@@ -59,6 +59,7 @@
 
 mod aoa;
 mod calibrate;
+mod calibrate_map;
 mod convert;
 mod correct;
 mod dataset;
