@@ -46,6 +46,23 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
         None => None,
     };
     let mut calibrate_options = convert::calibrate_options(options);
+    if let (Some(map), Some(path)) = (&map, &options.psd_map) {
+        let points: Vec<_> = data
+            .images
+            .iter()
+            .flat_map(|image| {
+                image.points.iter().map(|obs| {
+                    let led = set
+                        .template
+                        .leds
+                        .get(obs.led)
+                        .map_or_else(|| format!("#{}", obs.led), |l| l.id.clone());
+                    (image.id.as_str(), led, obs.measured)
+                })
+            })
+            .collect();
+        calibrate_map::check_data_in_hull(map, path, &points)?;
+    }
     if let Some(map) = &map {
         calibrate_options.base = calibrate_map::with_map(&calibrate_options.base, map)?;
     }

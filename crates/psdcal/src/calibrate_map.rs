@@ -30,6 +30,28 @@ pub(crate) fn load(path: &Path, geometry: &PsdGeometry) -> Result<MapInput> {
     Ok(MapInput { file, loaded })
 }
 
+/// Refuses data points outside the map's hull (`points`: image, LED,
+/// measured point).
+pub(crate) fn check_data_in_hull(
+    map: &MapInput,
+    path: &Path,
+    points: &[(&str, String, nalgebra::Vector2<f64>)],
+) -> Result<()> {
+    let outside: Vec<_> = points
+        .iter()
+        .filter(|(_, _, m)| !map.loaded.stage.contains_input(m))
+        .collect();
+    match outside.first() {
+        None => Ok(()),
+        Some((image, led, m)) => Err(Error::DataOutsidePsdMap {
+            map: path.display().to_string(),
+            outside: outside.len(),
+            points: points.len(),
+            first: format!("image {image}, LED {led} at ({:.4}, {:.4}) mm", m.x, m.y),
+        }),
+    }
+}
+
 /// `base` with the map first among its distortion stages, at its values.
 pub(crate) fn with_map(base: &Model, map: &MapInput) -> Result<Model> {
     let stage = &map.loaded.stage;
