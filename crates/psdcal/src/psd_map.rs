@@ -30,7 +30,7 @@ pub fn parse_psd_map_model(text: &str) -> std::result::Result<ModelChoice, Strin
         .ok_or_else(|| {
             format!(
                 "'{text}' is not a map model; expected auto, poly:N (N = 0 to 12) or spline:N \
-             (N = 1 to 40 cells per side)"
+             (N = 1 to 20 cells per side)"
             )
         })
 }

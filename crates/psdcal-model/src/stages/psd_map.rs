@@ -41,8 +41,8 @@ use crate::ModelError;
 
 /// Highest polynomial order.
 pub const MAX_POLY_ORDER: usize = 12;
-/// Most spline cells along an axis.
-pub const MAX_SPLINE_CELLS: usize = 40;
+/// Most spline cells along an axis (23² = 529 coefficients per axis).
+pub const MAX_SPLINE_CELLS: usize = 20;
 /// The stage's kind in calibration.json.
 pub const PSD_MAP_KIND: &str = "psd_map";
 
