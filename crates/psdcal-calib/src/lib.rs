@@ -22,6 +22,7 @@ pub use initialize::{initialize, InitOptions, InitReport, InitRoute, Initializat
 pub use preliminary::{estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport};
 pub use zhang::{closed_form, pose_from_homography, ClosedFormSolution};
 pub mod bootstrap;
+pub mod carried;
 pub mod covariance;
 pub mod diagnostics;
 pub mod electrical;
@@ -33,6 +34,7 @@ pub mod report;
 pub mod weighting;
 
 pub use bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
+pub use carried::{carry_fixed_covariance, CarriedCovariance};
 pub use covariance::{covariance, Covariance, CovarianceMethod};
 pub use diagnostics::{diagnose, DiagnosticOptions, DiagnosticReport};
 pub use electrical::{equal_current_gains, GainEstimate};

@@ -59,6 +59,12 @@ pub enum Command {
     /// Estimate the amplifier gains from equal-current records (electrical calibration)
     #[command(after_help = crate::cli_gains::GAINS_EXAMPLES)]
     Gains(crate::cli_gains::GainsArgs),
+    /// The PSD's own non-linearity map from a lensless scan (psd_map.json for calibrate --psd-map)
+    #[command(after_help = crate::cmd_psd_map::PSD_MAP_EXAMPLES)]
+    PsdMap(crate::cmd_psd_map::PsdMapArgs),
+    /// Simulate a lensless raster scan of the PSD (scan.csv for psd-map)
+    #[command(after_help = crate::cmd_psd_map::PSD_MAP_EXAMPLES)]
+    SimulateScan(crate::cmd_simulate_scan::SimulateScanArgs),
     /// Correct measured points (or electrode amplitudes) to ideal points with a calibration
     #[command(after_help = CORRECT_EXAMPLES)]
     Correct(CorrectArgs),
@@ -151,6 +157,10 @@ pub struct CalibrateArgs {
     /// replacement; seed 1 by default), where the linear one is not enough
     #[arg(long, value_name = "METHOD", default_value = "linear", value_parser = parse_uncertainty)]
     pub uncertainty: Uncertainty,
+    /// The PSD's non-linearity map from `psdcal psd-map`, first in the
+    /// model and held fixed (its uncertainty carried)
+    #[arg(long, value_name = "FILE")]
+    pub psd_map: Option<PathBuf>,
     /// Value of a fixed parameter, NAME=VALUE (repeatable), e.g. l1=-1.3058e-3
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment, allow_negative_numbers = true)]
     pub set: Vec<(Param, f64)>,
@@ -231,6 +241,8 @@ pub struct CalibrateConfig {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Job {
     Gains(crate::cli_gains::GainsArgs),
+    PsdMap(crate::cmd_psd_map::PsdMapArgs),
+    SimulateScan(crate::cmd_simulate_scan::SimulateScanArgs),
     Simulate(crate::cli_sim::SimulateArgs),
     Study(crate::cli_sim::StudyConfig),
     Demo(crate::cli_sim::DemoArgs),
@@ -268,6 +280,8 @@ impl Cli {
                 })
             }
             Command::Gains(args) => Job::Gains(args),
+            Command::PsdMap(args) => Job::PsdMap(args),
+            Command::SimulateScan(args) => Job::SimulateScan(args),
             Command::Simulate(args) => Job::Simulate(args),
             Command::Study(args) => Job::Study(args.into_config()),
             Command::Demo(args) => Job::Demo(args),
@@ -293,6 +307,7 @@ impl Cli {
                     normalize: !args.no_normalize,
                     robust: args.robust,
                     uncertainty: args.uncertainty,
+                    psd_map: args.psd_map,
                 };
                 let signals = matches!(points, PointSource::Signals(_));
                 options.check(signals, args.gains.is_some()).map_err(|m| {

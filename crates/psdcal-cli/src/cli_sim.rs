@@ -29,6 +29,10 @@ pub struct SimulateArgs {
     /// The PSD's own distortion (l1 = -1.3058e-3)
     #[arg(long)]
     pub psd_distortion: bool,
+    /// The PSD's own non-radial non-linearity (about 1 % of the size at the
+    /// edges; map it with simulate-scan and psd-map)
+    #[arg(long)]
+    pub psd_nonlinearity: bool,
     /// Number of images (template poses), at least 3
     #[arg(long, value_name = "N", default_value = "9", value_parser = parse_images)]
     pub images: usize,

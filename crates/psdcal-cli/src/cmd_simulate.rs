@@ -13,6 +13,7 @@ pub fn run(args: &SimulateArgs, output: Output) -> anyhow::Result<()> {
         snr_db: args.snr,
         imbalance: args.imbalance,
         psd_distortion: args.psd_distortion,
+        psd_nonlinearity: args.psd_nonlinearity,
         images: args.images,
         template: args.template.into(),
         record_cycles: args.record_cycles,

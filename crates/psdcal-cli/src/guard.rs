@@ -27,11 +27,17 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
         Job::Calibrate(c) => {
             let mut inputs = vec![("--template", c.template.as_path()), points(&c.points)];
             inputs.extend(c.gains_file.iter().map(|p| ("--gains", p.as_path())));
+            inputs.extend(c.options.psd_map.iter().map(|p| ("--psd-map", p.as_path())));
             let mut outputs = vec![("--out", c.out.as_path())];
             outputs.extend(c.residuals.iter().map(|p| ("--residuals", p.as_path())));
             (inputs, outputs)
         }
         Job::Gains(g) => (vec![("--signals", g.signals.as_path())], out(&g.out)),
+        Job::SimulateScan(s) => (Vec::new(), vec![("--out", s.out.as_path())]),
+        Job::PsdMap(m) => (
+            vec![("--scan", m.scan.as_path())],
+            vec![("--out", m.out.as_path())],
+        ),
         Job::Correct(c) => (
             vec![
                 ("--calibration", c.calibration.as_path()),

@@ -19,8 +19,10 @@ mod cmd_demo;
 mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
+pub mod cmd_psd_map;
 mod cmd_report;
 mod cmd_simulate;
+pub mod cmd_simulate_scan;
 mod cmd_study;
 mod guard;
 mod report;
@@ -49,6 +51,8 @@ pub fn main() -> ExitCode {
         Job::Check(config) => cmd_check::run(config, output),
         Job::Calibrate(config) => cmd_calibrate::run(config, output),
         Job::Gains(args) => cmd_gains::run(args, output),
+        Job::PsdMap(args) => cmd_psd_map::run(args, output),
+        Job::SimulateScan(args) => cmd_simulate_scan::run(args, output),
         Job::Simulate(args) => cmd_simulate::run(args, output),
         Job::Study(config) => cmd_study::run(config, output),
         Job::Demo(args) => cmd_demo::run(args, output),

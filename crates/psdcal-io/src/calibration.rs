@@ -48,6 +48,7 @@ use crate::atomic::write_atomic_bytes;
 use crate::error::{json_error, IoError, Location};
 
 mod provenance;
+mod psd_map_stage;
 mod records;
 mod region;
 mod rules;
@@ -58,6 +59,7 @@ mod tests_v2;
 mod v2;
 
 pub use provenance::{Diagnostic, InputFile, Provenance};
+pub use psd_map_stage::{PsdMapStageCovariance, PsdMapStageRecord};
 pub use records::{
     BootstrapRecord, CostKind, Covariance, FitSummary, GainsRecord, ImageFit, IntrinsicsRecord,
     SensorSize, Software, StdDevs,
@@ -117,6 +119,10 @@ pub struct Calibration {
     /// needed ([`Calibration::valid_region`]).
     #[serde(skip)]
     pub valid_region: Option<ValidRegionRecord>,
+    /// The PSD's non-linearity map, first among the distortion stages
+    /// (version 2 only, docs/model.md §8.3); `None` without one.
+    #[serde(skip)]
+    pub psd_map: Option<PsdMapStageRecord>,
 }
 
 impl Calibration {
@@ -149,6 +155,7 @@ impl Calibration {
             diagnostics: Vec::new(),
             provenance: None,
             valid_region: None,
+            psd_map: None,
         }
     }
 
@@ -278,6 +285,12 @@ impl Calibration {
     /// The JSON text (pretty-printed, newline-terminated), after validation.
     pub fn to_json_string(&self, destination: &str) -> Result<String, IoError> {
         self.validate(destination)?;
+        if self.psd_map.is_some() && self.version < 2 {
+            return Err(IoError::Invalid {
+                at: Location::file(destination),
+                message: "a calibration with a PSD map needs calibration.json version 2".into(),
+            });
+        }
         let encoded = if self.version >= 2 {
             serde_json::to_string_pretty(&v2::FileV2::from_record(self))
         } else {

@@ -10,6 +10,9 @@
 //!   (the facade writes each answer after the row's original columns);
 //! - [`Calibration`] — calibration.json, versioned, read with
 //!   [`read_calibration`] and written with [`write_calibration`];
+//! - [`Scan`] — scan.csv, a lensless scan of the PSD (points or amplitudes);
+//! - [`PsdMapFile`] — psd_map.json, a fitted PSD map ([`read_psd_map`],
+//!   [`write_psd_map`]);
 //! - [`RigFile`] — rig.json, sensors with poses in a world frame, and
 //!   [`RigObservations`], what they measured per emitter.
 //!
@@ -38,9 +41,11 @@ mod limits;
 mod number_text;
 mod observations;
 mod points;
+mod psd_map_file;
 mod rig;
 mod rig_observations;
 mod same_file;
+mod scan;
 mod signals;
 mod summary;
 mod template;
@@ -52,8 +57,8 @@ pub use atomic::{write_atomic, write_atomic_bytes};
 pub use calibration::{
     read_calibration, write_calibration, BootstrapRecord, Calibration, CostKind, Covariance,
     Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile, IntrinsicsRecord, Provenance,
-    SensorSize, Software, StdDevs, ValidRegionRecord, CALIBRATION_FORMAT, CALIBRATION_VERSION,
-    GAIN_NAMES,
+    PsdMapStageCovariance, PsdMapStageRecord, SensorSize, Software, StdDevs, ValidRegionRecord,
+    CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
 };
 pub use coverage::{Bounds, Coverage};
 pub use error::{ColumnRef, IoError, Location};
@@ -68,9 +73,15 @@ pub use limits::{
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
+pub use psd_map_file::{
+    read_psd_map, write_psd_map, LoadedPsdMap, MapCandidateRecord, MapCoefficients,
+    MapCovarianceRecord, MapFitRecord, MapResidualsRecord, PsdMapFile, PSD_MAP_FORMAT,
+    PSD_MAP_VERSION,
+};
 pub use rig::{read_rig, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION};
 pub use rig_observations::{RigObservation, RigObservations};
 pub use same_file::refuse_overwrite;
+pub use scan::{write_scan, Scan, ScanPoints, ScanReading, ScanRow, SCAN_DUPLICATE_MM};
 pub use signals::{SignalRow, Signals};
 pub use summary::{DataSetSummary, ImageSummary, LineSummary, TemplateSummary};
 pub use template::{Led, LineGroup, Template};

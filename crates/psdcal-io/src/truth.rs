@@ -32,6 +32,9 @@ pub struct SimulationSettings {
     pub imbalance: bool,
     /// PSD distortion switched on.
     pub psd_distortion: bool,
+    /// The PSD's non-radial non-linearity switched on (absent in older files).
+    #[serde(default)]
+    pub psd_nonlinearity: bool,
     /// Template name.
     pub template: String,
     /// Number of images.

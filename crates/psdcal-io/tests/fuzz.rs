@@ -14,9 +14,10 @@
 use std::path::{Path, PathBuf};
 
 use psdcal_io::{
-    read_gains, read_truth, Calibration, IoError, Observations, PointInput, Points, RigFile,
-    RigObservations, Signals, Template,
+    read_gains, read_psd_map, read_truth, Calibration, IoError, Observations, PointInput, Points,
+    RigFile, RigObservations, Scan, Signals, Template,
 };
+use psdcal_model::{ChannelGains, PsdGeometry};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -121,7 +122,37 @@ fn read_everywhere(dir: &Path, name: &str, bytes: &[u8]) {
     if let Err(e) = read_truth(&path) {
         check_error(src, &e);
     }
+    match Scan::from_reader(src, bytes) {
+        Ok(scan) => match scan.points(&PsdGeometry::default(), &ChannelGains::UNIT) {
+            Ok(p) => finite(p.stage.iter().chain(&p.measured).flat_map(|q| [q.x, q.y])),
+            Err(e) => check_error(src, &e),
+        },
+        Err(e) => check_error(src, &e),
+    }
+    match read_psd_map(&path) {
+        Ok((_, map)) => finite(map.block.iter().copied()),
+        Err(e) => check_error(src, &e),
+    }
 }
+
+const SCAN: &str =
+    "x_stage_mm,y_stage_mm,x_mm,y_mm\n0,0,0.001,0\n1,0,0.998,0.002\n0,1,0,0.997\n1,1,0.996,0.995\n";
+
+const PSD_MAP: &str = r#"{"format": "psdcal-psd-map", "version": 1,
+"sensor": {"lx_mm": 9.0, "ly_mm": 9.0}, "model": "poly:1",
+"stage": {"basis": "polynomial", "order": 1, "frame_mm": [-4.5, -4.5, 4.5, 4.5],
+  "hull_mm": [[-4.5, -4.5], [4.5, -4.5], [4.5, 4.5], [-4.5, 4.5]]},
+"coefficients": {"x": [0.001, -0.002, 0.0], "y": [0.0, 0.0, 0.003]},
+"covariance": {"sigma_x_mm": 0.0003, "sigma_y_mm": 0.0003,
+  "unit": [[0.01, 0.0, 0.0], [0.0, 0.02, 0.0], [0.0, 0.0, 0.02]]},
+"fit": {"points": 9, "from_amplitudes": false, "rejected_lines": [], "folds": 5,
+  "cv_rms_um": 0.5, "rms_um": 0.4, "sigma_x_um": 0.3, "sigma_y_um": 0.3,
+  "map_sigma_um": 0.05, "effective_terms": 3.0,
+  "candidates": [{"model": "poly:1", "cv_rms_um": 0.5}]},
+"residuals": {"x_mm": [0.0], "y_mm": [0.0], "dx_um": [0.1], "dy_um": [-0.1]},
+"provenance": {"psdcal_version": "0.1.0", "command": "", "options": {}, "inputs": [],
+  "created_utc": "2026-12-01T00:00:00Z"}}
+"#;
 
 const TOKENS: &[&str] = &[
     "nan",
@@ -230,6 +261,8 @@ fn seeds() -> Vec<(String, Vec<u8>)> {
     out.push(("rig.json".into(), RIG.as_bytes().to_vec()));
     out.push(("gains.json".into(), GAINS.as_bytes().to_vec()));
     out.push(("rig_points.csv".into(), RIG_POINTS.as_bytes().to_vec()));
+    out.push(("scan.csv".into(), SCAN.as_bytes().to_vec()));
+    out.push(("psd_map.json".into(), PSD_MAP.as_bytes().to_vec()));
     out
 }
 

@@ -52,7 +52,8 @@ pub enum LocateError {
          {distance_mm:.4} mm from the optical centre, and the region ends {limit_mm:.4} mm from \
          it in this direction ({})",
         if *.fold {
-            "where the distortion correction folds over: past there it has no unique answer"
+            "where the distortion correction folds over, or a PSD map's scan ends: past there \
+             it has no unique answer"
         } else {
             "the edge of the checked zone, far off the active area"
         }

@@ -47,6 +47,7 @@ pub mod caution;
 mod error;
 pub mod maps;
 pub mod plane;
+pub mod psd_map;
 pub mod rig;
 pub mod sensitivity;
 pub mod sensor;
@@ -61,6 +62,7 @@ pub use caution::{status_of, Caution};
 pub use error::LocateError;
 pub use maps::{error_map, ErrorMap, ErrorSource, MapCell, MapOptions, MapValues, MAX_GRID};
 pub use plane::{intersect_plane, Plane, PlaneIntersection};
+pub use psd_map::{MapCorrection, SensorPsdMap};
 pub use rig::{Rig, RigLocation, RigSensor};
 pub use sensitivity::{
     aoa_deviation, paper_aoa_error, paper_aoa_error_at, paper_sensitivity_focal,

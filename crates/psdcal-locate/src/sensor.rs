@@ -17,12 +17,15 @@ use nalgebra::{DMatrix, Matrix2, Matrix2x3, Matrix3, Vector2};
 use psdcal_model::sensor::{
     impact_point_gain_jacobian, impact_point_with_gains, is_on_active_area,
 };
-use psdcal_model::{Amplitudes, ChannelGains, Model, Param, PsdGeometry, SensorModel, ValidRegion};
+use psdcal_model::{
+    Amplitudes, ChannelGains, Model, Param, PsdGeometry, SensorModel, Stage, ValidRegion,
+};
 
 use crate::aoa::{alpha_wrt_ray, angle_of_arrival_with_jacobians, AngleOfArrival, AoaJacobians};
 use crate::caution::Caution;
 use crate::error::{finite, LocateError};
 use crate::plane::{intersect_plane, Plane, PlaneIntersection};
+use crate::psd_map::{MapCorrection, SensorPsdMap};
 use crate::uncertainty::{point_noise_covariance, propagate, ParameterCovariance};
 
 /// What a sensor measured for one emitter.
@@ -97,6 +100,9 @@ pub struct CalibratedSensor {
     /// region stored with the calibration ([`Self::with_valid_region`]).
     /// Recompute it ([`Self::refresh_valid_region`]) after changing `model`.
     pub valid_region: ValidRegion,
+    /// The PSD's non-linearity map, applied to the measured point before
+    /// `model` (docs/model.md §8.3); `None` without one.
+    pub psd_map: Option<SensorPsdMap>,
 }
 
 /// A measured point and, for amplitude input through gains, `∂m/∂g`.
@@ -193,6 +199,38 @@ impl CalibratedSensor {
             geometry,
             gains: None,
             covariance: ParameterCovariance::none(),
+            psd_map: None,
+        }
+    }
+
+    /// The same sensor with a PSD map first in its chain; the valid region
+    /// is recomputed for the whole chain (it ends at the map's hull).
+    pub fn with_psd_map(mut self, map: SensorPsdMap) -> Self {
+        self.psd_map = Some(map);
+        self.valid_region = ValidRegion::of_model(&self.chain(), &self.geometry);
+        self
+    }
+
+    /// The measured point corrected by the PSD map (the identity without
+    /// one), with `∂m'/∂m`; outside the map's hull, `BeyondValidRegion`.
+    pub fn map_corrected(&self, point: &Vector2<f64>) -> Result<MapCorrection, LocateError> {
+        match &self.psd_map {
+            None => Ok(MapCorrection {
+                point: *point,
+                wrt_measured: Matrix2::identity(),
+                wrt_block: Vec::new(),
+            }),
+            Some(map) if !map.contains(point) => {
+                let distance_mm = (point - self.valid_region.centre()).norm();
+                Err(LocateError::BeyondValidRegion {
+                    x: point.x,
+                    y: point.y,
+                    distance_mm,
+                    limit_mm: distance_mm,
+                    fold: false,
+                })
+            }
+            Some(map) => Ok(map.correct(point)),
         }
     }
 
@@ -205,7 +243,10 @@ impl CalibratedSensor {
 
     /// Recomputes the valid region from `model` and `geometry`.
     pub fn refresh_valid_region(&mut self) {
-        self.valid_region = ValidRegion::of_sensor_model(&self.model, &self.geometry);
+        self.valid_region = match self.psd_map {
+            None => ValidRegion::of_sensor_model(&self.model, &self.geometry),
+            Some(_) => ValidRegion::of_model(&self.chain(), &self.geometry),
+        };
     }
 
     /// `Ok` when `point` is inside the valid region, else
@@ -231,11 +272,21 @@ impl CalibratedSensor {
     /// standard chain and its gains stage, unit gains when the sensor has
     /// none): the flat parameter names its covariance is resolved against.
     pub fn chain(&self) -> Model {
-        Model::standard_with_gains(
+        let chain = Model::standard_with_gains(
             &self.model,
             self.geometry,
             &self.gains.unwrap_or(ChannelGains::UNIT),
-        )
+        );
+        let Some(map) = &self.psd_map else {
+            return chain;
+        };
+        let Ok(mut with_map) = chain.with_stage(0, Box::new(map.stage.clone())) else {
+            return chain;
+        };
+        for (p, v) in map.stage.parameters().iter().zip(&map.block) {
+            let _ = with_map.set(&p.name, *v);
+        }
+        with_map
     }
 
     /// The measured impact point of a measurement.
@@ -284,7 +335,13 @@ impl CalibratedSensor {
         options.check()?;
         let measured = self.measured_point(measurement)?;
         self.check_valid_region(&measured.point)?;
-        let (aoa, jacobians) = angle_of_arrival_with_jacobians(&self.model, &measured.point)?;
+        let corrected = self.map_corrected(&measured.point)?;
+        let (mut aoa, mut jacobians) =
+            angle_of_arrival_with_jacobians(&self.model, &corrected.point)?;
+        // ∂(a, b)/∂m' before the map's chain rule, for the map's columns.
+        let ray_wrt_corrected = jacobians.ray_wrt_measured;
+        aoa.measured = measured.point;
+        jacobians.ray_wrt_measured = ray_wrt_corrected * corrected.wrt_measured;
         let wrt_gains = measured.wrt_gains.map(|g| jacobians.ray_wrt_measured * g);
         let ray_covariance_calibration = if self.covariance.is_empty() {
             Matrix2::zeros()
@@ -301,6 +358,17 @@ impl CalibratedSensor {
             if let (Some(g), Some(columns)) = (wrt_gains, chain.gain_columns()) {
                 for (k, c) in columns.into_iter().enumerate() {
                     wrt_params.set_column(c, &g.column(k));
+                }
+            }
+            if let Some(map) = &self.psd_map {
+                for (k, p) in map.stage.parameters().iter().enumerate() {
+                    if let Some(c) = chain.index(&p.name) {
+                        let column = Vector2::new(
+                            corrected.wrt_block[2 * k],
+                            corrected.wrt_block[2 * k + 1],
+                        );
+                        wrt_params.set_column(c, &(ray_wrt_corrected * column));
+                    }
                 }
             }
             propagate(&self.covariance, &chain, &wrt_params)?

@@ -15,6 +15,7 @@
 //!   what calibration estimates;
 //! - [`covariance`]: [`ParameterCovariance`], the one covariance type (named
 //!   parameters, validated symmetric matrix);
+//! - [`hull`]: [`ConvexHull`], the domain of a stage fitted to a scan;
 //! - [`fit`]: what every fit shares: [`CostKind`], [`MIN_IMAGES`];
 //! - [`valid_region`]: where the measured → ideal map is one-to-one
 //!   (docs/model.md §8.2), a radius per ray from the optical centre.
@@ -32,6 +33,7 @@ pub mod diagnostic;
 pub mod distortion;
 mod error;
 pub mod fit;
+pub mod hull;
 pub mod model;
 pub mod model_projection;
 pub mod params;
@@ -47,6 +49,7 @@ pub use diagnostic::{Diagnostic, DiagnosticCode, Severity};
 pub use distortion::CorrectionJacobian;
 pub use error::ModelError;
 pub use fit::{CostKind, MIN_IMAGES, MIN_POINTS_PER_IMAGE};
+pub use hull::ConvexHull;
 pub use model::{ChainJacobian, Model};
 pub use model_projection::PoseJacobians;
 pub use params::{Distortion, Intrinsics, Param, SensorModel, UnknownParam, N_PARAMS};

@@ -529,6 +529,28 @@ impl Model {
         m
     }
 
+    /// Whether `measured` lies in every stage's own domain (docs/model.md
+    /// §8.3: a PSD map is known only on its scan's hull), following the
+    /// point through the chain.
+    pub fn in_domain(&self, measured: &Vector2<f64>) -> bool {
+        if !self.has_domain() {
+            return true;
+        }
+        let mut p = *measured;
+        for (stage, block) in self.stages.iter().zip(&self.blocks) {
+            if !stage.contains_input(&p) {
+                return false;
+            }
+            p = stage.apply(block, &p, None);
+        }
+        true
+    }
+
+    /// Whether some stage has a limited domain ([`Stage::has_domain`]).
+    pub fn has_domain(&self) -> bool {
+        self.stages.iter().any(|s| s.has_domain())
+    }
+
     /// Whether every distortion coefficient is zero (the chain is the
     /// identity up to the pinhole): checked through the stages' neutral
     /// values.

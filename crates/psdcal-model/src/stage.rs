@@ -96,6 +96,19 @@ pub trait Stage: Send + Sync + fmt::Debug {
         Ok(())
     }
 
+    /// Whether the stage is defined at `input` (its own domain: a map fitted
+    /// to a scan is known only on the scan's hull, docs/model.md §8.3); a
+    /// point whose input is outside is outside the model's valid region.
+    /// Everywhere by default.
+    fn contains_input(&self, _input: &Vector2<f64>) -> bool {
+        true
+    }
+
+    /// Whether [`Stage::contains_input`] can be false somewhere.
+    fn has_domain(&self) -> bool {
+        false
+    }
+
     /// Example parameter blocks on which the shared suite checks the stage:
     /// realistic values and harder ones, each a valid model over the
     /// 9 mm × 9 mm active area.

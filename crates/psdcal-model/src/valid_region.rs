@@ -15,6 +15,12 @@
 //! r_i   = sup { t ≤ R_i : det J(c + s u_i) > 1e-12 for every s ∈ [0, t] }
 //! ```
 //!
+//! A point outside a stage's own domain ([`crate::Stage::contains_input`]:
+//! a PSD map's scan hull) counts as `det J ≤ 0`, so the region also ends
+//! where the map is not known (for a convex domain about `c` the rule below
+//! stays inside it: a chord between rays 4° apart is within 6e-4 of the
+//! smaller radius, inside the margin).
+//!
 //! `r_i` is found by stepping along the ray from `c` and bisecting the first
 //! step whose end is not positive (or not finite) to 1e-12 relative; the
 //! stored radius is the bracket's positive end, so it lies before the fold.
@@ -108,8 +114,16 @@ impl ValidRegion {
             return Self::assemble(Vector2::zeros(), vec![0.0; REGION_RAYS], *geometry);
         }
         let mut scratch = Vec::new();
-        let mut det = |p: &Vector2<f64>| model.point_jacobian_with(p, &mut scratch).determinant();
-        let identity = model.distortion_is_identity();
+        // Outside a stage's own domain (a PSD map's scan hull) counts as a
+        // fold: the bisection then finds the domain's edge.
+        let mut det = |p: &Vector2<f64>| {
+            if model.in_domain(p) {
+                model.point_jacobian_with(p, &mut scratch).determinant()
+            } else {
+                f64::NEG_INFINITY
+            }
+        };
+        let identity = model.distortion_is_identity() && !model.has_domain();
         let centre_ok = positive(det(&centre));
         let radius = (0..REGION_RAYS)
             .map(|i| {

@@ -12,7 +12,7 @@ use common::{
     check_jacobian, check_jacobian_with_floor, example_poses, example_template_points, POSE_SCALES,
 };
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
-use psdcal_model::stages::{Gains, Lens, Pinhole, PsdRadial};
+use psdcal_model::stages::{Gains, Lens, MapBasis, MapFrame, Pinhole, PsdMap, PsdRadial};
 use psdcal_model::{
     Amplitudes, ChannelGains, Model, Pose, PsdGeometry, SensorModel, Stage, StageJacobian,
 };
@@ -28,7 +28,18 @@ fn all_stages() -> Vec<Box<dyn Stage>> {
         Box::new(Lens::new()),
         Box::new(Pinhole::new()),
         Box::new(PolyField::new(10, 4.5)),
+        Box::new(psd_map(MapBasis::Polynomial { order: 5 })),
+        Box::new(psd_map(MapBasis::Spline {
+            cells_x: 5,
+            cells_y: 4,
+        })),
     ]
+}
+
+/// A PSD map over the 9 mm active area, defined everywhere (the suite's
+/// points reach the corners; its hull is tested in tests/valid_region.rs).
+fn psd_map(basis: MapBasis) -> PsdMap {
+    PsdMap::new(basis, MapFrame::centred(9.0, 9.0), None).unwrap()
 }
 
 fn points() -> Vec<Vector2<f64>> {

@@ -221,3 +221,56 @@ fn regions_from_radii_round_trip_and_refuse_bad_values() {
     let empty = ValidRegion::of_sensor_model(&m, &geometry);
     assert!(!empty.contains(&Vector2::zeros()));
 }
+
+/// A PSD map known on a scan's hull (a 6 mm × 5 mm box about (0.3, −0.2),
+/// docs/model.md §8.3) ends the region at the hull: each ray's radius is the
+/// distance from the optical centre to the box's edge, computed here by
+/// hand, and points just inside and just outside the box are answered
+/// accordingly.
+#[test]
+fn a_psd_map_hull_bounds_the_region() {
+    use psdcal_model::stages::{MapBasis, MapFrame, PsdMap};
+    use psdcal_model::ConvexHull;
+    let (x0, x1, y0, y1) = (-2.7, 3.3, -2.7, 2.3);
+    let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)].map(|(x, y)| Vector2::new(x, y));
+    let hull = ConvexHull::of_points(&corners).unwrap();
+    let map = PsdMap::new(
+        MapBasis::Polynomial { order: 2 },
+        MapFrame::centred(9.0, 9.0),
+        Some(hull),
+    )
+    .unwrap();
+    let model = Model::standard(&radial(1e-3, 0.0))
+        .with_stage(0, Box::new(map))
+        .unwrap();
+    let region = ValidRegion::of_model(&model, &PsdGeometry::default());
+    let c = Vector2::new(0.5, -0.7);
+    assert!(!region.whole_active_area());
+    for (i, r) in region.radii().iter().enumerate() {
+        let theta = std::f64::consts::TAU * i as f64 / region.rays() as f64;
+        let u = Vector2::new(theta.cos(), theta.sin());
+        let tx = if u.x > 0.0 {
+            (x1 - c.x) / u.x
+        } else if u.x < 0.0 {
+            (x0 - c.x) / u.x
+        } else {
+            f64::INFINITY
+        };
+        let ty = if u.y > 0.0 {
+            (y1 - c.y) / u.y
+        } else if u.y < 0.0 {
+            (y0 - c.y) / u.y
+        } else {
+            f64::INFINITY
+        };
+        let expected = tx.min(ty);
+        // The hull admits points 1e-9 mm outside an edge (HULL_TOLERANCE_MM),
+        // 1e-9 / cos(angle to the edge normal) mm along the ray.
+        assert!((r - expected).abs() < 1e-8, "ray {i}: {r} vs {expected}");
+    }
+    assert!(region.contains(&Vector2::new(3.2, 0.0)));
+    assert!(!region.contains(&Vector2::new(3.35, 0.0)));
+    assert!(region.check(&Vector2::new(0.0, 2.4)).is_err());
+    assert!(model.in_domain(&Vector2::new(0.0, 2.2)));
+    assert!(!model.in_domain(&Vector2::new(0.0, 2.4)));
+}

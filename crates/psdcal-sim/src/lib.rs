@@ -9,11 +9,15 @@
 
 pub mod butterworth;
 mod error;
+pub mod nonlinearity;
+pub mod scan;
 pub mod scenario;
 pub mod signal;
 pub mod simulate;
 
 pub use error::SimError;
+pub use nonlinearity::PsdNonlinearity;
+pub use scan::{simulate_scan, ScanOptions, ScanSample};
 pub use scenario::{Lens, TemplateKind};
 pub use signal::{ChainConfig, SignalChain};
 pub use simulate::{simulate, Simulation, SimulationOptions};

@@ -11,7 +11,9 @@
 //! the requested SNR, band-pass filters and demodulates each channel (§6,
 //! [`crate::signal`]); and the impact point is computed from the demodulated
 //! amplitudes with the balanced formula (the calibration does not know the
-//! gains). Without noise the chain is skipped: it returns the amplitudes
+//! gains). With the PSD's non-linearity switched on, the currents are those
+//! of the point the PSD reports for the true spot ([`crate::nonlinearity`]).
+//! Without noise the chain is skipped: it returns the amplitudes
 //! exactly (its own tests show it), and skipping keeps noise-free studies fast.
 
 use nalgebra::Vector2;
@@ -20,6 +22,7 @@ use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
+use crate::nonlinearity::PsdNonlinearity;
 use crate::scenario::{draw_imbalance, draw_poses, Lens, Template, TemplateKind};
 use crate::signal::SignalChain;
 use crate::SimError;
@@ -39,6 +42,10 @@ pub struct SimulationOptions {
     pub imbalance: bool,
     /// The PSD's own distortion, `l1 = −1.3058e-3`.
     pub psd_distortion: bool,
+    /// The PSD's non-radial non-linearity ([`crate::PsdNonlinearity`]):
+    /// the currents are those of the point the PSD reports.
+    #[serde(default)]
+    pub psd_nonlinearity: bool,
     /// Number of images (template poses).
     pub images: usize,
     /// The template.
@@ -60,6 +67,7 @@ impl Default for SimulationOptions {
             snr_db: Some(40.0),
             imbalance: false,
             psd_distortion: false,
+            psd_nonlinearity: false,
             images: 9,
             template: TemplateKind::Scatter14,
             geometry: PsdGeometry::default(),
@@ -154,8 +162,13 @@ pub fn simulate(options: &SimulationOptions, rng: &mut ChaCha8Rng) -> Result<Sim
         for (led, xy) in template.leds.iter().enumerate() {
             let ideal = truth.project_ideal(pose, xy)?;
             let true_measured = truth.distort(&ideal)?;
+            let reported = if options.psd_nonlinearity {
+                PsdNonlinearity::new(options.geometry).reported(&true_measured)
+            } else {
+                true_measured
+            };
             let clean = scale(
-                &electrode_currents(&options.geometry, &true_measured, options.photocurrent_a)
+                &electrode_currents(&options.geometry, &reported, options.photocurrent_a)
                     .apply_gains(&gains),
                 gain_x1,
             );
@@ -216,8 +229,12 @@ impl Simulation {
                 let Ok(true_measured) = self.truth.distort(&ideal) else {
                     continue;
                 };
-                let amps =
-                    electrode_currents(geometry, &true_measured, 1.0).apply_gains(&self.gains);
+                let reported = if self.options.psd_nonlinearity {
+                    PsdNonlinearity::new(*geometry).reported(&true_measured)
+                } else {
+                    true_measured
+                };
+                let amps = electrode_currents(geometry, &reported, 1.0).apply_gains(&self.gains);
                 let Ok(measured) =
                     psdcal_model::sensor::impact_point_with_gains(geometry, &amps, gains)
                 else {

@@ -24,6 +24,7 @@ fn pipeline(c: &mut Criterion) {
         snr_db: Some(40.0),
         imbalance: false,
         psd_distortion: false,
+        psd_nonlinearity: false,
         images: 12,
         template: TemplateKind::Scatter14,
         record_cycles: DEFAULT_RECORD_CYCLES,

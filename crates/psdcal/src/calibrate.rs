@@ -10,6 +10,7 @@ use psdcal_calib::{CalibrationData, CalibrationResult};
 use psdcal_io::{write_calibration, Calibration, ValidRegionRecord};
 use psdcal_model::ValidRegion;
 
+use crate::calibrate_map;
 use crate::convert;
 use crate::dataset::DataSet;
 use crate::error::{Error, Result};
@@ -41,30 +42,67 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
         .check(set.signals.is_some(), set.known_gains.is_some())
         .map_err(Error::Options)?;
     let data = convert::calibration_data(set, options.fit_gains);
-    let result = psdcal_calib::calibrate(&data, &convert::calibrate_options(options)).map_err(
-        |e| match e {
-            CalibError::MisplacedLed {
-                led,
-                score,
-                next_score,
-                images,
-                cause,
-            } if led < set.template.leds.len() => Error::MisplacedLed {
-                led: set.template.leds[led].id.clone(),
-                template: set.template.source.clone(),
-                line: set.template.leds[led].line_no,
-                score,
-                next_score,
-                images,
-                cause,
-            },
-            e => Error::Calibrate(e),
+    let map = match &options.psd_map {
+        Some(path) => Some(calibrate_map::load(path, &set.options.geometry)?),
+        None => None,
+    };
+    let mut calibrate_options = convert::calibrate_options(options);
+    if let (Some(map), Some(path)) = (&map, &options.psd_map) {
+        let points: Vec<_> = data
+            .images
+            .iter()
+            .flat_map(|image| {
+                image.points.iter().map(|obs| {
+                    let led = set
+                        .template
+                        .leds
+                        .get(obs.led)
+                        .map_or_else(|| format!("#{}", obs.led), |l| l.id.clone());
+                    (image.id.as_str(), led, obs.measured)
+                })
+            })
+            .collect();
+        calibrate_map::check_data_in_hull(map, path, &points)?;
+    }
+    if let Some(map) = &map {
+        calibrate_options.base = calibrate_map::with_map(&calibrate_options.base, map)?;
+    }
+    let mut result = psdcal_calib::calibrate(&data, &calibrate_options).map_err(|e| match e {
+        CalibError::MisplacedLed {
+            led,
+            score,
+            next_score,
+            images,
+            cause,
+        } if led < set.template.leds.len() => Error::MisplacedLed {
+            led: set.template.leds[led].id.clone(),
+            template: set.template.source.clone(),
+            line: set.template.leds[led].line_no,
+            score,
+            next_score,
+            images,
+            cause,
         },
-    )?;
+        e => Error::Calibrate(e),
+    })?;
     check_data_in_region(&result, &data, set, &result.valid_region)?;
+    let map_stage = match &map {
+        Some(map) => Some(calibrate_map::carry(
+            &mut result,
+            &data,
+            &calibrate_options,
+            map,
+        )?),
+        None => None,
+    };
     let mut record = convert::record(&result, &data, set, options);
     record.valid_region = Some(ValidRegionRecord::from_region(&result.valid_region));
-    record.provenance = Some(provenance("", options.to_json(), &set.inputs));
+    record.psd_map = map_stage;
+    let mut inputs = set.inputs.clone();
+    if let Some(path) = &options.psd_map {
+        inputs.add(path);
+    }
+    record.provenance = Some(provenance("", options.to_json(), &inputs));
     let report = convert::fit_report(&result);
     Ok(Calibrated {
         result,

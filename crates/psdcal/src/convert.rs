@@ -283,8 +283,19 @@ pub fn sensor(calibration: &Calibration, file: &Path) -> Result<CalibratedSensor
             at: Location::file(&file.display().to_string()),
             message,
         })?;
-    let mut sensor = CalibratedSensor::new(calibration.to_model(), calibration.geometry())
-        .with_covariance(covariance);
+    let sensor = CalibratedSensor::new(calibration.to_model(), calibration.geometry());
+    if let Some(map) = &calibration.psd_map {
+        let mut sensor =
+            crate::calibrate_map::sensor_with_map(calibration, map, sensor, covariance).map_err(
+                |message| IoError::Invalid {
+                    at: Location::file(&file.display().to_string()),
+                    message,
+                },
+            )?;
+        sensor.gains = calibration.gains();
+        return Ok(sensor);
+    }
+    let mut sensor = sensor.with_covariance(covariance);
     if calibration.valid_region.is_some() {
         sensor = sensor.with_valid_region(calibration.valid_region());
     }

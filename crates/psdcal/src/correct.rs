@@ -46,7 +46,9 @@ pub fn correct(calibration: &Path, points: &Path, out: Option<&Path>) -> Result<
         let measured = sensor.measured_point(m)?.point;
         // Past a fold of the correction there is no unique ideal point.
         sensor.check_valid_region(&measured)?;
-        let aoa = angle_of_arrival(&sensor.model, &measured)?;
+        // A PSD map (docs/model.md §8.3) corrects the point first.
+        let corrected = sensor.map_corrected(&measured)?.point;
+        let aoa = angle_of_arrival(&sensor.model, &corrected)?;
         let mut values = Vec::with_capacity(4);
         if matches!(m, Measurement::Amplitudes(_)) {
             values.extend([num(measured.x), num(measured.y)]);

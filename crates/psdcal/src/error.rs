@@ -81,6 +81,23 @@ pub enum Error {
         /// What the calibration said without the check.
         cause: String,
     },
+    /// Data points outside the scanned hull of the PSD map given to the
+    /// calibration (docs/model.md §8.3): the map is not known there.
+    #[error(
+        "{map}: {outside} of {points} data points lie outside the PSD map's scanned area (first: \
+         {first}); the map is known only inside its scan's hull: scan the whole area the data \
+         cover, or calibrate without --psd-map"
+    )]
+    DataOutsidePsdMap {
+        /// The map file.
+        map: String,
+        /// Points outside.
+        outside: usize,
+        /// Points of the data.
+        points: usize,
+        /// The first point outside: image, LED and position.
+        first: String,
+    },
     /// Options that cannot work together or values out of range.
     #[error("{0}")]
     Options(String),

@@ -49,6 +49,7 @@
 //! | a calibration file (version 1 or 2) as a sensor | [`LoadedSensor`], [`sensor_of`] |
 //! | measured → ideal points, angles of arrival, positions, error maps | [`correct()`], [`aoa_table`], [`locate_table`], [`map_table`] |
 //! | electrical gains | [`estimate_gains`] |
+//! | the PSD's non-linearity map from a lensless scan | [`psd_map_from_scan`], [`simulate_scan_file`] |
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
 //!
@@ -59,6 +60,7 @@
 mod advice;
 mod aoa;
 mod calibrate;
+mod calibrate_map;
 mod convert;
 mod correct;
 mod dataset;
@@ -72,11 +74,13 @@ pub mod option_text;
 mod options;
 mod point_rows;
 mod provenance;
+mod psd_map;
 mod report;
 mod report_tables;
 mod residuals;
 mod sensor;
 mod simulate;
+mod simulate_scan;
 mod study;
 mod study_page;
 mod summary_text;
@@ -96,6 +100,10 @@ pub use map::{map_table, MapModel, MapRequest, MapSource, MapTable};
 pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
 pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
+pub use psd_map::{
+    parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, RESIDUAL_MAP_CELLS,
+};
+pub use psdcal_psdmap::ModelChoice as PsdMapModel;
 pub use report::{report_content, write_report, ReportFiles, ReportRequest};
 pub use residuals::{ImageResiduals, Residual, ResidualTable};
 pub use sensor::{covariance_warning, sensor_of, LoadedSensor};
@@ -103,6 +111,7 @@ pub use simulate::{
     chain_with_record, record_cycles_flag, simulate_files, transient_cycles, SimulateRequest,
     SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
 };
+pub use simulate_scan::{scan_samples, simulate_scan_file, ScanRequest, SimulatedScan};
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
 pub use summary_text::summary_text;
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};

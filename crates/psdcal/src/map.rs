@@ -9,6 +9,7 @@ use psdcal_model::{Param, PsdGeometry, SensorModel};
 use crate::error::{Error, Result};
 use crate::sensor::LoadedSensor;
 use crate::table::{deg, empty, num, StatusCount, Table};
+use psdcal_model::Stage as _;
 
 /// Which model a map evaluates.
 #[derive(Debug, Clone, PartialEq)]
@@ -70,7 +71,33 @@ pub fn map_table(request: &MapRequest) -> Result<MapTable> {
             (
                 loaded.sensor.model,
                 loaded.sensor.geometry,
-                Some(loaded.sensor.covariance),
+                // The map's own columns are not part of the error map's
+                // model: its estimated parameters' covariance (the map's
+                // uncertainty carried in) stays.
+                Some(match &loaded.sensor.psd_map {
+                    None => loaded.sensor.covariance,
+                    Some(map) => {
+                        let own: Vec<&str> = map
+                            .stage
+                            .parameters()
+                            .iter()
+                            .map(|p| p.name.as_str())
+                            .collect();
+                        let names: Vec<&str> = loaded
+                            .sensor
+                            .covariance
+                            .names()
+                            .iter()
+                            .map(String::as_str)
+                            .filter(|n| !own.contains(n))
+                            .collect();
+                        loaded
+                            .sensor
+                            .covariance
+                            .sub(&names)
+                            .map_err(|e| Error::Input(e.to_string()))?
+                    }
+                }),
                 path.display().to_string(),
             )
         }

@@ -100,6 +100,9 @@ pub struct CalibrationOptions {
     pub robust: Option<Robust>,
     /// How the covariance is computed.
     pub uncertainty: Uncertainty,
+    /// A PSD map (psd_map.json from `psdcal psd-map`) to put first in the
+    /// model, held fixed (docs/model.md §8.3).
+    pub psd_map: Option<std::path::PathBuf>,
 }
 
 impl Default for CalibrationOptions {
@@ -116,6 +119,7 @@ impl Default for CalibrationOptions {
             normalize: true,
             robust: None,
             uncertainty: Uncertainty::Linear,
+            psd_map: None,
         }
     }
 }

@@ -58,6 +58,8 @@ pub struct SimulateRequest {
     pub imbalance: bool,
     /// The PSD's own distortion.
     pub psd_distortion: bool,
+    /// The PSD's non-radial non-linearity (docs/model.md §8.3).
+    pub psd_nonlinearity: bool,
     /// Images (template poses).
     pub images: usize,
     /// The template.
@@ -93,6 +95,7 @@ pub fn simulate_files(request: &SimulateRequest) -> Result<SimulatedFiles> {
         snr_db: request.snr_db,
         imbalance: request.imbalance,
         psd_distortion: request.psd_distortion,
+        psd_nonlinearity: request.psd_nonlinearity,
         images: request.images,
         template: request.template,
         chain: chain_with_record(request.record_cycles)?,
@@ -163,7 +166,13 @@ fn describe(r: &SimulateRequest) -> String {
             ", PSD distortion"
         } else {
             ""
-        },
+        }
+        .to_string()
+            + if r.psd_nonlinearity {
+                ", PSD non-linearity"
+            } else {
+                ""
+            },
         r.images,
         r.seed
     ) + &if r.record_cycles == DEFAULT_RECORD_CYCLES {
@@ -206,6 +215,7 @@ fn truth(sim: &Simulation, r: &SimulateRequest) -> Truth {
             snr_db: r.snr_db,
             imbalance: r.imbalance,
             psd_distortion: r.psd_distortion,
+            psd_nonlinearity: r.psd_nonlinearity,
             template: r.template.name().into(),
             images: r.images,
             photocurrent_a: sim.options.photocurrent_a,

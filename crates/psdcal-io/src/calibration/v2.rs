@@ -18,6 +18,7 @@ use serde::ser::Serializer;
 use serde::{Deserialize, Serialize};
 
 use super::provenance::{Diagnostic, Provenance};
+use super::psd_map_stage::{PsdMapStageCovariance, PsdMapStageRecord};
 use super::records::{
     Covariance, FitSummary, GainsRecord, ImageFit, SensorSize, Software, StdDevs,
 };
@@ -30,14 +31,16 @@ use super::{Calibration, GAIN_NAMES};
 #[serde(rename_all = "snake_case")]
 enum StageKind {
     Gains,
+    PsdMap,
     PsdRadial,
     Lens,
     Pinhole,
 }
 
 impl StageKind {
-    const ORDER: [StageKind; 4] = [
+    const ORDER: [StageKind; 5] = [
         StageKind::Gains,
+        StageKind::PsdMap,
         StageKind::PsdRadial,
         StageKind::Lens,
         StageKind::Pinhole,
@@ -46,6 +49,7 @@ impl StageKind {
     fn name(self) -> &'static str {
         match self {
             StageKind::Gains => "gains",
+            StageKind::PsdMap => "psd_map",
             StageKind::PsdRadial => "psd_radial",
             StageKind::Lens => "lens",
             StageKind::Pinhole => "pinhole",
@@ -56,6 +60,8 @@ impl StageKind {
     fn names(self) -> &'static [&'static str] {
         match self {
             StageKind::Gains => &GAIN_NAMES,
+            // Runtime-sized: checked against the stage's configuration.
+            StageKind::PsdMap => &[],
             StageKind::PsdRadial => &["l1", "l2"],
             StageKind::Lens => &["cx", "cy", "k1", "k2", "k3", "p1", "p2"],
             StageKind::Pinhole => &["f", "skew"],
@@ -111,6 +117,12 @@ struct Stage {
     parameters: NamedValues,
     #[serde(default)]
     estimated: Vec<String>,
+    /// The structure of a runtime-sized stage (`psd_map`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    configuration: Option<serde_json::Value>,
+    /// A fixed stage's own covariance (`psd_map`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    covariance: Option<PsdMapStageCovariance>,
 }
 
 /// The version 2 file, field by field.
@@ -166,20 +178,32 @@ impl FileV2 {
         let stages = StageKind::ORDER
             .into_iter()
             .filter(|k| *k != StageKind::Gains || c.gains.is_some())
-            .map(|kind| Stage {
-                kind,
-                parameters: NamedValues(
-                    kind.names()
+            .filter_map(|kind| match (&c.psd_map, kind) {
+                (None, StageKind::PsdMap) => None,
+                (Some(map), StageKind::PsdMap) => Some(Stage {
+                    kind,
+                    parameters: NamedValues(map.parameters.clone()),
+                    estimated: Vec::new(),
+                    configuration: Some(map.configuration.clone()),
+                    covariance: Some(map.covariance.clone()),
+                }),
+                _ => Some(Stage {
+                    kind,
+                    parameters: NamedValues(
+                        kind.names()
+                            .iter()
+                            .map(|n| (n.to_string(), value(n)))
+                            .collect(),
+                    ),
+                    estimated: kind
+                        .names()
                         .iter()
-                        .map(|n| (n.to_string(), value(n)))
+                        .filter(|n| estimated.contains(n))
+                        .map(|n| n.to_string())
                         .collect(),
-                ),
-                estimated: kind
-                    .names()
-                    .iter()
-                    .filter(|n| estimated.contains(n))
-                    .map(|n| n.to_string())
-                    .collect(),
+                    configuration: None,
+                    covariance: None,
+                }),
             })
             .collect();
         FileV2 {
@@ -219,8 +243,8 @@ impl FileV2 {
             .collect();
         if order.windows(2).any(|w| w[0] > w[1]) {
             return Err(
-                "stages are out of order; expected gains, psd_radial, lens, pinhole (measured → \
-                 ideal)"
+                "stages are out of order; expected gains, psd_map, psd_radial, lens, pinhole \
+                 (measured → ideal)"
                     .to_string(),
             );
         }
@@ -232,11 +256,36 @@ impl FileV2 {
         let stage_value = |name: &str| {
             by_kind
                 .iter()
+                .filter(|(k, _)| *k != StageKind::PsdMap)
                 .find_map(|(_, s)| s.parameters.get(name))
                 .unwrap_or(0.0)
         };
+        let psd_map = match by_kind.iter().find(|(k, _)| *k == StageKind::PsdMap) {
+            None => None,
+            Some((_, s)) => {
+                let (Some(configuration), Some(covariance)) = (&s.configuration, &s.covariance)
+                else {
+                    return Err(
+                        "the psd_map stage needs its 'configuration' and 'covariance'".to_string(),
+                    );
+                };
+                if !s.estimated.is_empty() {
+                    return Err("the psd_map stage is held fixed; expected 'estimated': []".into());
+                }
+                let map = PsdMapStageRecord {
+                    configuration: configuration.clone(),
+                    parameters: s.parameters.0.clone(),
+                    covariance: covariance.clone(),
+                };
+                map.to_stage(self.covariance.parameters.len())?;
+                Some(map)
+            }
+        };
         for (name, value) in &self.parameters.0 {
-            let in_stage = by_kind.iter().find_map(|(_, s)| s.parameters.get(name));
+            let in_stage = by_kind
+                .iter()
+                .filter(|(k, _)| *k != StageKind::PsdMap)
+                .find_map(|(_, s)| s.parameters.get(name));
             match in_stage {
                 Some(v) if v == *value => {}
                 Some(v) => {
@@ -303,6 +352,7 @@ impl FileV2 {
         record.diagnostics = self.diagnostics;
         record.provenance = self.provenance;
         record.valid_region = self.valid_region;
+        record.psd_map = psd_map;
         Ok(record)
     }
 }
@@ -310,6 +360,10 @@ impl FileV2 {
 /// A stage has exactly its parameters, and estimates only its own (the
 /// gains all or none).
 fn check_stage(i: usize, stage: &Stage) -> Result<(), String> {
+    if stage.kind == StageKind::PsdMap {
+        // Its names come from its configuration (PsdMapStageRecord::to_stage).
+        return Ok(());
+    }
     let names = stage.kind.names();
     let kind = stage.kind.name();
     for (name, _) in &stage.parameters.0 {

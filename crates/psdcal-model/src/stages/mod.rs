@@ -1,15 +1,18 @@
 //! The stages of the standard model (docs/model.md §2–3, §8), one file each:
 //! [`PsdRadial`] (P14)–(P16), [`Lens`] (P7)–(P13), [`Pinhole`] (P4), and the
-//! channel gains on the amplitudes (P1)–(P2), (P43) in [`gains`].
+//! channel gains on the amplitudes (P1)–(P2), (P43) in [`gains`]; and the
+//! PSD's own non-linearity map (docs/model.md §8.3) in [`psd_map`].
 
 pub mod gains;
 pub mod lens;
 pub mod pinhole;
+pub mod psd_map;
 pub mod psd_radial;
 
 pub use gains::Gains;
 pub use lens::Lens;
 pub use pinhole::Pinhole;
+pub use psd_map::{MapBasis, MapFrame, PsdMap};
 pub use psd_radial::PsdRadial;
 
 use crate::stage::Stage;

@@ -1,0 +1,169 @@
+//! The PSD map from the command line (docs/model.md §8.3): `simulate-scan`
+//! → `psd-map` → `calibrate --psd-map` → `aoa`, and the bad inputs, each
+//! one clear line naming the file.
+
+mod common;
+
+use common::{psdcal, stderr, stdout};
+
+#[test]
+fn scan_map_calibrate_and_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    let run = psdcal([
+        "simulate-scan",
+        "--step",
+        "0.5",
+        "--stage-sigma",
+        "0.3",
+        "--snr",
+        "50",
+        "--out",
+        &p("scan.csv"),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(
+        stdout(&run).contains("19 × 19 positions"),
+        "{}",
+        stdout(&run)
+    );
+    let run = psdcal([
+        "--json",
+        "psd-map",
+        "--scan",
+        &p("scan.csv"),
+        "--out",
+        &p("map.json"),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&run)).unwrap();
+    assert_eq!(json["format"], "psdcal-psd-map");
+    // 361 points: the map's error is a fraction of the ~0.37 µm noise.
+    let fit = &json["fit"];
+    assert!(fit["cv_rms_um"].as_f64().unwrap() < 1.0, "{fit}");
+    assert!(fit["map_sigma_um"].as_f64().unwrap() < 0.37, "{fit}");
+    let run = psdcal([
+        "psd-map",
+        "--scan",
+        &p("scan.csv"),
+        "--model",
+        "poly:5",
+        "--out",
+        &p("m5.json"),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(
+        stdout(&run).contains("model poly:5 (21 coefficients per axis)"),
+        "{}",
+        stdout(&run)
+    );
+    assert!(stdout(&run).contains("residual RMS per cell"));
+
+    let sim = p("sim");
+    assert!(psdcal([
+        "-q",
+        "simulate",
+        "--snr",
+        "40",
+        "--images",
+        "12",
+        "--psd-nonlinearity",
+        "--out",
+        &sim
+    ])
+    .status
+    .success());
+    let run = psdcal([
+        "-q",
+        "calibrate",
+        "-t",
+        &format!("{sim}/template.csv"),
+        "-o",
+        &format!("{sim}/observations.csv"),
+        "--psd-map",
+        &p("map.json"),
+        "--out",
+        &p("cal.json"),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    std::fs::write(p("pts.csv"), "x_mm,y_mm\n0.5,0.5\n6,0\n").unwrap();
+    let run = psdcal([
+        "aoa",
+        "--calibration",
+        &p("cal.json"),
+        "--points",
+        &p("pts.csv"),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let out = stdout(&run);
+    assert!(
+        out.contains(",ok\n") && out.contains("outside_valid_region"),
+        "{out}"
+    );
+
+    // A map of another sensor size, named.
+    let run = psdcal([
+        "calibrate",
+        "-t",
+        &format!("{sim}/template.csv"),
+        "-o",
+        &format!("{sim}/observations.csv"),
+        "--lx",
+        "10",
+        "--ly",
+        "10",
+        "--psd-map",
+        &p("map.json"),
+        "--out",
+        &p("cal2.json"),
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    let err = stderr(&run);
+    assert!(
+        err.contains("map.json") && err.contains("9 mm × 9 mm"),
+        "{err}"
+    );
+}
+
+#[test]
+fn bad_scans_are_one_clear_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).display().to_string();
+    std::fs::write(
+        p("dup.csv"),
+        "x_stage_mm,y_stage_mm,x_mm,y_mm\n0,0,0,0\n1,0,1,0\n0,0,0,0\n",
+    )
+    .unwrap();
+    let run = psdcal(["psd-map", "--scan", &p("dup.csv"), "--out", &p("m.json")]);
+    assert_eq!(run.status.code(), Some(1));
+    let err = stderr(&run);
+    assert!(
+        err.contains("dup.csv:4") && err.contains("first on line 2"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+
+    let mut few = String::from("x_stage_mm,y_stage_mm,x_mm,y_mm\n");
+    for i in 0..4 {
+        for j in 0..4 {
+            few.push_str(&format!("{i},{j},{i},{j}\n"));
+        }
+    }
+    std::fs::write(p("few.csv"), few).unwrap();
+    let run = psdcal([
+        "psd-map",
+        "--scan",
+        &p("few.csv"),
+        "--model",
+        "poly:6",
+        "--out",
+        &p("m.json"),
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    let err = stderr(&run);
+    assert!(
+        err.contains("few.csv") && err.contains("too few for poly:6"),
+        "{err}"
+    );
+    assert!(!dir.path().join("m.json").exists());
+}

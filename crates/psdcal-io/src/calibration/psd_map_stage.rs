@@ -1,0 +1,100 @@
+//! calibration.json version 2's `psd_map` stage (docs/formats.md,
+//! docs/model.md §8.3): the PSD's non-linearity map, held fixed in the
+//! calibration, first among the distortion stages.
+//!
+//! `{"kind": "psd_map", "parameters": {"map_x_0_0": …}, "estimated": [],
+//! "configuration": {basis, order or cells, frame_mm, hull_mm},
+//! "covariance": {"sigma_x_mm", "sigma_y_mm", "unit": K×K, "cross": 2K rows
+//! × the calibration's covariance names}}`. The map's own covariance is
+//! `σ_x² U` (x coefficients), `σ_y² U` (y); `cross` is its covariance with
+//! the calibration's estimated parameters (the map's error carried into
+//! them, docs/model.md §8.3), whose `covariance` already includes it. Its
+//! coefficients live in the stage only, not in the flat `parameters`.
+
+use nalgebra::DMatrix;
+use psdcal_model::stages::PsdMap;
+use psdcal_model::{ParameterCovariance, Stage};
+use serde::{Deserialize, Serialize};
+
+/// The map's covariance as stored in its stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PsdMapStageCovariance {
+    /// Scan noise along x, mm.
+    pub sigma_x_mm: f64,
+    /// Scan noise along y, mm.
+    pub sigma_y_mm: f64,
+    /// `U` (K×K).
+    pub unit: Vec<Vec<f64>>,
+    /// Covariance of the map's coefficients (rows, the stage's parameter
+    /// order) with the calibration's estimated parameters (columns, the
+    /// order of `covariance.parameters`).
+    pub cross: Vec<Vec<f64>>,
+}
+
+/// A calibration's PSD map.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PsdMapStageRecord {
+    /// The stage's structure ([`Stage::configuration`]).
+    pub configuration: serde_json::Value,
+    /// Coefficients by name, in the stage's order.
+    pub parameters: Vec<(String, f64)>,
+    /// Their covariance.
+    pub covariance: PsdMapStageCovariance,
+}
+
+impl PsdMapStageRecord {
+    /// The stage and its block, checked: the names must be the stage's, in
+    /// its order, every number finite, the covariance of the right sizes.
+    pub fn to_stage(&self, estimated: usize) -> Result<(PsdMap, Vec<f64>), String> {
+        let stage = PsdMap::from_configuration(&self.configuration).map_err(|e| e.to_string())?;
+        let names: Vec<&str> = stage.parameters().iter().map(|p| p.name.as_str()).collect();
+        let given: Vec<&str> = self.parameters.iter().map(|(n, _)| n.as_str()).collect();
+        if names != given {
+            return Err(format!(
+                "the psd_map stage's parameters must be the {} coefficients of {} in order \
+                 ({} …)",
+                names.len(),
+                stage.basis().label(),
+                names.iter().take(3).copied().collect::<Vec<_>>().join(", ")
+            ));
+        }
+        let block: Vec<f64> = self.parameters.iter().map(|(_, v)| *v).collect();
+        let c = &self.covariance;
+        let k = stage.terms();
+        let finite = block.iter().all(|v| v.is_finite())
+            && [c.sigma_x_mm, c.sigma_y_mm]
+                .iter()
+                .all(|v| v.is_finite() && *v >= 0.0);
+        if !finite {
+            return Err("the psd_map stage's coefficients and sigmas must be finite".into());
+        }
+        let square = |m: &Vec<Vec<f64>>, rows: usize, cols: usize| {
+            m.len() == rows
+                && m.iter()
+                    .all(|r| r.len() == cols && r.iter().all(|v| v.is_finite()))
+        };
+        if !square(&c.unit, k, k) || !square(&c.cross, 2 * k, estimated) {
+            return Err(format!(
+                "the psd_map stage's covariance: 'unit' must be {k} × {k} and 'cross' {} × \
+                 {estimated}, of finite numbers",
+                2 * k
+            ));
+        }
+        Ok((stage, block))
+    }
+
+    /// The map's own covariance by its names.
+    pub fn map_covariance(&self, stage: &PsdMap) -> Result<ParameterCovariance, String> {
+        let k = stage.terms();
+        let c = &self.covariance;
+        let unit = DMatrix::from_fn(k, k, |i, j| c.unit[i][j]);
+        let mut m = DMatrix::zeros(2 * k, 2 * k);
+        m.view_mut((0, 0), (k, k))
+            .copy_from(&(&unit * c.sigma_x_mm.powi(2)));
+        m.view_mut((k, k), (k, k))
+            .copy_from(&(&unit * c.sigma_y_mm.powi(2)));
+        let names = stage.parameters().iter().map(|p| p.name.clone()).collect();
+        ParameterCovariance::new(names, m)
+            .map_err(|e| format!("the psd_map stage's covariance: {e}"))
+    }
+}

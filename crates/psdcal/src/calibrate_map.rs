@@ -1,0 +1,143 @@
+//! `calibrate --psd-map`: the PSD's non-linearity map (psd_map.json,
+//! docs/model.md §8.3) as the first, fixed stage of the calibrated model,
+//! its covariance carried into the parameters' (psdcal-calib's
+//! `carry_fixed_covariance`) and, through calibration.json's `psd_map`
+//! stage, into every angle's uncertainty.
+
+use std::path::Path;
+
+use nalgebra::DMatrix;
+use psdcal_calib::{CalibrateOptions, CalibrationData, CalibrationResult};
+use psdcal_io::{
+    read_psd_map, Calibration, LoadedPsdMap, PsdMapFile, PsdMapStageCovariance, PsdMapStageRecord,
+};
+use psdcal_locate::{CalibratedSensor, SensorPsdMap};
+use psdcal_model::{Model, ParameterCovariance, PsdGeometry, Stage};
+
+use crate::error::{Error, Result};
+
+/// A map file read for a calibration.
+#[derive(Debug, Clone)]
+pub(crate) struct MapInput {
+    pub file: PsdMapFile,
+    pub loaded: LoadedPsdMap,
+}
+
+/// Reads psd_map.json and checks it belongs to a sensor of `geometry`.
+pub(crate) fn load(path: &Path, geometry: &PsdGeometry) -> Result<MapInput> {
+    let (file, loaded) = read_psd_map(path)?;
+    file.check_sensor(&path.display().to_string(), geometry)?;
+    Ok(MapInput { file, loaded })
+}
+
+/// Refuses data points outside the map's hull (`points`: image, LED,
+/// measured point).
+pub(crate) fn check_data_in_hull(
+    map: &MapInput,
+    path: &Path,
+    points: &[(&str, String, nalgebra::Vector2<f64>)],
+) -> Result<()> {
+    let outside: Vec<_> = points
+        .iter()
+        .filter(|(_, _, m)| !map.loaded.stage.contains_input(m))
+        .collect();
+    match outside.first() {
+        None => Ok(()),
+        Some((image, led, m)) => Err(Error::DataOutsidePsdMap {
+            map: path.display().to_string(),
+            outside: outside.len(),
+            points: points.len(),
+            first: format!("image {image}, LED {led} at ({:.4}, {:.4}) mm", m.x, m.y),
+        }),
+    }
+}
+
+/// `base` with the map first among its distortion stages, at its values.
+pub(crate) fn with_map(base: &Model, map: &MapInput) -> Result<Model> {
+    let stage = &map.loaded.stage;
+    let mut model = base.with_stage(0, Box::new(stage.clone()))?;
+    for (p, v) in stage.parameters().iter().zip(&map.loaded.block) {
+        model.set(&p.name, *v)?;
+    }
+    Ok(model)
+}
+
+/// Carries the map's covariance into `result`'s and returns the
+/// calibration.json stage of the map (with the cross-covariance).
+pub(crate) fn carry(
+    result: &mut CalibrationResult,
+    data: &CalibrationData,
+    options: &CalibrateOptions,
+    map: &MapInput,
+) -> Result<PsdMapStageRecord> {
+    let carried = psdcal_calib::carry_fixed_covariance(
+        data,
+        &result.model,
+        &result.poses,
+        &options.refine,
+        &result.covariance.parameters,
+        &map.loaded.covariance,
+    )
+    .map_err(Error::Calibrate)?;
+    result.covariance.parameters = carried.parameters;
+    let stage = &map.loaded.stage;
+    let c = &map.file.covariance;
+    Ok(PsdMapStageRecord {
+        configuration: stage.configuration(),
+        parameters: stage
+            .parameters()
+            .iter()
+            .map(|p| p.name.clone())
+            .zip(map.loaded.block.iter().copied())
+            .collect(),
+        covariance: PsdMapStageCovariance {
+            sigma_x_mm: c.sigma_x_mm,
+            sigma_y_mm: c.sigma_y_mm,
+            unit: c.unit.clone(),
+            cross: (0..carried.cross.nrows())
+                .map(|i| carried.cross.row(i).iter().copied().collect())
+                .collect(),
+        },
+    })
+}
+
+/// The sensor of a calibration with a map: the map first, the joint
+/// covariance of the estimated parameters and the map's coefficients
+/// `[[C_θ, C_mθᵀ], [C_mθ, C_m]]`; `estimated` is the record's covariance.
+pub(crate) fn sensor_with_map(
+    calibration: &Calibration,
+    map: &PsdMapStageRecord,
+    sensor: CalibratedSensor,
+    estimated: ParameterCovariance,
+) -> std::result::Result<CalibratedSensor, String> {
+    let nt = estimated.len();
+    let (stage, block) = map.to_stage(nt)?;
+    let cm = map.map_covariance(&stage)?;
+    let nm = cm.len();
+    let mut joint = DMatrix::zeros(nt + nm, nt + nm);
+    joint
+        .view_mut((0, 0), (nt, nt))
+        .copy_from(estimated.matrix());
+    joint.view_mut((nt, nt), (nm, nm)).copy_from(cm.matrix());
+    for i in 0..nm {
+        for j in 0..nt {
+            let v = map.covariance.cross[i][j];
+            joint[(nt + i, j)] = v;
+            joint[(j, nt + i)] = v;
+        }
+    }
+    let names = estimated
+        .names()
+        .iter()
+        .chain(cm.names())
+        .cloned()
+        .collect();
+    let joint = ParameterCovariance::new(names, joint).map_err(|e| e.to_string())?;
+    let mut sensor = sensor
+        .with_covariance(joint)
+        .with_psd_map(SensorPsdMap { stage, block });
+    if calibration.valid_region.is_some() {
+        sensor = sensor.with_valid_region(calibration.valid_region());
+    }
+    Ok(sensor)
+}
