@@ -16,6 +16,7 @@ mod cmd_calibrate;
 mod cmd_check;
 mod cmd_correct;
 mod cmd_demo;
+pub mod cmd_evaluate;
 mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
@@ -57,6 +58,7 @@ pub fn main() -> ExitCode {
         Job::Locate(config) => cmd_locate::run(config, output),
         Job::Map(config) => cmd_map::run(config, output),
         Job::Report(config) => cmd_report::run(config, output),
+        Job::Evaluate(args) => cmd_evaluate::run(args, output),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -38,6 +38,7 @@ mod limits;
 mod number_text;
 mod observations;
 mod points;
+mod positioning;
 mod rig;
 mod rig_observations;
 mod same_file;
@@ -68,6 +69,7 @@ pub use limits::{
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
+pub use positioning::{EstimateRow, MatchedEstimate, PositionEstimates, PositionTruth, TruthRow};
 pub use rig::{read_rig, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION};
 pub use rig_observations::{RigObservation, RigObservations};
 pub use same_file::refuse_overwrite;

@@ -49,6 +49,7 @@
 //! | a calibration file (version 1 or 2) as a sensor | [`LoadedSensor`], [`sensor_of`] |
 //! | measured → ideal points, angles of arrival, positions, error maps | [`correct()`], [`aoa_table`], [`locate_table`], [`map_table`] |
 //! | electrical gains | [`estimate_gains`] |
+//! | positions (and angles) against a surveyed truth: the standard metrics | [`evaluate()`] |
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
 //!
@@ -63,6 +64,7 @@ mod correct;
 mod dataset;
 mod demo;
 mod error;
+mod evaluate;
 mod fit_report;
 mod gains;
 mod locate;
@@ -85,6 +87,7 @@ pub use correct::{correct, Corrected};
 pub use dataset::{source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
 pub use demo::{demo, Demo, DemoParameter};
 pub use error::{Error, Result};
+pub use evaluate::{evaluate, EvaluateRequest, Evaluation};
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
 pub use gains::{estimate_gains, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
