@@ -75,6 +75,9 @@ pub enum Command {
     /// Judge estimated positions against a surveyed truth (mean, RMS, 75th/95th percentiles, CE95, SE95, honest error bars)
     #[command(after_help = crate::cmd_evaluate::EVALUATE_EXAMPLES)]
     Evaluate(crate::cmd_evaluate::EvaluateArgs),
+    /// Simulate a calibrated rig of sensors and emitters at known positions (rig.json, rig_points.csv, truth.csv)
+    #[command(after_help = crate::cmd_simulate_positioning::SIMULATE_POSITIONING_EXAMPLES)]
+    SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -247,6 +250,7 @@ pub enum Job {
     Map(crate::cli_locate::MapConfig),
     Report(crate::cli_report::ReportConfig),
     Evaluate(crate::cmd_evaluate::EvaluateArgs),
+    SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
 }
 
 impl Cli {
@@ -282,6 +286,7 @@ impl Cli {
             Command::Map(args) => Job::Map(args.into_config(output)?),
             Command::Report(args) => Job::Report(args.into_config()),
             Command::Evaluate(args) => Job::Evaluate(args),
+            Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
             Command::Calibrate(args) => {
                 let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;

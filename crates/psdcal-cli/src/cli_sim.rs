@@ -117,7 +117,7 @@ impl StudyArgs {
     }
 }
 
-fn parse_snr(text: &str) -> Result<f64, String> {
+pub(crate) fn parse_snr(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && (-20.0..=200.0).contains(&v) => Ok(v),
         _ => Err(format!(
@@ -126,7 +126,7 @@ fn parse_snr(text: &str) -> Result<f64, String> {
     }
 }
 
-fn parse_images(text: &str) -> Result<usize, String> {
+pub(crate) fn parse_images(text: &str) -> Result<usize, String> {
     match text.trim().parse::<usize>() {
         Ok(n) if (3..=100_000).contains(&n) => Ok(n),
         _ => Err(format!("expected a number of images from 3 to 100000 (a calibration needs at least 3), found '{text}'")),

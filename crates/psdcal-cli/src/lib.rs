@@ -22,6 +22,7 @@ mod cmd_locate;
 mod cmd_map;
 mod cmd_report;
 mod cmd_simulate;
+pub mod cmd_simulate_positioning;
 mod cmd_study;
 mod guard;
 mod report;
@@ -59,6 +60,7 @@ pub fn main() -> ExitCode {
         Job::Map(config) => cmd_map::run(config, output),
         Job::Report(config) => cmd_report::run(config, output),
         Job::Evaluate(args) => cmd_evaluate::run(args, output),
+        Job::SimulatePositioning(args) => cmd_simulate_positioning::run(args, output),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

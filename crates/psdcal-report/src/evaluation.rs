@@ -33,6 +33,9 @@ pub struct EvaluationReport {
     pub distance_from: String,
 }
 
+/// Figures as `(file stem, SVG text)`.
+pub type NamedSvgs = Vec<(&'static str, String)>;
+
 /// The empirical CDF of `values`: the steps `(v_(k), k/n)` and
 /// `(v_(k), (k+1)/n)` of the sorted values, starting at `(v_(0), 0)`.
 pub fn cdf_points(values: &[f64]) -> Vec<(f64, f64)> {
@@ -52,7 +55,7 @@ pub fn cdf_points(values: &[f64]) -> Vec<(f64, f64)> {
 /// `error_vectors`, `error_vs_distance`, to be written as files).
 pub fn evaluation_page(
     report: &EvaluationReport,
-) -> Result<(Page, Vec<(&'static str, String)>), ReportError> {
+) -> Result<(Page, NamedSvgs), ReportError> {
     let mut page = Page::new(&report.title);
     if !report.warnings.is_empty() {
         page.push(Block::Heading("Warnings".into()))

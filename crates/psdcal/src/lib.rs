@@ -51,6 +51,7 @@
 //! | electrical gains | [`estimate_gains`] |
 //! | positions (and angles) against a surveyed truth: the standard metrics | [`evaluate()`] |
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
+//! | simulate a calibrated rig and emitters (rig.json, rig_points.csv, truth.csv) | [`simulate_positioning`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
 //!
 //! Every failure is an [`Error`]; nothing here prints, and every output
@@ -77,6 +78,7 @@ mod report_tables;
 mod residuals;
 mod sensor;
 mod simulate;
+mod simulate_positioning;
 mod study;
 mod study_page;
 mod table;
@@ -102,6 +104,7 @@ pub use simulate::{
     chain_with_record, record_cycles_flag, simulate_files, transient_cycles, SimulateRequest,
     SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
 };
+pub use simulate_positioning::{simulate_positioning, PositioningRequest, SimulatedRig};
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
 
@@ -111,4 +114,5 @@ pub use psdcal_locate::LocateError;
 pub use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, Plane, MAX_GRID};
 pub use psdcal_model::{Diagnostic, DiagnosticCode, Severity};
 pub use psdcal_model::{Param, PsdGeometry};
+pub use psdcal_sim::room::RoomOptions;
 pub use psdcal_sim::{Lens, TemplateKind};
