@@ -53,9 +53,7 @@ pub fn cdf_points(values: &[f64]) -> Vec<(f64, f64)> {
 /// The page: warnings, the introduction, the tables, then the three
 /// figures side by side (their SVG also returned, named `error_cdf`,
 /// `error_vectors`, `error_vs_distance`, to be written as files).
-pub fn evaluation_page(
-    report: &EvaluationReport,
-) -> Result<(Page, NamedSvgs), ReportError> {
+pub fn evaluation_page(report: &EvaluationReport) -> Result<(Page, NamedSvgs), ReportError> {
     let mut page = Page::new(&report.title);
     if !report.warnings.is_empty() {
         page.push(Block::Heading("Warnings".into()))

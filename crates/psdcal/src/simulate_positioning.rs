@@ -3,7 +3,7 @@
 //! that `psdcal locate --rig` and `psdcal evaluate` run end to end.
 //!
 //! Sensor `k` (1-based id `s<k>`): a calibration data set simulated with
-//! seed `seed + k − 1` (the paper's lens and template poses, through the
+//! seed `1000 seed + k` (wrapping; distinct for every seed and sensor) (the paper's lens and template poses, through the
 //! signal chain at the SNR) into `s<k>/`, calibrated from automatic
 //! initialisation (f, cx, cy, k1, k2) into `s<k>/calibration.json`. The room
 //! (sensor poses, emitters on the floor) and every emitter observation come
@@ -121,7 +121,7 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
             images: request.images,
             template: TemplateKind::Scatter14,
             record_cycles: request.record_cycles,
-            seed: request.seed.wrapping_add(k as u64),
+            seed: request.seed.wrapping_mul(1000).wrapping_add(k as u64 + 1),
             out: dir.clone(),
         })?;
         let set = DataSet::from_files(
