@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::{draw_err, ReportError};
-use crate::plot::{chart, color, finite, pad, to_png, to_svg, Figure, Frame};
+use crate::plot::{chart_with, color, finite, pad, to_png, to_svg, Figure, Frame};
 
 /// The counts of `values` in `bins` equal bins over `[lo, hi]` (the last
 /// bin closed).
@@ -72,7 +72,7 @@ impl Figure for Histogram<'_> {
             pad((lo, hi)),
             (0.0, 1.1 * top),
         );
-        let mut chart = chart(root, &frame)?;
+        let mut chart = chart_with(root, &frame, true)?;
         let width = (hi - lo) / counts.len() as f64;
         let fill = color(0).mix(0.75).filled();
         chart

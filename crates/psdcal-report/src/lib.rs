@@ -48,7 +48,7 @@ pub use evaluation::{cdf_points, evaluation_page, EvaluationReport};
 pub use histogram::{bin_counts, histogram_png, histogram_svg};
 pub use html::{inline_svg, Block, Page, Table};
 pub use number::num;
-pub use plot::{Arrow, ArrowSet, Frame, PointSet};
+pub use plot::{count_label, tick_label, Arrow, ArrowSet, Frame, PointSet};
 pub use residuals::{residuals_png, residuals_svg};
 pub use scatter::{scatter_png, scatter_svg};
 pub use sensitivity::{

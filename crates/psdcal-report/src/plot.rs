@@ -205,6 +205,39 @@ pub(crate) fn to_png<F: Figure>(figure: &F, path: &Path) -> Result<(), ReportErr
     })
 }
 
+/// Tick labels per axis at most (plotters' ticks are then at least
+/// `range / MAX_TICKS` apart).
+const MAX_TICKS: usize = 8;
+
+/// The text of a tick at `v` on an axis over `range`: enough decimals (or
+/// mantissa digits, in scientific notation beyond 1e-3…1e5) that ticks
+/// `range / (2 MAX_TICKS)` apart never print alike; `-0` printed `0`.
+pub fn tick_label(v: f64, range: (f64, f64)) -> String {
+    let step = ((range.1 - range.0).abs() / (2 * MAX_TICKS) as f64).max(f64::MIN_POSITIVE);
+    let magnitude = range.0.abs().max(range.1.abs());
+    let text = if magnitude >= 1e5 || magnitude < 1e-3 {
+        let digits = ((magnitude / step).log10().ceil().max(0.0) as usize).min(12);
+        format!("{v:.digits$e}")
+    } else {
+        let decimals = ((-step.log10()).ceil().max(0.0) as usize).min(12);
+        format!("{v:.decimals$}")
+    };
+    if text.starts_with('-') && text[1..].chars().all(|c| c == '0' || c == '.') {
+        text[1..].to_string()
+    } else {
+        text
+    }
+}
+
+/// The text of a tick on a count axis: integers only (other ticks blank).
+pub fn count_label(v: f64) -> String {
+    if (v - v.round()).abs() < 1e-9 {
+        format!("{}", v.round().abs() as u64)
+    } else {
+        String::new()
+    }
+}
+
 /// The chart of a frame on `area`, with its mesh and axis labels drawn.
 pub(crate) fn chart<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
@@ -217,22 +250,51 @@ pub(crate) fn chart<'a, DB: DrawingBackend>(
     >,
     ReportError,
 > {
+    chart_with(area, frame, false)
+}
+
+/// [`chart`], the y axis a count axis (integer tick labels) when `counts`.
+pub(crate) fn chart_with<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    frame: &Frame,
+    counts: bool,
+) -> Result<
+    ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    ReportError,
+> {
     let mut chart = ChartBuilder::on(area)
-        .caption(&frame.title, (FAMILY, 18))
+        .caption(&frame.title, (FAMILY, 20))
         .margin(12)
-        .x_label_area_size(42)
-        .y_label_area_size(64)
+        .x_label_area_size(48)
+        .y_label_area_size(78)
         .build_cartesian_2d(
             frame.x_range.0..frame.x_range.1,
             frame.y_range.0..frame.y_range.1,
         )
         .map_err(draw_err)?;
+    let (xr, yr) = (frame.x_range, frame.y_range);
+    let x_fmt = move |v: &f64| tick_label(*v, xr);
+    let y_fmt = move |v: &f64| {
+        if counts {
+            count_label(*v)
+        } else {
+            tick_label(*v, yr)
+        }
+    };
     chart
         .configure_mesh()
         .x_desc(frame.x_label.as_str())
         .y_desc(frame.y_label.as_str())
-        .label_style((FAMILY, 12))
-        .axis_desc_style((FAMILY, 14))
+        .x_labels(MAX_TICKS)
+        .y_labels(MAX_TICKS)
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .label_style((FAMILY, 15))
+        .axis_desc_style((FAMILY, 16))
         .light_line_style(WHITE.mix(0.0))
         .bold_line_style(BLACK.mix(0.12))
         .draw()
