@@ -34,6 +34,7 @@ struct Histogram<'a> {
     bins: usize,
     title: &'a str,
     x_label: &'a str,
+    y_label: &'a str,
 }
 
 impl Histogram<'_> {
@@ -68,7 +69,7 @@ impl Figure for Histogram<'_> {
         let frame = Frame::new(
             self.title,
             self.x_label,
-            "trials",
+            self.y_label,
             pad((lo, hi)),
             (0.0, 1.1 * top),
         );
@@ -118,6 +119,7 @@ pub fn histogram_svg(
         bins,
         title,
         x_label,
+        y_label: "trials",
     })
 }
 
@@ -137,6 +139,48 @@ pub fn histogram_png(
             bins,
             title,
             x_label,
+            y_label: "trials",
+        },
+        path,
+    )
+}
+
+/// A histogram of `values` in `bins` equal bins with a labelled count axis
+/// (integer ticks) and no truth line.
+pub fn counts_histogram_svg(
+    values: &[f64],
+    bins: usize,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+) -> Result<String, ReportError> {
+    to_svg(&Histogram {
+        values,
+        truth: None,
+        bins,
+        title,
+        x_label,
+        y_label,
+    })
+}
+
+/// [`counts_histogram_svg`] as a PNG file.
+pub fn counts_histogram_png(
+    values: &[f64],
+    bins: usize,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    path: &Path,
+) -> Result<(), ReportError> {
+    to_png(
+        &Histogram {
+            values,
+            truth: None,
+            bins,
+            title,
+            x_label,
+            y_label,
         },
         path,
     )

@@ -31,7 +31,7 @@ pub mod escape;
 pub mod evaluation;
 pub mod histogram;
 pub mod html;
-mod number;
+pub mod number;
 mod plot;
 pub mod residuals;
 pub mod scatter;
@@ -45,9 +45,11 @@ pub use error::ReportError;
 pub use error_map::{grid_step, heat_map_png, heat_map_svg, HeatCell, COLORBAR_STEPS};
 pub use escape::escape_html;
 pub use evaluation::{cdf_points, evaluation_page, EvaluationReport};
-pub use histogram::{bin_counts, histogram_png, histogram_svg};
-pub use html::{inline_svg, Block, Page, Table};
-pub use number::num;
+pub use histogram::{
+    bin_counts, counts_histogram_png, counts_histogram_svg, histogram_png, histogram_svg,
+};
+pub use html::{correlation_colour, inline_svg, Block, Page, Table};
+pub use number::{num, unit_text, value_with_sigma};
 pub use plot::{count_label, tick_label, Arrow, ArrowSet, Frame, PointSet};
 pub use residuals::{residuals_png, residuals_svg};
 pub use scatter::{scatter_png, scatter_svg};

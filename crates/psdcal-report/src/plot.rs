@@ -215,7 +215,7 @@ const MAX_TICKS: usize = 8;
 pub fn tick_label(v: f64, range: (f64, f64)) -> String {
     let step = ((range.1 - range.0).abs() / (2 * MAX_TICKS) as f64).max(f64::MIN_POSITIVE);
     let magnitude = range.0.abs().max(range.1.abs());
-    let text = if magnitude >= 1e5 || magnitude < 1e-3 {
+    let text = if !(1e-3..1e5).contains(&magnitude) {
         let digits = ((magnitude / step).log10().ceil().max(0.0) as usize).min(12);
         format!("{v:.digits$e}")
     } else {
