@@ -74,6 +74,8 @@ fn the_page_reads_as_a_report_for_people() {
     // Worst points and the residual histogram.
     assert!(html.contains("<h2>Worst points</h2>"));
     assert!(html.contains("Sensor residuals"));
+    assert!(html.contains("RMS residual per image"));
+    assert!(dir.path().join("report/image_rms.svg").is_file());
     for bad in ["<script", "<link", "<img", "url(", "https://"] {
         assert!(!html.contains(bad), "{bad}");
     }

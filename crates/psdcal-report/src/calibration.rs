@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use crate::bars::{bar_chart_png, bar_chart_svg};
 use crate::coverage::{coverage_png, coverage_svg};
 use crate::distortion::{distortion_field_png, distortion_field_svg, spiral_png, spiral_svg};
 use crate::error::ReportError;
@@ -75,6 +76,13 @@ pub enum PlotData {
         /// Label of the count axis.
         y_label: String,
     },
+    /// One bar per item (an image's RMS error).
+    Bars {
+        /// The values, in item order.
+        values: Vec<f64>,
+        /// Title, labels, ranges.
+        frame: Frame,
+    },
     /// A heat map over the sensor (Figure 9).
     HeatMap {
         /// Cells.
@@ -128,6 +136,7 @@ impl Plot {
                 x_label,
                 y_label,
             } => counts_histogram_svg(values, *bins, title, x_label, y_label),
+            PlotData::Bars { values, frame } => bar_chart_svg(values, frame),
             PlotData::HeatMap {
                 cells,
                 step,
@@ -177,6 +186,7 @@ impl Plot {
                 x_label,
                 y_label,
             } => counts_histogram_png(values, *bins, title, x_label, y_label, path),
+            PlotData::Bars { values, frame } => bar_chart_png(values, frame, path),
             PlotData::HeatMap {
                 cells,
                 step,

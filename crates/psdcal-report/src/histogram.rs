@@ -73,7 +73,7 @@ impl Figure for Histogram<'_> {
             pad((lo, hi)),
             (0.0, 1.1 * top),
         );
-        let mut chart = chart_with(root, &frame, true)?;
+        let mut chart = chart_with(root, &frame, false, true)?;
         let width = (hi - lo) / counts.len() as f64;
         let fill = color(0).mix(0.75).filled();
         chart

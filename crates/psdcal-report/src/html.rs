@@ -20,7 +20,7 @@ th,td{border:1px solid #ccc;padding:0.25rem 0.5rem;text-align:right;white-space:
 th:first-child,td:first-child{text-align:left}thead th{background:#f2f2f2}\
 .correlation td{text-align:center;min-width:3.2em}\
 figure{margin:1rem 0;max-width:100%}figure svg{max-width:100%;height:auto;display:block}\
-figcaption{font-size:0.9rem;color:#444}\
+figcaption{font-size:0.9rem;color:#444}li,p{overflow-wrap:anywhere}\
 .figures{display:flex;flex-wrap:wrap;gap:1rem}.figures figure{flex:1 1 20rem;margin:0}\
 @media print{body{max-width:none;padding:0}.table-wrap{overflow:visible}\
 figure,table{break-inside:avoid}h2{break-after:avoid}}";

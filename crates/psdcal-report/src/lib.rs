@@ -14,6 +14,7 @@
 //! | AoA sensitivity to Δx and Δf (Fig. 6) | [`aoa_sensitivity_svg`], [`line_plot_svg`] |
 //! | Monte Carlo histograms | [`histogram_svg`] |
 //! | scatter plots | [`scatter_svg`] |
+//! | bar charts (per-image RMS) | [`bar_chart_svg`] |
 //! | a positioning evaluation (error CDF, error vectors, error against distance) | [`evaluation_page`] |
 //!
 //! Pages ([`Page`]) are one HTML file with inline SVG, an inline style
@@ -22,6 +23,7 @@
 
 #![warn(missing_docs)]
 
+pub mod bars;
 pub mod calibration;
 pub mod coverage;
 pub mod distortion;
@@ -38,6 +40,7 @@ pub mod scatter;
 pub mod sensitivity;
 pub mod study;
 
+pub use bars::{bar_chart_png, bar_chart_svg, bar_frame};
 pub use calibration::{calibration_page, CalibrationReport, Plot, PlotData};
 pub use coverage::{coverage_png, coverage_svg};
 pub use distortion::{distortion_field_png, distortion_field_svg, spiral_png, spiral_svg};

@@ -250,14 +250,16 @@ pub(crate) fn chart<'a, DB: DrawingBackend>(
     >,
     ReportError,
 > {
-    chart_with(area, frame, false)
+    chart_with(area, frame, false, false)
 }
 
-/// [`chart`], the y axis a count axis (integer tick labels) when `counts`.
+/// [`chart`], an axis a count axis (integer tick labels) when `x_counts`
+/// or `y_counts`.
 pub(crate) fn chart_with<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
     frame: &Frame,
-    counts: bool,
+    x_counts: bool,
+    y_counts: bool,
 ) -> Result<
     ChartContext<
         'a,
@@ -277,9 +279,15 @@ pub(crate) fn chart_with<'a, DB: DrawingBackend>(
         )
         .map_err(draw_err)?;
     let (xr, yr) = (frame.x_range, frame.y_range);
-    let x_fmt = move |v: &f64| tick_label(*v, xr);
+    let x_fmt = move |v: &f64| {
+        if x_counts {
+            count_label(*v)
+        } else {
+            tick_label(*v, xr)
+        }
+    };
     let y_fmt = move |v: &f64| {
-        if counts {
+        if y_counts {
             count_label(*v)
         } else {
             tick_label(*v, yr)

@@ -130,6 +130,11 @@ fn no_axis_of_any_plot_repeats_a_tick_label() {
         }
         let values: Vec<f64> = pts.iter().map(|p| p.0).collect();
         for n in [1usize, 3, 12] {
+            let bars: Vec<f64> = values[..n].iter().map(|v| v.abs()).collect();
+            let svg = bar_chart_svg(&bars, &bar_frame("b", "image", "rms", &bars)).unwrap();
+            assert_distinct_ticks(&svg, &format!("bars of {n} over {r:?}"));
+        }
+        for n in [1usize, 3, 12] {
             let svg = histogram_svg(&values[..n], Some(values[0]), 10, "h", "x").unwrap();
             assert_distinct_ticks(&svg, &format!("histogram of {n} over {r:?}"));
         }
@@ -148,6 +153,36 @@ fn count_axes_print_integers_only() {
     for (_, _, body) in texts(&svg) {
         assert_ne!(body, "0.5");
         assert_ne!(body, "1.5");
+    }
+}
+
+#[test]
+fn bar_charts_have_one_bar_per_value_and_integer_item_ticks() {
+    let values: Vec<f64> = (0..40).map(|k| 1.0 + (k % 7) as f64).collect();
+    let svg = bar_chart_svg(&values, &bar_frame("b", "image", "rms", &values)).unwrap();
+    let empty = bar_chart_svg(&[], &bar_frame("b", "image", "rms", &[])).unwrap();
+    assert_eq!(
+        svg.matches("<rect").count() - empty.matches("<rect").count(),
+        40
+    );
+    assert_distinct_ticks(&svg, "40 bars");
+    // The x axis: the lowest row of three or more texts; integers only.
+    let t = texts(&svg);
+    let mut rows: HashMap<&str, Vec<&str>> = HashMap::new();
+    for (_, y, body) in &t {
+        rows.entry(y.as_str()).or_default().push(body.as_str());
+    }
+    let (_, x_axis) = rows
+        .into_iter()
+        .filter(|(_, v)| v.len() >= 3)
+        .max_by(|a, b| {
+            a.0.parse::<f64>()
+                .unwrap()
+                .total_cmp(&b.0.parse::<f64>().unwrap())
+        })
+        .unwrap();
+    for label in x_axis {
+        assert!(label.parse::<u64>().is_ok(), "{label}");
     }
 }
 

@@ -337,6 +337,40 @@ fn data_plots(plots: &mut Vec<Plot>, set: &DataSet, table: &ResidualTable, lx: f
         .flatten()
         .filter_map(|p| Some(1e3 * p.on_sensor?.norm()))
         .collect();
+    let rms: Vec<f64> = table
+        .images
+        .iter()
+        .filter_map(|im| im.rms().1.map(|r| 1e3 * r))
+        .collect();
+    if !rms.is_empty() {
+        let worst = table
+            .images
+            .iter()
+            .filter_map(|im| Some((im.rms().1?, im.id.as_str())))
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .map_or(String::new(), |(r, id)| {
+                format!(
+                    "; the largest, {} µm, is image {id}",
+                    psdcal_report::num(1e3 * r)
+                )
+            });
+        plots.push(Plot {
+            name: "image_rms",
+            caption: format!(
+                "RMS sensor residual of each of the {} images, in file order{worst}",
+                rms.len()
+            ),
+            data: PlotData::Bars {
+                frame: psdcal_report::bar_frame(
+                    "RMS residual per image",
+                    "image (in file order)",
+                    "RMS residual (µm)",
+                    &rms,
+                ),
+                values: rms,
+            },
+        });
+    }
     if !sizes.is_empty() {
         let bins = ((sizes.len() as f64).sqrt().round() as usize).clamp(5, 30);
         plots.push(Plot {
