@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::{draw_err, ReportError};
-use crate::plot::{chart_with, color, finite, pad, to_png, to_svg, Figure, Frame};
+use crate::plot::{build_chart, color, finite, pad, to_png, to_svg, Figure, Frame};
 
 /// The counts of `values` in `bins` equal bins over `[lo, hi]` (the last
 /// bin closed).
@@ -73,7 +73,7 @@ impl Figure for Histogram<'_> {
             pad((lo, hi)),
             (0.0, 1.1 * top),
         );
-        let mut chart = chart_with(root, &frame, false, true)?;
+        let mut chart = build_chart(root, &frame, false, true, self.truth.is_some())?;
         let width = (hi - lo) / counts.len() as f64;
         let fill = color(0).mix(0.75).filled();
         chart

@@ -250,8 +250,27 @@ pub(crate) fn chart<'a, DB: DrawingBackend>(
     >,
     ReportError,
 > {
-    chart_with(area, frame, false, false)
+    build_chart(area, frame, false, false, false)
 }
+
+/// [`chart`] with room on the right for a legend outside the data
+/// ([`legend`]).
+pub(crate) fn chart_legend<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    frame: &Frame,
+) -> Result<
+    ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    ReportError,
+> {
+    build_chart(area, frame, false, false, true)
+}
+
+/// Width of the legend column right of the data, pixels.
+pub(crate) const LEGEND_WIDTH: u32 = 150;
 
 /// [`chart`], an axis a count axis (integer tick labels) when `x_counts`
 /// or `y_counts`.
@@ -268,9 +287,28 @@ pub(crate) fn chart_with<'a, DB: DrawingBackend>(
     >,
     ReportError,
 > {
+    build_chart(area, frame, x_counts, y_counts, false)
+}
+
+/// The chart: count axes as asked, and a legend column when `legend`.
+pub(crate) fn build_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    frame: &Frame,
+    x_counts: bool,
+    y_counts: bool,
+    legend: bool,
+) -> Result<
+    ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    ReportError,
+> {
     let mut chart = ChartBuilder::on(area)
         .caption(&frame.title, (FAMILY, 20))
         .margin(12)
+        .margin_right(if legend { 12 + LEGEND_WIDTH } else { 12 })
         .x_label_area_size(48)
         .y_label_area_size(78)
         .build_cartesian_2d(
@@ -310,7 +348,8 @@ pub(crate) fn chart_with<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
-/// The legend, when there are series labels and not too many.
+/// The legend, outside the data: in the column right of the plotting area
+/// that [`chart_legend`] leaves free.
 pub(crate) fn legend<'a, DB: DrawingBackend + 'a>(
     chart: &mut ChartContext<
         'a,
@@ -318,12 +357,13 @@ pub(crate) fn legend<'a, DB: DrawingBackend + 'a>(
         Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
     >,
 ) -> Result<(), ReportError> {
+    let width = chart.plotting_area().dim_in_pixel().0 as i32;
     chart
         .configure_series_labels()
-        .label_font((FAMILY, 12))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.4))
-        .position(SeriesLabelPosition::UpperRight)
+        .label_font((FAMILY, 14))
+        .background_style(WHITE.mix(0.0))
+        .border_style(WHITE.mix(0.0))
+        .position(SeriesLabelPosition::Coordinate(width + 8, 0))
         .draw()
         .map_err(draw_err)
 }

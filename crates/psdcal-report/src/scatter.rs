@@ -7,7 +7,7 @@ use plotters::prelude::*;
 
 use crate::error::{draw_err, ReportError};
 use crate::plot::{
-    chart, color, finite, legend, to_png, to_svg, Figure, Frame, PointSet, MAX_LEGEND,
+    chart, chart_legend, color, finite, legend, to_png, to_svg, Figure, Frame, PointSet, MAX_LEGEND,
 };
 
 struct Scatter<'a> {
@@ -24,8 +24,12 @@ impl Figure for Scatter<'_> {
                 .iter()
                 .flat_map(|s| s.points.iter().flat_map(|p| [p.0, p.1])),
         )?;
-        let mut chart = chart(root, self.frame)?;
         let labelled = self.sets.len() > 1 && self.sets.len() <= MAX_LEGEND;
+        let mut chart = if labelled {
+            chart_legend(root, self.frame)?
+        } else {
+            chart(root, self.frame)?
+        };
         for (k, set) in self.sets.iter().enumerate() {
             let c = color(k);
             let series = chart
