@@ -194,3 +194,89 @@ fn bad_input_names_the_file_and_line() {
         assert!(err.contains(expected), "{err}\nexpected: {expected}");
     }
 }
+
+#[test]
+fn angles_from_aoa_are_evaluated_in_degrees() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = dir.path().join("points.csv");
+    fs::write(&points, "emitter,x_mm,y_mm\na,0.5,0.2\nb,-1,2\nc,3,-2\n").unwrap();
+    let aoa = dir.path().join("aoa.csv");
+    let calibration = common::valid("calibration.json");
+    let out = psdcal([
+        "-q",
+        "aoa",
+        "-c",
+        calibration.to_str().unwrap(),
+        "-p",
+        points.to_str().unwrap(),
+        "--point-sigma",
+        "0.001",
+        "--out",
+        aoa.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // The truth: every estimate off by (−0.01°, +0.005°).
+    let rows = read_csv(&aoa);
+    let (ax, ay) = (col(&rows, "alpha_x_deg"), col(&rows, "alpha_y_deg"));
+    let mut truth = String::from("emitter,alpha_x_deg,alpha_y_deg\n");
+    for r in &rows[1..] {
+        let x: f64 = r[ax].parse().unwrap();
+        let y: f64 = r[ay].parse().unwrap();
+        truth.push_str(&format!("{},{},{}\n", r[0], x + 0.01, y - 0.005));
+    }
+    let truth_path = dir.path().join("truth.csv");
+    fs::write(&truth_path, truth).unwrap();
+    let out = psdcal([
+        "--json",
+        "evaluate",
+        "--truth",
+        truth_path.to_str().unwrap(),
+        "--estimates",
+        aoa.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let a = &json["angles"];
+    assert_eq!(a["n"], 3);
+    let size = 0.01f64.hypot(0.005);
+    for k in [
+        "mean_deg",
+        "median_deg",
+        "rms_deg",
+        "p75_deg",
+        "p95_deg",
+        "max_deg",
+    ] {
+        assert!((a[k].as_f64().unwrap() - size).abs() < 1e-9 * size, "{k}");
+    }
+    assert!((a["bias_deg"][0].as_f64().unwrap() + 0.01).abs() < 1e-11);
+    assert!((a["bias_deg"][1].as_f64().unwrap() - 0.005).abs() < 1e-11);
+    assert!(a["within_95_ellipse"].as_f64().is_some());
+    assert!(json.get("mean_mm").is_none(), "no positions compared");
+}
+
+#[test]
+fn impossible_rigs_are_usage_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = psdcal([
+        "simulate-positioning",
+        "--sensors",
+        "1",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let out = psdcal([
+        "simulate-positioning",
+        "--baseline",
+        "30000",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("shorten the baseline"),
+        "{}",
+        stderr(&out)
+    );
+}
