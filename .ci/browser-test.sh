@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# Browser test of `psdcal report`: the page renders in headless Chromium
-# without console errors and its screenshot is not blank.
+# Browser test of `psdcal report` and `psdcal evaluate --report`: each page
+# renders in headless Chromium at 1200 px and at 390 px (a phone) without
+# console errors, and its screenshots are not blank.
 #
 # Installs Debian's `chromium` when it is missing (CI runs as root).
-# Usage: .ci/browser-test.sh [SCREENSHOT.png]   (default: a temporary file)
+# Usage: .ci/browser-test.sh [SCREENSHOT_PREFIX]   (default: a temporary folder;
+#        writes PREFIX-report-1200.png, PREFIX-report-390.png, PREFIX-evaluation-….png)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 started=$(date +%s)
@@ -15,45 +17,58 @@ fi
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-shot=${1:-$work/shot.png}
+prefix=${1:-$work/shot}
 
 cargo build --release --quiet --bin psdcal
-psdcal=target/release/psdcal
+psdcal=${CARGO_TARGET_DIR:-target}/release/psdcal
 "$psdcal" -q simulate --lens 2 --snr 40 --out "$work/sim"
 "$psdcal" -q calibrate -t "$work/sim/template.csv" -o "$work/sim/observations.csv" \
     --out "$work/sim/calibration.json"
 "$psdcal" -q report -c "$work/sim/calibration.json" -t "$work/sim/template.csv" \
     -o "$work/sim/observations.csv" --out "$work/report"
 
-page="$work/report/report.html"
-if grep -qi '<script' "$page"; then
-    echo "browser-test: FAIL: report.html holds a <script> element" >&2
-    exit 1
-fi
+"$psdcal" -q simulate-positioning --lens 2 --snr 40 --emitters 60 --out "$work/room"
+"$psdcal" -q locate --rig "$work/room/rig.json" --points "$work/room/rig_points.csv" \
+    --point-sigma 0.0007 --out "$work/room/estimates.csv"
+"$psdcal" -q evaluate --truth "$work/room/truth.csv" --estimates "$work/room/estimates.csv" \
+    --rig "$work/room/rig.json" --report "$work/evaluation"
 
-# Headless Chromium, nothing on the network: console messages are logged on
-# standard error as CONSOLE(...) lines.
-timeout 120 chromium --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
-    --disable-background-networking --disable-component-update --disable-sync \
-    --user-data-dir="$work/profile" --enable-logging=stderr --v=0 \
-    --hide-scrollbars --window-size="${BROWSER_TEST_WINDOW:-1000,1400}" \
-    --screenshot="$shot" "file://$page" >"$work/chromium.out" 2>"$work/chromium.err" || {
-    echo "browser-test: FAIL: chromium exited with an error:" >&2
-    tail -20 "$work/chromium.err" >&2
-    exit 1
+# check_page NAME PAGE WIDTH: render PAGE at WIDTH px; fail on a script,
+# console errors, or a (nearly) blank screenshot.
+check_page() {
+    local name=$1 page=$2 width=$3
+    local shot="$prefix-$name-$width.png"
+    if grep -qi '<script' "$page"; then
+        echo "browser-test: FAIL: $name holds a <script> element" >&2
+        exit 1
+    fi
+    # Headless Chromium, nothing on the network: console messages are logged
+    # on standard error as CONSOLE(...) lines.
+    timeout 120 chromium --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
+        --disable-background-networking --disable-component-update --disable-sync \
+        --user-data-dir="$work/profile" --enable-logging=stderr --v=0 \
+        --hide-scrollbars --window-size="$width,1400" \
+        --screenshot="$shot" "file://$page" >"$work/chromium.out" 2>"$work/chromium.err" || {
+        echo "browser-test: FAIL: chromium exited with an error on $name at $width px:" >&2
+        tail -20 "$work/chromium.err" >&2
+        exit 1
+    }
+    if grep -E 'CONSOLE|Refused to|Uncaught' "$work/chromium.err" >&2; then
+        echo "browser-test: FAIL: $name logged console errors at $width px (above)" >&2
+        exit 1
+    fi
+    if [ ! -s "$shot" ]; then
+        echo "browser-test: FAIL: no screenshot of $name at $width px" >&2
+        tail -20 "$work/chromium.err" >&2
+        exit 1
+    fi
+    not_blank "$shot"
+    echo "browser-test: $name renders at $width px"
 }
-if grep -E 'CONSOLE|Refused to|Uncaught' "$work/chromium.err" >&2; then
-    echo "browser-test: FAIL: the page logged console errors (above)" >&2
-    exit 1
-fi
-if [ ! -s "$shot" ]; then
-    echo "browser-test: FAIL: no screenshot was written" >&2
-    tail -20 "$work/chromium.err" >&2
-    exit 1
-fi
 
+not_blank() {
 # Not blank: decode the PNG (standard library only) and count the colours.
-python3 - "$shot" <<'PY'
+python3 - "$1" <<'PY'
 import struct, sys, zlib
 data = open(sys.argv[1], "rb").read()
 assert data[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
@@ -90,4 +105,10 @@ print(f"browser-test: screenshot {width}x{height}, {len(colours)} distinct sampl
 if len(colours) < 50:
     sys.exit("browser-test: FAIL: the screenshot is (nearly) blank")
 PY
-echo "browser-test: OK: report.html renders without console errors ($(( $(date +%s) - started )) s)"
+}
+
+for width in 1200 390; do
+    check_page report "$work/report/report.html" "$width"
+    check_page evaluation "$work/evaluation/evaluation.html" "$width"
+done
+echo "browser-test: OK: report.html and evaluation.html render without console errors at 1200 and 390 px ($(( $(date +%s) - started )) s)"

@@ -80,6 +80,12 @@ pub enum Command {
     /// A self-contained HTML report of a calibration with its plots (SVG and PNG)
     #[command(after_help = crate::cli_report::REPORT_EXAMPLES)]
     Report(crate::cli_report::ReportArgs),
+    /// Judge estimated positions against a surveyed truth (mean, RMS, 75th/95th percentiles, CE95, SE95, honest error bars)
+    #[command(after_help = crate::cmd_evaluate::EVALUATE_EXAMPLES)]
+    Evaluate(crate::cmd_evaluate::EvaluateArgs),
+    /// Simulate a calibrated rig of sensors and emitters at known positions (rig.json, rig_points.csv, truth.csv)
+    #[command(after_help = crate::cmd_simulate_positioning::SIMULATE_POSITIONING_EXAMPLES)]
+    SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -244,7 +250,7 @@ pub enum Job {
     PsdMap(crate::cmd_psd_map::PsdMapArgs),
     SimulateScan(crate::cmd_simulate_scan::SimulateScanArgs),
     Simulate(crate::cli_sim::SimulateArgs),
-    Study(crate::cli_sim::StudyConfig),
+    Study(psdcal::StudyRequest),
     Demo(crate::cli_sim::DemoArgs),
     Check(CheckConfig),
     Calibrate(CalibrateConfig),
@@ -253,6 +259,8 @@ pub enum Job {
     Locate(crate::cli_locate::LocateConfig),
     Map(crate::cli_locate::MapConfig),
     Report(crate::cli_report::ReportConfig),
+    Evaluate(crate::cmd_evaluate::EvaluateArgs),
+    SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
 }
 
 impl Cli {
@@ -289,6 +297,8 @@ impl Cli {
             Command::Locate(args) => Job::Locate(args.into_config(output)?),
             Command::Map(args) => Job::Map(args.into_config(output)?),
             Command::Report(args) => Job::Report(args.into_config()),
+            Command::Evaluate(args) => Job::Evaluate(args),
+            Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
             Command::Calibrate(args) => {
                 let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;
@@ -328,13 +338,7 @@ impl Cli {
                 })
             }
             Command::Correct(args) => {
-                if output == Output::Json && args.out.is_none() {
-                    return Err(Cli::command().error(
-                        clap::error::ErrorKind::MissingRequiredArgument,
-                        "'correct --json' needs '--out FILE': standard output carries the JSON \
-                         summary, so the corrected table must go to a file",
-                    ));
-                }
+                crate::cli_locate::json_needs_out("correct", &args.out, output)?;
                 Job::Correct(CorrectConfig {
                     calibration: args.calibration,
                     points: args.points,

@@ -144,7 +144,11 @@ fn usage(kind: clap::error::ErrorKind, message: impl std::fmt::Display) -> clap:
     Cli::command().error(kind, message)
 }
 
-fn json_needs_out(command: &str, out: &Option<PathBuf>, output: Output) -> Result<(), clap::Error> {
+pub(crate) fn json_needs_out(
+    command: &str,
+    out: &Option<PathBuf>,
+    output: Output,
+) -> Result<(), clap::Error> {
     if output == Output::Json && out.is_none() {
         return Err(usage(
             clap::error::ErrorKind::MissingRequiredArgument,
@@ -227,25 +231,9 @@ impl MapArgs {
                 ))
             }
         };
-        let errors: Vec<(Param, f64)> = self.errors.into_iter().flatten().collect();
-        for (i, (p, _)) in errors.iter().enumerate() {
-            if errors[..i].iter().any(|(q, _)| q == p) {
-                return Err(usage(
-                    clap::error::ErrorKind::ValueValidation,
-                    format!("--error gives '{p}' twice; give each parameter once"),
-                ));
-            }
-        }
-        let source = match (errors.is_empty(), self.k_sigma) {
-            (false, None) => MapSource::Errors(errors),
-            (true, Some(k)) => MapSource::KSigma(k),
-            _ => {
-                return Err(usage(
-                    clap::error::ErrorKind::ArgumentConflict,
-                    "give either --error NAME=VALUE or --k-sigma K, not both",
-                ))
-            }
-        };
+        let errors = self.errors.into_iter().flatten().collect();
+        let source = MapSource::choose(errors, self.k_sigma)
+            .map_err(|m| usage(clap::error::ErrorKind::ArgumentConflict, m))?;
         Ok(MapConfig {
             model,
             source,

@@ -4,7 +4,10 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use psdcal::MAX_RECORD_CYCLES;
+use psdcal::option_text::{
+    parse_images, parse_record_cycles, parse_snr, parse_threads, parse_trials,
+};
+use psdcal::StudyRequest;
 
 use crate::choice::{choice, name, LensArg, TableArg, TemplateArg};
 
@@ -90,26 +93,11 @@ pub struct DemoArgs {
     pub seed: u64,
 }
 
-/// Validated configuration of `psdcal study`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StudyConfig {
-    /// Table ids in order, each once (`fig9` last when asked for).
-    pub tables: Vec<String>,
-    pub trials: usize,
-    pub threads: Option<usize>,
-    pub seed: u64,
-    /// Record length of the signal chain, cycles.
-    pub record_cycles: usize,
-    pub out: PathBuf,
-    /// Folder of study.html, if asked for.
-    pub report: Option<PathBuf>,
-}
-
 impl StudyArgs {
     /// The configuration: `all` expands, duplicates go, the paper's order.
-    pub fn into_config(self) -> StudyConfig {
+    pub fn into_config(self) -> StudyRequest {
         let ids: Vec<String> = self.tables.iter().map(name).collect();
-        StudyConfig {
+        StudyRequest {
             tables: psdcal::expand_tables(&ids),
             trials: self.trials,
             threads: self.threads,
@@ -118,51 +106,5 @@ impl StudyArgs {
             out: self.out,
             report: self.report,
         }
-    }
-}
-
-fn parse_snr(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && (-20.0..=200.0).contains(&v) => Ok(v),
-        _ => Err(format!(
-            "expected an SNR in dB between -20 and 200, found '{text}'"
-        )),
-    }
-}
-
-fn parse_images(text: &str) -> Result<usize, String> {
-    match text.trim().parse::<usize>() {
-        Ok(n) if (3..=100_000).contains(&n) => Ok(n),
-        _ => Err(format!("expected a number of images from 3 to 100000 (a calibration needs at least 3), found '{text}'")),
-    }
-}
-
-fn parse_trials(text: &str) -> Result<usize, String> {
-    match text.trim().parse::<usize>() {
-        Ok(n) if (1..=1_000_000).contains(&n) => Ok(n),
-        _ => Err(format!(
-            "expected a number of trials from 1 to 1000000, found '{text}'"
-        )),
-    }
-}
-
-fn parse_record_cycles(text: &str) -> Result<usize, String> {
-    let transient = psdcal::transient_cycles();
-    match text.trim().parse::<usize>() {
-        Ok(n) if n > transient && n <= MAX_RECORD_CYCLES => Ok(n),
-        _ => Err(format!(
-            "expected a record length from {} to {MAX_RECORD_CYCLES} cycles (more than the \
-             {transient}-cycle filter transient), found '{text}'",
-            transient + 1
-        )),
-    }
-}
-
-fn parse_threads(text: &str) -> Result<usize, String> {
-    match text.trim().parse::<usize>() {
-        Ok(n) if (1..=1024).contains(&n) => Ok(n),
-        _ => Err(format!(
-            "expected a number of threads from 1 to 1024, found '{text}'"
-        )),
     }
 }

@@ -12,19 +12,10 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use psdcal::StudyRequest;
 
 use crate::cli::Output;
-use crate::cli_sim::StudyConfig;
 
 /// Runs `study`.
-pub fn run(config: &StudyConfig, output: Output) -> anyhow::Result<()> {
-    let plan = psdcal::plan_study(&StudyRequest {
-        tables: config.tables.clone(),
-        trials: config.trials,
-        threads: config.threads,
-        seed: config.seed,
-        record_cycles: config.record_cycles,
-        out: config.out.clone(),
-        report: config.report.clone(),
-    })?;
+pub fn run(config: &StudyRequest, output: Output) -> anyhow::Result<()> {
+    let plan = psdcal::plan_study(config)?;
     let bar = progress_bar(plan.trial_count(), output);
     let cancel = Arc::new(AtomicBool::new(false));
     {

@@ -75,6 +75,14 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
             // (the plots are .svg and .png files).
             (inputs, vec![("--out", c.page.as_path())])
         }
+        Job::Evaluate(e) => {
+            let mut inputs = vec![
+                ("--truth", e.truth.as_path()),
+                ("--estimates", e.estimates.as_path()),
+            ];
+            inputs.extend(e.rig.iter().map(|p| ("--rig", p.as_path())));
+            (inputs, Vec::new())
+        }
         _ => (Vec::new(), Vec::new()),
     }
 }

@@ -16,12 +16,14 @@ mod cmd_calibrate;
 mod cmd_check;
 mod cmd_correct;
 mod cmd_demo;
+pub mod cmd_evaluate;
 mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
 pub mod cmd_psd_map;
 mod cmd_report;
 mod cmd_simulate;
+pub mod cmd_simulate_positioning;
 pub mod cmd_simulate_scan;
 mod cmd_study;
 mod guard;
@@ -61,6 +63,8 @@ pub fn main() -> ExitCode {
         Job::Locate(config) => cmd_locate::run(config, output),
         Job::Map(config) => cmd_map::run(config, output),
         Job::Report(config) => cmd_report::run(config, output),
+        Job::Evaluate(args) => cmd_evaluate::run(args, output),
+        Job::SimulatePositioning(args) => cmd_simulate_positioning::run(args, output),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

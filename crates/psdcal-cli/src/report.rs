@@ -82,30 +82,12 @@ pub fn print_points_answer(
 ) -> anyhow::Result<()> {
     use crate::cli::Output;
     print_row_warnings(&answer.count);
-    let line = format!(
-        "{} {} point{} of {} with {}: {}",
-        summary.verb,
-        answer.rows,
-        if answer.rows == 1 { "" } else { "s" },
-        answer.source,
-        summary.calibration.display(),
-        answer.count.summary()
-    );
+    let line = answer.summary_line(summary.verb, summary.calibration);
     match (output, summary.out) {
         (Output::Quiet, _) => {}
         (Output::Json, out) => {
-            let mut json = serde_json::json!({
-                "command": summary.command,
-                "calibration": summary.calibration.display().to_string(),
-                "points": answer.source,
-                "out": out.map(|p| p.display().to_string()),
-                "from_amplitudes": answer.amplitudes,
-                "added_columns": answer.added,
-                "rows": answer.count.to_json(),
-            });
-            if let (Some(map), Some(extra)) = (json.as_object_mut(), summary.extra.as_object()) {
-                map.extend(extra.clone());
-            }
+            let json =
+                answer.summary_json(summary.command, summary.calibration, out, &summary.extra);
             println!("{}", serde_json::to_string_pretty(&json)?);
         }
         (Output::Text, Some(out)) if summary.name_columns => println!(

@@ -41,6 +41,7 @@ mod limits;
 mod number_text;
 mod observations;
 mod points;
+mod positioning;
 mod psd_map_file;
 mod rig;
 mod rig_observations;
@@ -73,6 +74,7 @@ pub use limits::{
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
+pub use positioning::{EstimateRow, MatchedEstimate, PositionEstimates, PositionTruth, TruthRow};
 pub use psd_map_file::{
     read_psd_map, write_psd_map, LoadedPsdMap, MapCandidateRecord, MapCoefficients,
     MapCovarianceRecord, MapFitRecord, MapResidualsRecord, PsdMapFile, PSD_MAP_FORMAT,

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 use psdcal_io::{
     read_gains, read_psd_map, read_truth, Calibration, IoError, Observations, PointInput, Points,
-    RigFile, RigObservations, Scan, Signals, Template,
+    PositionEstimates, PositionTruth, RigFile, RigObservations, Scan, Signals, Template,
 };
 use psdcal_model::{ChannelGains, PsdGeometry};
 use rand::{Rng, SeedableRng};
@@ -44,6 +44,12 @@ const RIG_POINTS: &str = "emitter,sensor,x_mm,y_mm\ntag1,a,2.68,2.35\ntag1,b,-3.
                           tag2,a,vx,1\n";
 
 /// Checks an error: it names `source` and is one short line.
+const POSITION_TRUTH: &str = "emitter,x_mm,y_mm,z_mm,alpha_x_deg,alpha_y_deg\ne1,0,0,0,1,2\n\
+    e2,100.5,-200,3,-4,5\n";
+const ESTIMATES: &str = "emitter,sensors,x_world_mm,y_world_mm,z_world_mm,sigma_x_world_mm,\
+    sigma_y_world_mm,sigma_z_world_mm,cov_xy_world_mm2,cov_xz_world_mm2,cov_yz_world_mm2,status\n\
+    e1,a;b,0.5,1,-2,2,3,4,1,0,0,ok\ne2,a,,,,,,,,,,too_few_sensors\n";
+
 fn check_error(source: &str, e: &IoError) {
     let text = e.to_string();
     assert!(
@@ -131,6 +137,24 @@ fn read_everywhere(dir: &Path, name: &str, bytes: &[u8]) {
     }
     match read_psd_map(&path) {
         Ok((_, map)) => finite(map.block.iter().copied()),
+        Err(e) => check_error(src, &e),
+    }
+    match PositionTruth::read(&path) {
+        Ok(t) => finite(t.rows.iter().flat_map(|r| {
+            let p = r.position.map_or([0.0; 3], |p| [p.x, p.y, p.z]);
+            let a = r.alpha.map_or([0.0; 2], |a| [a.x, a.y]);
+            p.into_iter().chain(a)
+        })),
+        Err(e) => check_error(src, &e),
+    }
+    match PositionEstimates::read(&path) {
+        Ok(est) => {
+            for r in &est.rows {
+                finite(r.position.iter().flat_map(|p| [p.x, p.y, p.z]));
+                finite(r.position_covariance.iter().flat_map(|c| c.iter().copied()));
+                finite(r.alpha.iter().flat_map(|a| [a.x, a.y]));
+            }
+        }
         Err(e) => check_error(src, &e),
     }
 }
@@ -263,6 +287,8 @@ fn seeds() -> Vec<(String, Vec<u8>)> {
     out.push(("rig_points.csv".into(), RIG_POINTS.as_bytes().to_vec()));
     out.push(("scan.csv".into(), SCAN.as_bytes().to_vec()));
     out.push(("psd_map.json".into(), PSD_MAP.as_bytes().to_vec()));
+    out.push(("truth.csv".into(), POSITION_TRUTH.as_bytes().to_vec()));
+    out.push(("estimates.csv".into(), ESTIMATES.as_bytes().to_vec()));
     out
 }
 

@@ -17,7 +17,10 @@
 //! - [`mod@triangulate`] and [`rig`]: the position from two or more sensors
 //!   with known poses in a world frame (least-squares ray intersection);
 //! - [`sensitivity`] and [`maps`]: the paper's small-angle sensitivity
-//!   (P40)–(P42), the full-model error, and error maps over the sensor area.
+//!   (P40)–(P42), the full-model error, and error maps over the sensor area;
+//! - [`evaluate`]: positions and angles against the truth by the standard
+//!   metrics (mean, median, RMS, 75th/95th percentiles, CE95/SE95, bias,
+//!   the fraction inside the 95 % covariance region).
 //!
 //! Frames as in CONVENTIONS.md (sensor: origin at the PSD's electrical
 //! centre, `z` along the optical axis towards the scene); poses are named
@@ -45,6 +48,7 @@
 pub mod aoa;
 pub mod caution;
 mod error;
+pub mod evaluate;
 pub mod maps;
 pub mod plane;
 pub mod psd_map;
@@ -60,6 +64,10 @@ pub use aoa::{
 };
 pub use caution::{status_of, Caution};
 pub use error::LocateError;
+pub use evaluate::{
+    evaluate_angles, evaluate_positions, percentile, AngleEvaluation, AnglePair, ErrorStats,
+    PositionEvaluation, PositionPair, CHI2_95_2D, CHI2_95_3D,
+};
 pub use maps::{error_map, ErrorMap, ErrorSource, MapCell, MapOptions, MapValues, MAX_GRID};
 pub use plane::{intersect_plane, Plane, PlaneIntersection};
 pub use psd_map::{MapCorrection, SensorPsdMap};

@@ -4,10 +4,12 @@
 
 use std::path::Path;
 
+use crate::bars::{bar_chart_png, bar_chart_svg};
 use crate::coverage::{coverage_png, coverage_svg};
 use crate::distortion::{distortion_field_png, distortion_field_svg, spiral_png, spiral_svg};
 use crate::error::ReportError;
 use crate::error_map::{heat_map_png, heat_map_svg, HeatCell};
+use crate::histogram::{counts_histogram_png, counts_histogram_svg};
 use crate::html::{Block, Page, Table};
 use crate::plot::{Arrow, ArrowSet, Frame, PointSet};
 use crate::residuals::{residuals_png, residuals_svg};
@@ -61,6 +63,26 @@ pub enum PlotData {
         /// Half the sensor width, mm.
         half_width: f64,
     },
+    /// A histogram of values with a count axis.
+    Histogram {
+        /// The values.
+        values: Vec<f64>,
+        /// Number of bins.
+        bins: usize,
+        /// Title.
+        title: String,
+        /// Label of the value axis (with its unit).
+        x_label: String,
+        /// Label of the count axis.
+        y_label: String,
+    },
+    /// One bar per item (an image's RMS error).
+    Bars {
+        /// The values, in item order.
+        values: Vec<f64>,
+        /// Title, labels, ranges.
+        frame: Frame,
+    },
     /// A heat map over the sensor (Figure 9).
     HeatMap {
         /// Cells.
@@ -107,6 +129,14 @@ impl Plot {
                 frame,
             } => spiral_svg(measured, corrected, frame),
             PlotData::Sensitivity { f, half_width } => aoa_sensitivity_svg(*f, *half_width),
+            PlotData::Histogram {
+                values,
+                bins,
+                title,
+                x_label,
+                y_label,
+            } => counts_histogram_svg(values, *bins, title, x_label, y_label),
+            PlotData::Bars { values, frame } => bar_chart_svg(values, frame),
             PlotData::HeatMap {
                 cells,
                 step,
@@ -149,6 +179,14 @@ impl Plot {
                 );
                 line_plot_png(&curves, &frame, path)
             }
+            PlotData::Histogram {
+                values,
+                bins,
+                title,
+                x_label,
+                y_label,
+            } => counts_histogram_png(values, *bins, title, x_label, y_label, path),
+            PlotData::Bars { values, frame } => bar_chart_png(values, frame, path),
             PlotData::HeatMap {
                 cells,
                 step,
@@ -177,17 +215,20 @@ pub struct CalibrationReport {
     /// Per image: residuals recomputed from the data, if given.
     pub recomputed: Option<Table>,
     /// What the calibration noticed about itself, one line each
-    /// (`code (severity): message`); empty when it noticed nothing.
+    /// (`code (severity): message`), and warnings about the data; empty
+    /// when there is nothing to say. Shown first.
     pub diagnostics: Vec<String>,
+    /// Provenance: version, command, inputs with their SHA-256.
+    pub provenance: Option<Table>,
+    /// The estimated parameters' correlation matrix: names and rows.
+    pub correlation: Option<(Vec<String>, Vec<Vec<f64>>)>,
+    /// The points with the largest residuals.
+    pub worst_points: Option<Table>,
 }
 
 /// The page of a report; `svgs` are its plots' SVG texts, in order.
 pub fn calibration_page(report: &CalibrationReport, svgs: &[String]) -> Page {
     let mut page = Page::new(&report.title);
-    page.push(Block::List(report.sources.clone()));
-    page.push(Block::Heading("Parameters".into()));
-    page.push(Block::Table(report.parameters.clone()));
-    page.push(Block::Table(report.fit.clone()));
     page.push(Block::Heading("Diagnostics".into()));
     if report.diagnostics.is_empty() {
         page.push(Block::Paragraph(
@@ -196,6 +237,22 @@ pub fn calibration_page(report: &CalibrationReport, svgs: &[String]) -> Page {
     } else {
         page.push(Block::List(report.diagnostics.clone()));
     }
+    page.push(Block::List(report.sources.clone()));
+    page.push(Block::Heading("Parameters".into()));
+    page.push(Block::Table(report.parameters.clone()));
+    if let Some((names, values)) = &report.correlation {
+        page.push(Block::Correlation {
+            caption: "Correlations of the estimated parameters (|ρ| near 1: the data hardly \
+                      separate them)"
+                .into(),
+            names: names.clone(),
+            values: values.clone(),
+        });
+    }
+    page.push(Block::Table(report.fit.clone()));
+    if let Some(t) = &report.provenance {
+        page.push(Block::Table(t.clone()));
+    }
     page.push(Block::Heading("Plots".into()));
     page.push(Block::Figures(
         svgs.iter()
@@ -203,6 +260,10 @@ pub fn calibration_page(report: &CalibrationReport, svgs: &[String]) -> Page {
             .map(|(svg, p)| (svg.clone(), p.caption.clone()))
             .collect(),
     ));
+    if let Some(t) = &report.worst_points {
+        page.push(Block::Heading("Worst points".into()));
+        page.push(Block::Table(t.clone()));
+    }
     page.push(Block::Heading("Images".into()));
     page.push(Block::Table(report.images.clone()));
     if let Some(t) = &report.recomputed {
@@ -230,6 +291,9 @@ mod tests {
             images: table,
             recomputed: None,
             diagnostics,
+            provenance: None,
+            correlation: None,
+            worst_points: None,
         }
     }
 

@@ -7,7 +7,7 @@ use plotters::prelude::*;
 
 use crate::error::{draw_err, ReportError};
 use crate::plot::{
-    chart, color, finite, legend, to_png, to_svg, Figure, Frame, PointSet, MAX_LEGEND,
+    chart, chart_legend, color, finite, legend, to_png, to_svg, Figure, Frame, PointSet, MAX_LEGEND,
 };
 
 struct Coverage<'a> {
@@ -26,7 +26,12 @@ impl Figure for Coverage<'_> {
                 .iter()
                 .flat_map(|s| s.points.iter().flat_map(|p| [p.0, p.1])),
         )?;
-        let mut chart = chart(root, self.frame)?;
+        let labelled = self.images.len() <= MAX_LEGEND && !self.images.is_empty();
+        let mut chart = if labelled {
+            chart_legend(root, self.frame)?
+        } else {
+            chart(root, self.frame)?
+        };
         let (hx, hy) = (0.5 * self.lx, 0.5 * self.ly);
         chart
             .draw_series(std::iter::once(PathElement::new(
@@ -34,7 +39,6 @@ impl Figure for Coverage<'_> {
                 BLACK.stroke_width(2),
             )))
             .map_err(draw_err)?;
-        let labelled = self.images.len() <= MAX_LEGEND;
         for (k, set) in self.images.iter().enumerate() {
             let c = color(k);
             let series = chart
@@ -46,7 +50,7 @@ impl Figure for Coverage<'_> {
                 });
             }
         }
-        if labelled && !self.images.is_empty() {
+        if labelled {
             legend(&mut chart)?;
         }
         Ok(())

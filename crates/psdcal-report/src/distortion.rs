@@ -7,7 +7,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::{draw_err, ReportError};
-use crate::plot::{chart, color, finite, legend, to_png, to_svg, Arrow, ArrowSet, Figure, Frame};
+use crate::plot::{
+    chart_legend, color, finite, legend, to_png, to_svg, Arrow, ArrowSet, Figure, Frame,
+};
 use crate::residuals::Arrows;
 
 fn field_sets(arrows: &[Arrow]) -> [ArrowSet; 1] {
@@ -69,7 +71,7 @@ impl Figure for Spiral<'_> {
                 .chain(self.corrected)
                 .flat_map(|p| [p.0, p.1]),
         )?;
-        let mut chart = chart(root, self.frame)?;
+        let mut chart = chart_legend(root, self.frame)?;
         let red = color(3);
         let blue = color(0);
         chart

@@ -107,10 +107,10 @@ impl Figure for HeatMap<'_> {
             .disable_y_mesh()
             .disable_x_axis()
             .y_desc(self.value_label)
-            .label_style((FAMILY, 11))
-            .axis_desc_style((FAMILY, 12))
+            .label_style((FAMILY, 14))
+            .axis_desc_style((FAMILY, 15))
             .y_labels(6)
-            .y_label_formatter(&|v| crate::number::num(*v))
+            .y_label_formatter(&|v| crate::plot::tick_label(*v, (lo, hi)))
             .draw()
             .map_err(draw_err)?;
         let step = (hi - lo) / COLORBAR_STEPS as f64;

@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::{draw_err, ReportError};
-use crate::plot::{chart, color, finite, pad, to_png, to_svg, Figure, Frame};
+use crate::plot::{build_chart, color, finite, pad, to_png, to_svg, Figure, Frame};
 
 /// The counts of `values` in `bins` equal bins over `[lo, hi]` (the last
 /// bin closed).
@@ -34,6 +34,7 @@ struct Histogram<'a> {
     bins: usize,
     title: &'a str,
     x_label: &'a str,
+    y_label: &'a str,
 }
 
 impl Histogram<'_> {
@@ -68,11 +69,11 @@ impl Figure for Histogram<'_> {
         let frame = Frame::new(
             self.title,
             self.x_label,
-            "trials",
+            self.y_label,
             pad((lo, hi)),
             (0.0, 1.1 * top),
         );
-        let mut chart = chart(root, &frame)?;
+        let mut chart = build_chart(root, &frame, false, true, self.truth.is_some())?;
         let width = (hi - lo) / counts.len() as f64;
         let fill = color(0).mix(0.75).filled();
         chart
@@ -118,6 +119,7 @@ pub fn histogram_svg(
         bins,
         title,
         x_label,
+        y_label: "trials",
     })
 }
 
@@ -137,6 +139,48 @@ pub fn histogram_png(
             bins,
             title,
             x_label,
+            y_label: "trials",
+        },
+        path,
+    )
+}
+
+/// A histogram of `values` in `bins` equal bins with a labelled count axis
+/// (integer ticks) and no truth line.
+pub fn counts_histogram_svg(
+    values: &[f64],
+    bins: usize,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+) -> Result<String, ReportError> {
+    to_svg(&Histogram {
+        values,
+        truth: None,
+        bins,
+        title,
+        x_label,
+        y_label,
+    })
+}
+
+/// [`counts_histogram_svg`] as a PNG file.
+pub fn counts_histogram_png(
+    values: &[f64],
+    bins: usize,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    path: &Path,
+) -> Result<(), ReportError> {
+    to_png(
+        &Histogram {
+            values,
+            truth: None,
+            bins,
+            title,
+            x_label,
+            y_label,
         },
         path,
     )

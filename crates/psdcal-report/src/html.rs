@@ -18,8 +18,9 @@ table{border-collapse:collapse;font-size:0.9rem;font-variant-numeric:tabular-num
 caption{text-align:left;font-weight:600;padding:0.3rem 0}\
 th,td{border:1px solid #ccc;padding:0.25rem 0.5rem;text-align:right;white-space:nowrap}\
 th:first-child,td:first-child{text-align:left}thead th{background:#f2f2f2}\
+.correlation td{text-align:center;min-width:3.2em}\
 figure{margin:1rem 0;max-width:100%}figure svg{max-width:100%;height:auto;display:block}\
-figcaption{font-size:0.9rem;color:#444}\
+figcaption{font-size:0.9rem;color:#444}li,p{overflow-wrap:anywhere}\
 .figures{display:flex;flex-wrap:wrap;gap:1rem}.figures figure{flex:1 1 20rem;margin:0}\
 @media print{body{max-width:none;padding:0}.table-wrap{overflow:visible}\
 figure,table{break-inside:avoid}h2{break-after:avoid}}";
@@ -48,6 +49,34 @@ pub enum Block {
     Table(Table),
     /// Figures side by side (wrapping on narrow screens): `(svg, caption)`.
     Figures(Vec<(String, String)>),
+    /// A correlation matrix as a table whose cells are coloured by the
+    /// value (blue −1, white 0, red +1), two decimals in each.
+    Correlation {
+        /// Caption above the table.
+        caption: String,
+        /// Row and column names.
+        names: Vec<String>,
+        /// The square matrix, one row per name.
+        values: Vec<Vec<f64>>,
+    },
+}
+
+/// The background of a correlation `r` (clamped to [−1, 1]): white at 0,
+/// towards blue (−1) or red (+1); and a text colour that stays readable.
+pub fn correlation_colour(r: f64) -> (String, &'static str) {
+    let r = if r.is_finite() {
+        r.clamp(-1.0, 1.0)
+    } else {
+        0.0
+    };
+    let (end, a) = if r < 0.0 {
+        ((33.0, 102.0, 172.0), -r)
+    } else {
+        ((178.0, 24.0, 43.0), r)
+    };
+    let mix = |c: f64| (255.0 + a * (c - 255.0)).round() as u8;
+    let background = format!("#{:02x}{:02x}{:02x}", mix(end.0), mix(end.1), mix(end.2));
+    (background, if a > 0.6 { "#fff" } else { "#111" })
 }
 
 /// An HTML page.
@@ -106,6 +135,11 @@ fn render_block(out: &mut String, block: &Block) {
             out.push_str("</ul>\n");
         }
         Block::Table(table) => render_table(out, table),
+        Block::Correlation {
+            caption,
+            names,
+            values,
+        } => render_correlation(out, caption, names, values),
         Block::Figures(figures) => {
             out.push_str("<div class=\"figures\">\n");
             for (svg, caption) in figures {
@@ -138,6 +172,32 @@ fn render_table(out: &mut String, table: &Table) {
         out.push_str("<tr>");
         for cell in row {
             out.push_str(&format!("<td>{}</td>", escape_html(cell)));
+        }
+        out.push_str("</tr>\n");
+    }
+    out.push_str("</tbody></table></div>\n");
+}
+
+fn render_correlation(out: &mut String, caption: &str, names: &[String], values: &[Vec<f64>]) {
+    out.push_str("<div class=\"table-wrap\"><table class=\"correlation\">\n");
+    out.push_str(&format!("<caption>{}</caption>\n", escape_html(caption)));
+    out.push_str("<thead><tr><th scope=\"col\"></th>");
+    for n in names {
+        out.push_str(&format!("<th scope=\"col\">{}</th>", escape_html(n)));
+    }
+    out.push_str("</tr></thead>\n<tbody>\n");
+    for (name, row) in names.iter().zip(values) {
+        out.push_str(&format!("<tr><th scope=\"row\">{}</th>", escape_html(name)));
+        for &r in row {
+            let (bg, fg) = correlation_colour(r);
+            let text = if r.is_finite() {
+                format!("{r:.2}")
+            } else {
+                "–".into()
+            };
+            out.push_str(&format!(
+                "<td style=\"background:{bg};color:{fg}\">{text}</td>"
+            ));
         }
         out.push_str("</tr>\n");
     }
@@ -182,6 +242,32 @@ mod tests {
         assert!(!html.contains("<script"));
         assert!(!html.contains("alert('x')"));
         assert_eq!(html.matches("&lt;script&gt;alert(&#39;x&#39;)").count(), 9);
+        let mut page = Page::new("m");
+        page.push(Block::Correlation {
+            caption: evil.into(),
+            names: vec![evil.into()],
+            values: vec![vec![0.5]],
+        });
+        let html = page.render();
+        assert!(!html.contains("<script"));
+        assert_eq!(html.matches("&lt;script&gt;").count(), 3);
+    }
+
+    #[test]
+    fn correlations_are_coloured_by_value() {
+        assert_eq!(correlation_colour(0.0), ("#ffffff".to_string(), "#111"));
+        assert_eq!(correlation_colour(1.0), ("#b2182b".to_string(), "#fff"));
+        assert_eq!(correlation_colour(-1.0), ("#2166ac".to_string(), "#fff"));
+        assert_eq!(correlation_colour(f64::NAN).0, "#ffffff");
+        let mut page = Page::new("m");
+        page.push(Block::Correlation {
+            caption: "c".into(),
+            names: vec!["f".into(), "k1".into()],
+            values: vec![vec![1.0, -0.93], vec![-0.93, 1.0]],
+        });
+        let html = page.render();
+        assert!(html.contains("<td style=\"background:#b2182b;color:#fff\">1.00</td>"));
+        assert!(html.contains(">-0.93</td>"));
     }
 
     #[test]

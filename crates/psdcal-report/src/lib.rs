@@ -13,6 +13,9 @@
 //! | AoA / position error maps (Fig. 9) | [`heat_map_svg`] |
 //! | AoA sensitivity to Δx and Δf (Fig. 6) | [`aoa_sensitivity_svg`], [`line_plot_svg`] |
 //! | Monte Carlo histograms | [`histogram_svg`] |
+//! | scatter plots | [`scatter_svg`] |
+//! | bar charts (per-image RMS) | [`bar_chart_svg`] |
+//! | a positioning evaluation (error CDF, error vectors, error against distance) | [`evaluation_page`] |
 //!
 //! Pages ([`Page`]) are one HTML file with inline SVG, an inline style
 //! sheet, no script and nothing loaded from the network; every text is
@@ -20,31 +23,39 @@
 
 #![warn(missing_docs)]
 
+pub mod bars;
 pub mod calibration;
 pub mod coverage;
 pub mod distortion;
 pub mod error;
 pub mod error_map;
 pub mod escape;
+pub mod evaluation;
 pub mod histogram;
 pub mod html;
-mod number;
+pub mod number;
 mod plot;
 pub mod residuals;
+pub mod scatter;
 pub mod sensitivity;
 pub mod study;
 
+pub use bars::{bar_chart_png, bar_chart_svg, bar_frame};
 pub use calibration::{calibration_page, CalibrationReport, Plot, PlotData};
 pub use coverage::{coverage_png, coverage_svg};
 pub use distortion::{distortion_field_png, distortion_field_svg, spiral_png, spiral_svg};
 pub use error::ReportError;
 pub use error_map::{grid_step, heat_map_png, heat_map_svg, HeatCell, COLORBAR_STEPS};
 pub use escape::escape_html;
-pub use histogram::{bin_counts, histogram_png, histogram_svg};
-pub use html::{inline_svg, Block, Page, Table};
-pub use number::num;
-pub use plot::{Arrow, ArrowSet, Frame, PointSet};
+pub use evaluation::{cdf_points, evaluation_page, EvaluationReport};
+pub use histogram::{
+    bin_counts, counts_histogram_png, counts_histogram_svg, histogram_png, histogram_svg,
+};
+pub use html::{correlation_colour, inline_svg, Block, Page, Table};
+pub use number::{num, unit_text, value_with_sigma};
+pub use plot::{count_label, tick_label, Arrow, ArrowSet, Frame, PointSet};
 pub use residuals::{residuals_png, residuals_svg};
+pub use scatter::{scatter_png, scatter_svg};
 pub use sensitivity::{
     aoa_sensitivity_svg, line_plot_png, line_plot_svg, paper_sensitivity_curves,
 };

@@ -205,6 +205,39 @@ pub(crate) fn to_png<F: Figure>(figure: &F, path: &Path) -> Result<(), ReportErr
     })
 }
 
+/// Tick labels per axis at most (plotters' ticks are then at least
+/// `range / MAX_TICKS` apart).
+const MAX_TICKS: usize = 8;
+
+/// The text of a tick at `v` on an axis over `range`: enough decimals (or
+/// mantissa digits, in scientific notation beyond 1e-3…1e5) that ticks
+/// `range / (2 MAX_TICKS)` apart never print alike; `-0` printed `0`.
+pub fn tick_label(v: f64, range: (f64, f64)) -> String {
+    let step = ((range.1 - range.0).abs() / (2 * MAX_TICKS) as f64).max(f64::MIN_POSITIVE);
+    let magnitude = range.0.abs().max(range.1.abs());
+    let text = if !(1e-3..1e5).contains(&magnitude) {
+        let digits = ((magnitude / step).log10().ceil().max(0.0) as usize).min(12);
+        format!("{v:.digits$e}")
+    } else {
+        let decimals = ((-step.log10()).ceil().max(0.0) as usize).min(12);
+        format!("{v:.decimals$}")
+    };
+    if text.starts_with('-') && text[1..].chars().all(|c| c == '0' || c == '.') {
+        text[1..].to_string()
+    } else {
+        text
+    }
+}
+
+/// The text of a tick on a count axis: integers only (other ticks blank).
+pub fn count_label(v: f64) -> String {
+    if (v - v.round()).abs() < 1e-9 {
+        format!("{}", v.round().abs() as u64)
+    } else {
+        String::new()
+    }
+}
+
 /// The chart of a frame on `area`, with its mesh and axis labels drawn.
 pub(crate) fn chart<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
@@ -217,22 +250,97 @@ pub(crate) fn chart<'a, DB: DrawingBackend>(
     >,
     ReportError,
 > {
+    build_chart(area, frame, false, false, false)
+}
+
+/// [`chart`] with room on the right for a legend outside the data
+/// ([`legend`]).
+pub(crate) fn chart_legend<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    frame: &Frame,
+) -> Result<
+    ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    ReportError,
+> {
+    build_chart(area, frame, false, false, true)
+}
+
+/// Width of the legend column right of the data, pixels.
+pub(crate) const LEGEND_WIDTH: u32 = 150;
+
+/// [`chart`], an axis a count axis (integer tick labels) when `x_counts`
+/// or `y_counts`.
+pub(crate) fn chart_with<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    frame: &Frame,
+    x_counts: bool,
+    y_counts: bool,
+) -> Result<
+    ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    ReportError,
+> {
+    build_chart(area, frame, x_counts, y_counts, false)
+}
+
+/// The chart: count axes as asked, and a legend column when `legend`.
+pub(crate) fn build_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    frame: &Frame,
+    x_counts: bool,
+    y_counts: bool,
+    legend: bool,
+) -> Result<
+    ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    ReportError,
+> {
     let mut chart = ChartBuilder::on(area)
-        .caption(&frame.title, (FAMILY, 18))
+        .caption(&frame.title, (FAMILY, 20))
         .margin(12)
-        .x_label_area_size(42)
-        .y_label_area_size(64)
+        .margin_right(if legend { 12 + LEGEND_WIDTH } else { 12 })
+        .x_label_area_size(48)
+        .y_label_area_size(78)
         .build_cartesian_2d(
             frame.x_range.0..frame.x_range.1,
             frame.y_range.0..frame.y_range.1,
         )
         .map_err(draw_err)?;
+    let (xr, yr) = (frame.x_range, frame.y_range);
+    let x_fmt = move |v: &f64| {
+        if x_counts {
+            count_label(*v)
+        } else {
+            tick_label(*v, xr)
+        }
+    };
+    let y_fmt = move |v: &f64| {
+        if y_counts {
+            count_label(*v)
+        } else {
+            tick_label(*v, yr)
+        }
+    };
     chart
         .configure_mesh()
         .x_desc(frame.x_label.as_str())
         .y_desc(frame.y_label.as_str())
-        .label_style((FAMILY, 12))
-        .axis_desc_style((FAMILY, 14))
+        .x_labels(MAX_TICKS)
+        .y_labels(MAX_TICKS)
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .label_style((FAMILY, 15))
+        .axis_desc_style((FAMILY, 16))
         .light_line_style(WHITE.mix(0.0))
         .bold_line_style(BLACK.mix(0.12))
         .draw()
@@ -240,7 +348,8 @@ pub(crate) fn chart<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
-/// The legend, when there are series labels and not too many.
+/// The legend, outside the data: in the column right of the plotting area
+/// that [`chart_legend`] leaves free.
 pub(crate) fn legend<'a, DB: DrawingBackend + 'a>(
     chart: &mut ChartContext<
         'a,
@@ -248,12 +357,13 @@ pub(crate) fn legend<'a, DB: DrawingBackend + 'a>(
         Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
     >,
 ) -> Result<(), ReportError> {
+    let width = chart.plotting_area().dim_in_pixel().0 as i32;
     chart
         .configure_series_labels()
-        .label_font((FAMILY, 12))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.4))
-        .position(SeriesLabelPosition::UpperRight)
+        .label_font((FAMILY, 14))
+        .background_style(WHITE.mix(0.0))
+        .border_style(WHITE.mix(0.0))
+        .position(SeriesLabelPosition::Coordinate(width + 8, 0))
         .draw()
         .map_err(draw_err)
 }

@@ -8,7 +8,8 @@ use plotters::prelude::*;
 
 use crate::error::{draw_err, ReportError};
 use crate::plot::{
-    arrow_parts, chart, color, finite, legend, to_png, to_svg, ArrowSet, Figure, Frame, MAX_LEGEND,
+    arrow_parts, chart, chart_legend, color, finite, legend, to_png, to_svg, ArrowSet, Figure,
+    Frame, MAX_LEGEND,
 };
 
 pub(crate) struct Arrows<'a> {
@@ -35,11 +36,15 @@ impl Figure for Arrows<'_> {
                     .flat_map(|a| [a.at.0, a.at.1, a.delta.0, a.delta.1])
             }),
         )?;
-        let mut chart = chart(root, self.frame)?;
+        let labelled = self.sets.len() > 1 && self.sets.len() <= MAX_LEGEND;
+        let mut chart = if labelled {
+            chart_legend(root, self.frame)?
+        } else {
+            chart(root, self.frame)?
+        };
         let span = (self.frame.x_range.1 - self.frame.x_range.0)
             .max(self.frame.y_range.1 - self.frame.y_range.0);
         let head = 0.018 * span;
-        let labelled = self.sets.len() > 1 && self.sets.len() <= MAX_LEGEND;
         for (k, set) in self.sets.iter().enumerate() {
             let c = color(k);
             let ends: Vec<((f64, f64), (f64, f64))> = set

@@ -7,7 +7,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::{draw_err, ReportError};
-use crate::plot::{chart, color, finite, legend, to_png, to_svg, Figure, Frame, PointSet};
+use crate::plot::{
+    chart, chart_legend, color, finite, legend, to_png, to_svg, Figure, Frame, PointSet,
+};
 
 struct Lines<'a> {
     curves: &'a [PointSet],
@@ -23,7 +25,12 @@ impl Figure for Lines<'_> {
                 .iter()
                 .flat_map(|s| s.points.iter().flat_map(|p| [p.0, p.1])),
         )?;
-        let mut chart = chart(root, self.frame)?;
+        let labelled = self.curves.len() > 1;
+        let mut chart = if labelled {
+            chart_legend(root, self.frame)?
+        } else {
+            chart(root, self.frame)?
+        };
         for (k, curve) in self.curves.iter().enumerate() {
             let c = color(k);
             chart
@@ -35,7 +42,7 @@ impl Figure for Lines<'_> {
                 .label(curve.label.as_str())
                 .legend(move |(x, y)| Rectangle::new([(x, y - 4), (x + 10, y + 4)], c.filled()));
         }
-        if !self.curves.is_empty() {
+        if labelled {
             legend(&mut chart)?;
         }
         Ok(())

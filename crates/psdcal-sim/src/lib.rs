@@ -3,13 +3,15 @@
 //! Simulation of a PSD sensor's whole signal chain (docs/model.md §6: modulated
 //! LEDs, noise at a given SNR, Butterworth band-pass, demodulation, amplifier
 //! gain imbalance (P43), PSD distortion), seeded scenarios, and whole
-//! simulated data sets with their truth. The Monte Carlo studies that
+//! simulated data sets with their truth; a room of sensors and emitters
+//! for positioning ([`room`]). The Monte Carlo studies that
 //! calibrate them live in psdcal-study.
 #![warn(missing_docs)]
 
 pub mod butterworth;
 mod error;
 pub mod nonlinearity;
+pub mod room;
 pub mod scan;
 pub mod scenario;
 pub mod signal;

@@ -50,7 +50,9 @@
 //! | measured → ideal points, angles of arrival, positions, error maps | [`correct()`], [`aoa_table`], [`locate_table`], [`map_table`] |
 //! | electrical gains | [`estimate_gains`] |
 //! | the PSD's non-linearity map from a lensless scan | [`psd_map_from_scan`], [`simulate_scan_file`] |
+//! | positions (and angles) against a surveyed truth: the standard metrics | [`evaluate()`] |
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
+//! | simulate a calibrated rig and emitters (rig.json, rig_points.csv, truth.csv) | [`simulate_positioning`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
 //!
 //! Every failure is an [`Error`]; nothing here prints, and every output
@@ -66,6 +68,7 @@ mod correct;
 mod dataset;
 mod demo;
 mod error;
+mod evaluate;
 mod fit_report;
 mod gains;
 mod locate;
@@ -80,6 +83,7 @@ mod report_tables;
 mod residuals;
 mod sensor;
 mod simulate;
+mod simulate_positioning;
 mod simulate_scan;
 mod study;
 mod study_page;
@@ -93,6 +97,7 @@ pub use correct::{correct, Corrected};
 pub use dataset::{source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
 pub use demo::{demo, Demo, DemoParameter};
 pub use error::{Error, Result};
+pub use evaluate::{evaluate, EvaluateRequest, Evaluation};
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
 pub use gains::{estimate_gains, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
@@ -111,6 +116,7 @@ pub use simulate::{
     chain_with_record, record_cycles_flag, simulate_files, transient_cycles, SimulateRequest,
     SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
 };
+pub use simulate_positioning::{simulate_positioning, PositioningRequest, SimulatedRig};
 pub use simulate_scan::{scan_samples, simulate_scan_file, ScanRequest, SimulatedScan};
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
 pub use summary_text::summary_text;
@@ -122,4 +128,5 @@ pub use psdcal_locate::LocateError;
 pub use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, Plane, MAX_GRID};
 pub use psdcal_model::{Diagnostic, DiagnosticCode, Severity};
 pub use psdcal_model::{Param, PsdGeometry};
+pub use psdcal_sim::room::RoomOptions;
 pub use psdcal_sim::{Lens, TemplateKind};

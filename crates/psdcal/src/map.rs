@@ -29,6 +29,25 @@ pub enum MapSource {
     KSigma(f64),
 }
 
+impl MapSource {
+    /// The source from `--error` lists (flattened) or `--k-sigma`: exactly
+    /// one of the two, each parameter at most once.
+    pub fn choose(errors: Vec<(Param, f64)>, k_sigma: Option<f64>) -> Result<Self, String> {
+        for (i, (p, _)) in errors.iter().enumerate() {
+            if errors[..i].iter().any(|(q, _)| q == p) {
+                return Err(format!(
+                    "--error gives '{p}' twice; give each parameter once"
+                ));
+            }
+        }
+        match (errors.is_empty(), k_sigma) {
+            (false, None) => Ok(Self::Errors(errors)),
+            (true, Some(k)) => Ok(Self::KSigma(k)),
+            _ => Err("give either --error NAME=VALUE or --k-sigma K, not both".into()),
+        }
+    }
+}
+
 /// What to map.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MapRequest {

@@ -215,3 +215,56 @@ pub fn parse_error_list(text: &str) -> Result<Vec<(Param, f64)>, String> {
     }
     Ok(out)
 }
+
+/// `--snr DB`: an SNR in dB, −20 to 200.
+pub fn parse_snr(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && (-20.0..=200.0).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "expected an SNR in dB between -20 and 200, found '{text}'"
+        )),
+    }
+}
+
+/// `--images N`: 3 to 100 000 images.
+pub fn parse_images(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if (3..=100_000).contains(&n) => Ok(n),
+        _ => Err(format!("expected a number of images from 3 to 100000 (a calibration needs at least 3), found '{text}'")),
+    }
+}
+
+/// `--trials N`: 1 to 1 000 000 Monte Carlo trials.
+pub fn parse_trials(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if (1..=1_000_000).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "expected a number of trials from 1 to 1000000, found '{text}'"
+        )),
+    }
+}
+
+/// `--record-cycles N`: a record longer than the filter transient, at most
+/// [`crate::MAX_RECORD_CYCLES`] cycles.
+pub fn parse_record_cycles(text: &str) -> Result<usize, String> {
+    let transient = crate::transient_cycles();
+    match text.trim().parse::<usize>() {
+        Ok(n) if n > transient && n <= crate::MAX_RECORD_CYCLES => Ok(n),
+        _ => Err(format!(
+            "expected a record length from {} to {} cycles (more than the \
+             {transient}-cycle filter transient), found '{text}'",
+            transient + 1,
+            crate::MAX_RECORD_CYCLES
+        )),
+    }
+}
+
+/// `--threads N`: 1 to 1 024 threads.
+pub fn parse_threads(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if (1..=1024).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "expected a number of threads from 1 to 1024, found '{text}'"
+        )),
+    }
+}

@@ -34,6 +34,45 @@ pub struct PointsAnswer {
     pub count: StatusCount,
 }
 
+impl PointsAnswer {
+    /// The one-line summary: `<verb> N point(s) of <points> with
+    /// <calibration>: <status counts>`.
+    pub fn summary_line(&self, verb: &str, calibration: &Path) -> String {
+        format!(
+            "{verb} {} point{} of {} with {}: {}",
+            self.rows,
+            if self.rows == 1 { "" } else { "s" },
+            self.source,
+            calibration.display(),
+            self.count.summary()
+        )
+    }
+
+    /// The JSON summary of a points command (`aoa`, `correct`), with the
+    /// command's own fields `extra` (an object) merged in.
+    pub fn summary_json(
+        &self,
+        command: &str,
+        calibration: &Path,
+        out: Option<&Path>,
+        extra: &serde_json::Value,
+    ) -> serde_json::Value {
+        let mut json = serde_json::json!({
+            "command": command,
+            "calibration": calibration.display().to_string(),
+            "points": self.source,
+            "out": out.map(|p| p.display().to_string()),
+            "from_amplitudes": self.amplitudes,
+            "added_columns": self.added,
+            "rows": self.count.to_json(),
+        });
+        if let (Some(map), Some(extra)) = (json.as_object_mut(), extra.as_object()) {
+            map.extend(extra.clone());
+        }
+        json
+    }
+}
+
 /// The values of one answered row (without `status`) and its cautions, or
 /// why it has no answer.
 pub type RowAnswer = std::result::Result<(Vec<String>, Vec<Caution>), LocateError>;

@@ -15,7 +15,7 @@ use psdcal_report::{
 
 use crate::dataset::{DataSet, DataSetFiles, LoadOptions, PointSource};
 use crate::error::{Error, Result};
-use crate::report_tables::{residual_rows, tables};
+use crate::report_tables::{residual_rows, tables, worst_points};
 use crate::residuals::ResidualTable;
 use crate::sensor::LoadedSensor;
 
@@ -118,7 +118,10 @@ pub fn report_content(
     let (lx, ly) = (geometry.lx, geometry.ly);
     let mut plots = Vec::new();
     let mut recomputed = None;
+    let mut worst = None;
+    let mut warnings = Vec::new();
     if let Some(set) = data {
+        warnings.extend(set.validated.warnings.iter().map(|w| format!("data: {w}")));
         let poses: Vec<(&str, psdcal_model::Pose)> = calibration
             .images
             .iter()
@@ -127,6 +130,7 @@ pub fn report_content(
         let table =
             ResidualTable::compute(&Model::from(model), &poses, &set.template, &set.validated);
         recomputed = Some(residual_rows(&table));
+        worst = Some(worst_points(&table, &set.template));
         data_plots(&mut plots, set, &table, lx, ly);
     }
     let region = &loaded.sensor.valid_region;
@@ -194,7 +198,15 @@ pub fn report_content(
             });
         }
     }
-    let mut report = tables(request, calibration, model, plots, recomputed);
+    let mut report = tables(
+        request,
+        calibration,
+        model,
+        plots,
+        recomputed,
+        worst,
+        warnings,
+    );
     report.sources.push(region_text(region));
     Ok(report)
 }
@@ -298,6 +310,15 @@ fn data_plots(plots: &mut Vec<Plot>, set: &DataSet, table: &ResidualTable, lx: f
             "sensor (projected LED − measured point)",
         ),
     ] {
+        let images = sets.len();
+        let (sets, what) = if images > MAX_IMAGE_ARROWS {
+            (
+                vec![cell_means(&sets, &frame0, CELLS)],
+                format!("{what}, mean per cell of a {CELLS} × {CELLS} grid over {images} images"),
+            )
+        } else {
+            (sets, what.to_string())
+        };
         let span = (frame0.x_range.1 - frame0.x_range.0).max(frame0.y_range.1 - frame0.y_range.0);
         let scale = arrow_scale(sets.iter().flat_map(|s| &s.arrows), span);
         let mut frame = frame0;
@@ -310,6 +331,106 @@ fn data_plots(plots: &mut Vec<Plot>, set: &DataSet, table: &ResidualTable, lx: f
             ),
             data: PlotData::Residuals { sets, scale, frame },
         });
+    }
+    let sizes: Vec<f64> = table
+        .images
+        .iter()
+        .filter_map(|im| im.residuals.as_ref())
+        .flatten()
+        .filter_map(|p| Some(1e3 * p.on_sensor?.norm()))
+        .collect();
+    let rms: Vec<f64> = table
+        .images
+        .iter()
+        .filter_map(|im| im.rms().1.map(|r| 1e3 * r))
+        .collect();
+    if !rms.is_empty() {
+        let worst = table
+            .images
+            .iter()
+            .filter_map(|im| Some((im.rms().1?, im.id.as_str())))
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .map_or(String::new(), |(r, id)| {
+                format!(
+                    "; the largest, {} µm, is image {id}",
+                    psdcal_report::num(1e3 * r)
+                )
+            });
+        plots.push(Plot {
+            name: "image_rms",
+            caption: format!(
+                "RMS sensor residual of each of the {} images, in file order{worst}",
+                rms.len()
+            ),
+            data: PlotData::Bars {
+                frame: psdcal_report::bar_frame(
+                    "RMS residual per image",
+                    "image (in file order)",
+                    "RMS residual (µm)",
+                    &rms,
+                ),
+                values: rms,
+            },
+        });
+    }
+    if !sizes.is_empty() {
+        let bins = ((sizes.len() as f64).sqrt().round() as usize).clamp(5, 30);
+        plots.push(Plot {
+            name: "residual_histogram",
+            caption: format!(
+                "How large the {} sensor residuals are (projected LED − measured point)",
+                sizes.len()
+            ),
+            data: PlotData::Histogram {
+                values: sizes,
+                bins,
+                title: "Sensor residuals".into(),
+                x_label: "residual (µm)".into(),
+                y_label: "points".into(),
+            },
+        });
+    }
+}
+
+/// Above this many images the residual plots show per-cell means.
+const MAX_IMAGE_ARROWS: usize = 12;
+/// Cells per side of the per-cell means.
+const CELLS: usize = 10;
+
+/// The mean residual of each cell of an `n × n` grid over the frame (at
+/// the mean position of its points): one arrow per non-empty cell.
+fn cell_means(sets: &[ArrowSet], frame: &Frame, n: usize) -> ArrowSet {
+    let (x0, y0) = (frame.x_range.0, frame.y_range.0);
+    let (w, h) = (
+        (frame.x_range.1 - x0) / n as f64,
+        (frame.y_range.1 - y0) / n as f64,
+    );
+    let mut sum = vec![(0.0, 0.0, 0.0, 0.0, 0usize); n * n];
+    for a in sets.iter().flat_map(|s| &s.arrows) {
+        let i = (((a.at.0 - x0) / w).floor().max(0.0) as usize).min(n - 1);
+        let j = (((a.at.1 - y0) / h).floor().max(0.0) as usize).min(n - 1);
+        let c = &mut sum[j * n + i];
+        *c = (
+            c.0 + a.at.0,
+            c.1 + a.at.1,
+            c.2 + a.delta.0,
+            c.3 + a.delta.1,
+            c.4 + 1,
+        );
+    }
+    ArrowSet {
+        label: "mean per cell".into(),
+        arrows: sum
+            .iter()
+            .filter(|c| c.4 > 0)
+            .map(|c| {
+                let k = c.4 as f64;
+                Arrow {
+                    at: (c.0 / k, c.1 / k),
+                    delta: (c.2 / k, c.3 / k),
+                }
+            })
+            .collect(),
     }
 }
 

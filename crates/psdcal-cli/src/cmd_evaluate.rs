@@ -1,0 +1,58 @@
+//! `psdcal evaluate`: estimated positions (and angles) against a surveyed
+//! truth by the standard metrics (the library's `evaluate`).
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::cli::Output;
+
+pub const EVALUATE_EXAMPLES: &str = include_str!("../help/evaluate.txt");
+
+/// Arguments of `psdcal evaluate`.
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct EvaluateArgs {
+    /// Surveyed truth: emitter, x_mm, y_mm, z_mm (and/or alpha_x_deg, alpha_y_deg)
+    #[arg(long, value_name = "FILE")]
+    pub truth: PathBuf,
+    /// Estimates to judge: the CSV psdcal locate (or aoa) writes, with an emitter column
+    #[arg(long, value_name = "FILE")]
+    pub estimates: PathBuf,
+    /// Rig file: plot the error against the distance to the nearest sensor
+    #[arg(long, value_name = "FILE")]
+    pub rig: Option<PathBuf>,
+    /// Folder (created if missing) for evaluation.html and its figures (SVG)
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
+}
+
+/// Runs `evaluate`.
+pub fn run(args: &EvaluateArgs, output: Output) -> anyhow::Result<()> {
+    let evaluation = psdcal::evaluate(&psdcal::EvaluateRequest {
+        truth: args.truth.clone(),
+        estimates: args.estimates.clone(),
+        rig: args.rig.clone(),
+    })?;
+    for w in evaluation.warnings() {
+        eprintln!("warning: {w}");
+    }
+    let files = match &args.report {
+        Some(dir) => evaluation.write_report(dir)?,
+        None => Vec::new(),
+    };
+    match output {
+        Output::Quiet => {}
+        Output::Json => {
+            let mut json = evaluation.to_json();
+            json["report"] = serde_json::json!(files.first().map(|f| f.display().to_string()));
+            println!("{}", serde_json::to_string_pretty(&json)?);
+        }
+        Output::Text => {
+            print!("{}", evaluation.text());
+            if let Some(page) = files.first() {
+                println!("wrote {} and {} figures", page.display(), files.len() - 1);
+            }
+        }
+    }
+    Ok(())
+}
