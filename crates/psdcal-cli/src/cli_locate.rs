@@ -232,8 +232,12 @@ impl MapArgs {
             }
         };
         let errors = self.errors.into_iter().flatten().collect();
-        let source = MapSource::choose(errors, self.k_sigma)
-            .map_err(|m| usage(clap::error::ErrorKind::ArgumentConflict, m))?;
+        let source = MapSource::choose(errors, self.k_sigma).map_err(|e| match e {
+            psdcal::MapSourceError::Repeated(_) => {
+                usage(clap::error::ErrorKind::ValueValidation, e)
+            }
+            _ => usage(clap::error::ErrorKind::ArgumentConflict, e),
+        })?;
         Ok(MapConfig {
             model,
             source,

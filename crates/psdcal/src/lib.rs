@@ -101,7 +101,7 @@ pub use evaluate::{evaluate, EvaluateRequest, Evaluation};
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
 pub use gains::{estimate_gains, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
-pub use map::{map_table, MapModel, MapRequest, MapSource, MapTable};
+pub use map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
 pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
 pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};

@@ -32,20 +32,33 @@ pub enum MapSource {
 impl MapSource {
     /// The source from `--error` lists (flattened) or `--k-sigma`: exactly
     /// one of the two, each parameter at most once.
-    pub fn choose(errors: Vec<(Param, f64)>, k_sigma: Option<f64>) -> Result<Self, String> {
+    pub fn choose(
+        errors: Vec<(Param, f64)>,
+        k_sigma: Option<f64>,
+    ) -> std::result::Result<Self, MapSourceError> {
         for (i, (p, _)) in errors.iter().enumerate() {
             if errors[..i].iter().any(|(q, _)| q == p) {
-                return Err(format!(
-                    "--error gives '{p}' twice; give each parameter once"
-                ));
+                return Err(MapSourceError::Repeated(*p));
             }
         }
         match (errors.is_empty(), k_sigma) {
             (false, None) => Ok(Self::Errors(errors)),
             (true, Some(k)) => Ok(Self::KSigma(k)),
-            _ => Err("give either --error NAME=VALUE or --k-sigma K, not both".into()),
+            _ => Err(MapSourceError::Conflict),
         }
     }
+}
+
+/// Why [`MapSource::choose`] refused.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MapSourceError {
+    /// A parameter's error given twice.
+    #[error("--error gives '{0}' twice; give each parameter once")]
+    Repeated(Param),
+    /// Both or neither of the errors and `--k-sigma`.
+    #[error("give either --error NAME=VALUE or --k-sigma K, not both")]
+    Conflict,
 }
 
 /// What to map.
