@@ -7,7 +7,9 @@
 //! calibrate them live in psdcal-study.
 #![warn(missing_docs)]
 
-pub mod butterworth;
+/// The Butterworth band-pass, now in psdcal-signal (re-exported so that
+/// `psdcal_sim::butterworth` keeps its paths).
+pub use psdcal_signal::butterworth;
 mod error;
 pub mod scenario;
 pub mod signal;
