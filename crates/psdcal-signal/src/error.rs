@@ -10,6 +10,46 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Error)]
 #[non_exhaustive]
 pub enum SignalError {
+    /// The record is too short to skip the filter's transient and keep a
+    /// detection window of a few cycles.
+    #[error(
+        "the record has {samples} samples; demodulating it needs at least {minimum} \
+         (the filter's transient plus {cycles} cycles of the lowest tone)"
+    )]
+    RecordTooShortToDemodulate {
+        /// Samples in the record.
+        samples: usize,
+        /// Fewest samples that can be demodulated.
+        minimum: usize,
+        /// Cycles the detection window must hold at least.
+        cycles: f64,
+    },
+    /// A sample sits at the ADC's range (clipped): the amplitude would be
+    /// wrong.
+    #[error(
+        "channel {channel} is saturated at sample {sample} of the record ({value} V, full scale ±{full_scale_v} V)"
+    )]
+    Saturated {
+        /// Channel index (0 = vx1, 1 = vx2, 2 = vy1, 3 = vy2).
+        channel: usize,
+        /// Sample index in the record, 0-based.
+        sample: usize,
+        /// The sample, V.
+        value: f64,
+        /// The ADC's full scale, V.
+        full_scale_v: f64,
+    },
+    /// A sample is NaN or infinite.
+    #[error("channel {channel} has a non-finite sample at {sample} of the record")]
+    NonFiniteSample {
+        /// Channel index.
+        channel: usize,
+        /// Sample index in the record, 0-based.
+        sample: usize,
+    },
+    /// No tone was given.
+    #[error("no tone to detect")]
+    NoTones,
     /// Tones closer than the detection window can separate
     /// (spacing below `2 / window`, docs/model.md §8).
     #[error(
@@ -150,4 +190,3 @@ impl From<ModelError> for SignalError {
         }
     }
 }
-

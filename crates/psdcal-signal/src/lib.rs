@@ -13,5 +13,10 @@
 pub mod butterworth;
 mod error;
 pub mod lockin;
+pub mod record;
+pub mod stream;
+pub mod tones;
 
 pub use error::SignalError;
+pub use record::{demodulate_record, DemodConfig, RecordEstimate, ToneEstimate};
+pub use stream::StreamFilter;

@@ -68,7 +68,10 @@ impl LockIn {
         record_len: usize,
         window_start: usize,
     ) -> Result<Self, SignalError> {
-        for (name, value) in [("frequency_hz", frequency_hz), ("sample_rate_hz", sample_rate_hz)] {
+        for (name, value) in [
+            ("frequency_hz", frequency_hz),
+            ("sample_rate_hz", sample_rate_hz),
+        ] {
             if !value.is_finite() || value <= 0.0 {
                 return Err(SignalError::InvalidParameter {
                     name,
@@ -164,8 +167,13 @@ impl LockIn {
     pub fn sums(&self, filtered: &[f64]) -> IqSums {
         let mut acc = IqSums::default();
         let end = filtered.len().min(self.cos.len());
-        for n in self.window_start.min(end)..end {
-            acc.add(filtered[n], self.cos[n], self.sin[n]);
+        let start = self.window_start.min(end);
+        let window = filtered[start..end]
+            .iter()
+            .zip(&self.cos[start..end])
+            .zip(&self.sin[start..end]);
+        for ((&y, &c), &s) in window {
+            acc.add(y, c, s);
         }
         acc
     }

@@ -392,7 +392,12 @@ impl SignalChain {
         let cycle = config.sample_rate_hz / config.f0_hz;
         let record_len = (config.record_cycles as f64 * cycle).round() as usize;
         let window_start = (config.transient_cycles as f64 * cycle).round() as usize;
-        let lockin = LockIn::new_valid(config.f0_hz, config.sample_rate_hz, record_len, window_start);
+        let lockin = LockIn::new_valid(
+            config.f0_hz,
+            config.sample_rate_hz,
+            record_len,
+            window_start,
+        );
         let gain = filter.magnitude(config.f0_hz);
         let inv_gain = 1.0 / gain;
         let mut chain = Self {
@@ -440,7 +445,10 @@ impl SignalChain {
     /// included), as the columns of a 2×2 matrix.
     fn clean_response(&self) -> [[f64; 2]; 2] {
         let mut out = [[0.0; 2]; 2];
-        for (col, table) in [self.lockin.cos(), self.lockin.sin()].into_iter().enumerate() {
+        for (col, table) in [self.lockin.cos(), self.lockin.sin()]
+            .into_iter()
+            .enumerate()
+        {
             let mut y = table.to_vec();
             self.filter.filter(&mut y);
             let mut acc = Accumulator::default();
