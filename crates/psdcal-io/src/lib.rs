@@ -13,6 +13,10 @@
 //! - [`RigFile`] — rig.json, sensors with poses in a world frame, and
 //!   [`RigObservations`], what they measured per emitter.
 //!
+//! - [`RawReader`] — raw recordings (raw.csv, raw.npy) read frame by frame
+//!   in constant memory, with [`Schedule`] (schedule.csv) and [`Tones`]
+//!   (tones.csv), the input of `demodulate`.
+//!
 //! [`validate_data_set`] checks a template and its observations together and
 //! groups the usable points by image; [`DataSetSummary`] and [`Coverage`]
 //! describe the result. Every output file is written atomically
@@ -38,9 +42,11 @@ mod limits;
 mod number_text;
 mod observations;
 mod points;
+mod raw;
 mod rig;
 mod rig_observations;
 mod same_file;
+mod schedule;
 mod signals;
 mod summary;
 mod template;
@@ -68,9 +74,11 @@ pub use limits::{
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
+pub use raw::{Frame, RawFormat, RawReader, RATE_TOLERANCE};
 pub use rig::{read_rig, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION};
 pub use rig_observations::{RigObservation, RigObservations};
 pub use same_file::refuse_overwrite;
+pub use schedule::{Schedule, ScheduleRow, Tone, Tones};
 pub use signals::{SignalRow, Signals};
 pub use summary::{DataSetSummary, ImageSummary, LineSummary, TemplateSummary};
 pub use template::{Led, LineGroup, Template};
