@@ -72,6 +72,9 @@ pub enum Command {
     /// A self-contained HTML report of a calibration with its plots (SVG and PNG)
     #[command(after_help = crate::cli_report::REPORT_EXAMPLES)]
     Report(crate::cli_report::ReportArgs),
+    /// Demodulate a raw recording (raw.csv, raw.npy) into signals.csv with a per-record SNR
+    #[command(after_help = crate::cmd_demodulate::DEMODULATE_EXAMPLES)]
+    Demodulate(crate::cmd_demodulate::DemodulateArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -243,6 +246,7 @@ pub enum Job {
     Locate(crate::cli_locate::LocateConfig),
     Map(crate::cli_locate::MapConfig),
     Report(crate::cli_report::ReportConfig),
+    Demodulate(crate::cmd_demodulate::DemodulateArgs),
 }
 
 impl Cli {
@@ -277,6 +281,7 @@ impl Cli {
             Command::Locate(args) => Job::Locate(args.into_config(output)?),
             Command::Map(args) => Job::Map(args.into_config(output)?),
             Command::Report(args) => Job::Report(args.into_config()),
+            Command::Demodulate(args) => Job::Demodulate(args),
             Command::Calibrate(args) => {
                 let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;

@@ -16,6 +16,7 @@ mod cmd_calibrate;
 mod cmd_check;
 mod cmd_correct;
 mod cmd_demo;
+pub mod cmd_demodulate;
 mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
@@ -52,6 +53,7 @@ pub fn main() -> ExitCode {
         Job::Simulate(args) => cmd_simulate::run(args, output),
         Job::Study(config) => cmd_study::run(config, output),
         Job::Demo(args) => cmd_demo::run(args, output),
+        Job::Demodulate(args) => cmd_demodulate::run(args, output),
         Job::Correct(config) => cmd_correct::run(config, output),
         Job::Aoa(config) => cmd_aoa::run(config, output),
         Job::Locate(config) => cmd_locate::run(config, output),

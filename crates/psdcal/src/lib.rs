@@ -49,6 +49,7 @@
 //! | a calibration file (version 1 or 2) as a sensor | [`LoadedSensor`], [`sensor_of`] |
 //! | measured → ideal points, angles of arrival, positions, error maps | [`correct()`], [`aoa_table`], [`locate_table`], [`map_table`] |
 //! | electrical gains | [`estimate_gains`] |
+//! | raw recordings → signals.csv (band-pass, lock-in, SNR) | [`demodulate()`] |
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
 //!
@@ -62,6 +63,7 @@ mod convert;
 mod correct;
 mod dataset;
 mod demo;
+mod demodulate;
 mod error;
 mod fit_report;
 mod gains;
@@ -84,6 +86,9 @@ pub use calibrate::{calibrate, Calibrated};
 pub use correct::{correct, Corrected};
 pub use dataset::{source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
 pub use demo::{demo, Demo, DemoParameter};
+pub use demodulate::{
+    demodulate, DemodulateRequest, Demodulated, RecordOutcome, RecordStatus, MAX_RECORD_SAMPLES,
+};
 pub use error::{Error, Result};
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
 pub use gains::{estimate_gains, GainsMethod};
@@ -92,6 +97,7 @@ pub use map::{map_table, MapModel, MapRequest, MapSource, MapTable};
 pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
 pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
+pub use psdcal_signal::DemodConfig;
 pub use report::{report_content, write_report, ReportFiles, ReportRequest};
 pub use residuals::{ImageResiduals, Residual, ResidualTable};
 pub use sensor::{covariance_warning, sensor_of, LoadedSensor};
