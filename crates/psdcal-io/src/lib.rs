@@ -74,11 +74,14 @@ pub use limits::{
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
-pub use raw::{Frame, RawFormat, RawReader, RATE_TOLERANCE};
+pub use raw::{
+    npy_header, write_csv_frames, write_npy_frames, Frame, RawFormat, RawReader, RATE_TOLERANCE,
+    RAW_CSV_HEADER,
+};
 pub use rig::{read_rig, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION};
 pub use rig_observations::{RigObservation, RigObservations};
 pub use same_file::refuse_overwrite;
-pub use schedule::{Schedule, ScheduleRow, Tone, Tones};
+pub use schedule::{write_schedule, write_tones, Schedule, ScheduleRow, Tone, Tones};
 pub use signals::{SignalRow, Signals};
 pub use summary::{DataSetSummary, ImageSummary, LineSummary, TemplateSummary};
 pub use template::{Led, LineGroup, Template};

@@ -562,3 +562,56 @@ fn parse_npy_header(header: &str) -> Result<(NpyType, u64), String> {
         )),
     }
 }
+
+/// The header of a little-endian float64 `.npy` array of shape `(rows, 4)`,
+/// C order (format version 1.0, padded to 64 bytes).
+pub fn npy_header(rows: u64) -> Vec<u8> {
+    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, 4), }}");
+    let mut header = dict.into_bytes();
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(b' ');
+    }
+    header.push(b'\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    // The dictionary of a (u64, 4) shape stays far below 65535 bytes.
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(&header);
+    out
+}
+
+/// Writes `frames` as rows of a `.npy` array (after [`npy_header`]).
+pub fn write_npy_frames(w: &mut impl std::io::Write, frames: &[Frame]) -> std::io::Result<()> {
+    for frame in frames {
+        for v in frame {
+            w.write_all(&v.to_le_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+/// The header line of raw.csv as psdcal writes it.
+pub const RAW_CSV_HEADER: &str = "t_s,vx1,vx2,vy1,vy2";
+
+/// Writes `frames` as raw.csv rows, the first at sample `first` of a
+/// recording sampled at `rate_hz` (`t_s = n / rate`).
+pub fn write_csv_frames(
+    w: &mut impl std::io::Write,
+    first: u64,
+    rate_hz: f64,
+    frames: &[Frame],
+) -> std::io::Result<()> {
+    use crate::number_text::number_text;
+    for (i, f) in frames.iter().enumerate() {
+        let t = (first + i as u64) as f64 / rate_hz;
+        writeln!(
+            w,
+            "{},{},{},{},{}",
+            number_text(t),
+            number_text(f[0]),
+            number_text(f[1]),
+            number_text(f[2]),
+            number_text(f[3])
+        )?;
+    }
+    Ok(())
+}

@@ -186,3 +186,53 @@ impl Tones {
         })
     }
 }
+
+/// Writes schedule.csv (`image,led,t_start_s,t_stop_s`, or without `led`
+/// when every row's is `None`), with a leading comment.
+pub fn write_schedule(
+    path: impl AsRef<Path>,
+    comment: &str,
+    rows: &[ScheduleRow],
+) -> Result<(), IoError> {
+    use crate::number_text::number_text;
+    use std::io::Write;
+    let with_led = rows.iter().any(|r| r.led.is_some());
+    crate::atomic::write_atomic(path, |w| {
+        for line in comment.lines() {
+            writeln!(w, "# {line}")?;
+        }
+        writeln!(
+            w,
+            "{}",
+            if with_led {
+                "image,led,t_start_s,t_stop_s"
+            } else {
+                "image,t_start_s,t_stop_s"
+            }
+        )?;
+        for r in rows {
+            let times = format!("{},{}", number_text(r.t_start_s), number_text(r.t_stop_s));
+            match (&r.led, with_led) {
+                (Some(led), true) => writeln!(w, "{},{},{}", r.image, led, times)?,
+                _ => writeln!(w, "{},{}", r.image, times)?,
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Writes tones.csv (`led,frequency_hz`), with a leading comment.
+pub fn write_tones(path: impl AsRef<Path>, comment: &str, tones: &[Tone]) -> Result<(), IoError> {
+    use crate::number_text::number_text;
+    use std::io::Write;
+    crate::atomic::write_atomic(path, |w| {
+        for line in comment.lines() {
+            writeln!(w, "# {line}")?;
+        }
+        writeln!(w, "led,frequency_hz")?;
+        for t in tones {
+            writeln!(w, "{},{}", t.led, number_text(t.frequency_hz))?;
+        }
+        Ok(())
+    })
+}

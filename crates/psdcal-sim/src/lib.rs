@@ -3,7 +3,8 @@
 //! Simulation of a PSD sensor's whole signal chain (docs/model.md §6: modulated
 //! LEDs, noise at a given SNR, Butterworth band-pass, demodulation, amplifier
 //! gain imbalance (P43), PSD distortion), seeded scenarios, and whole
-//! simulated data sets with their truth. The Monte Carlo studies that
+//! simulated data sets with their truth, and raw recordings as a card
+//! records them (`raw`: sampled channels with a card's impairments). The Monte Carlo studies that
 //! calibrate them live in psdcal-study.
 #![warn(missing_docs)]
 
@@ -11,11 +12,13 @@
 /// `psdcal_sim::butterworth` keeps its paths).
 pub use psdcal_signal::butterworth;
 mod error;
+pub mod raw;
 pub mod scenario;
 pub mod signal;
 pub mod simulate;
 
 pub use error::SimError;
+pub use raw::{Impairment, Impairments, RawPlan, RawRecord};
 pub use scenario::{Lens, TemplateKind};
 pub use signal::{ChainConfig, SignalChain};
 pub use simulate::{simulate, Simulation, SimulationOptions};

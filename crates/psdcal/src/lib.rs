@@ -77,6 +77,7 @@ mod report_tables;
 mod residuals;
 mod sensor;
 mod simulate;
+mod simulate_raw;
 mod study;
 mod study_page;
 mod table;
@@ -97,13 +98,18 @@ pub use map::{map_table, MapModel, MapRequest, MapSource, MapTable};
 pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
 pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
+pub use psdcal_io::RawFormat;
 pub use psdcal_signal::DemodConfig;
+pub use psdcal_sim::{Impairment, Impairments};
 pub use report::{report_content, write_report, ReportFiles, ReportRequest};
 pub use residuals::{ImageResiduals, Residual, ResidualTable};
 pub use sensor::{covariance_warning, sensor_of, LoadedSensor};
 pub use simulate::{
     chain_with_record, record_cycles_flag, simulate_files, transient_cycles, SimulateRequest,
     SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
+};
+pub use simulate_raw::{
+    simulate_raw_files, RawRequest, FDMA_SPACING_HZ, RAW_F0_HZ, RAW_SAMPLE_RATE_HZ,
 };
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
