@@ -188,3 +188,32 @@ impl LockIn {
         )
     }
 }
+
+/// The sums `Σ y c`, `Σ y s`, `Σ y²` over the common length of the three
+/// slices (the reference already aligned with `y`), accumulated in four
+/// interleaved partial sums (independent additions the processor
+/// overlaps; the order of the additions differs from a plain loop by
+/// rounding only).
+pub fn window_sums(y: &[f64], cos: &[f64], sin: &[f64]) -> IqSums {
+    let len = y.len().min(cos.len()).min(sin.len());
+    let (y, cos, sin) = (&y[..len], &cos[..len], &sin[..len]);
+    let mut acc = [IqSums::default(); 4];
+    let body = len - len % 4;
+    for ((y4, c4), s4) in y[..body]
+        .chunks_exact(4)
+        .zip(cos[..body].chunks_exact(4))
+        .zip(sin[..body].chunks_exact(4))
+    {
+        for lane in 0..4 {
+            acc[lane].add(y4[lane], c4[lane], s4[lane]);
+        }
+    }
+    for n in body..len {
+        acc[n - body].add(y[n], cos[n], sin[n]);
+    }
+    IqSums {
+        yc: (acc[0].yc + acc[1].yc) + (acc[2].yc + acc[3].yc),
+        ys: (acc[0].ys + acc[1].ys) + (acc[2].ys + acc[3].ys),
+        yy: (acc[0].yy + acc[1].yy) + (acc[2].yy + acc[3].yy),
+    }
+}

@@ -245,19 +245,14 @@ fn detect<const C: usize>(
     let mut gram = DMatrix::zeros(p, p);
     for i in 0..p {
         for j in i..p {
-            let v: f64 = basis(i).iter().zip(basis(j)).map(|(a, b)| a * b).sum();
+            let v = dot(basis(i), basis(j));
             gram[(i, j)] = v;
             gram[(j, i)] = v;
         }
     }
     let mut b = DMatrix::zeros(p, C);
     for i in 0..p {
-        let mut acc = [0.0; C];
-        for (frame, &r) in frames.iter().zip(basis(i)) {
-            for c in 0..C {
-                acc[c] += frame[c] * r;
-            }
-        }
+        let acc = frame_dot(frames, basis(i));
         for c in 0..C {
             b[(i, c)] = acc[c];
         }
@@ -269,6 +264,47 @@ fn detect<const C: usize>(
         }
     }
     Detection { gram, b, yy }
+}
+
+/// `Σ a b` in four interleaved partial sums.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in ca.zip(cb) {
+        for lane in 0..4 {
+            acc[lane] += x[lane] * y[lane];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+/// `Σ_n frame[n][c] r[n]` per channel, in four interleaved partial sums.
+fn frame_dot<const C: usize>(frames: &[[f64; C]], r: &[f64]) -> [f64; C] {
+    let mut acc = [[0.0; C]; 4];
+    let (cf, cr) = (frames.chunks_exact(4), r.chunks_exact(4));
+    let mut out = [0.0; C];
+    for (frame, &v) in cf.remainder().iter().zip(cr.remainder()) {
+        for c in 0..C {
+            out[c] += frame[c] * v;
+        }
+    }
+    for (f4, r4) in cf.zip(cr) {
+        for lane in 0..4 {
+            for c in 0..C {
+                acc[lane][c] += f4[lane][c] * r4[lane];
+            }
+        }
+    }
+    for c in 0..C {
+        out[c] += (acc[0][c] + acc[1][c]) + (acc[2][c] + acc[3][c]);
+    }
+    out
 }
 
 /// The relative clock offset `Δρ` seen by `J` sub-windows at `freqs`, or
