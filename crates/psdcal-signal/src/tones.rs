@@ -64,10 +64,9 @@ pub fn fill_reference(
             }
             i += LANES;
         }
-        for lane in 0..end - i {
-            cos[i + lane] = c[lane];
-            sin[i + lane] = s[lane];
-        }
+        let rest = end - i;
+        cos[i..end].copy_from_slice(&c[..rest]);
+        sin[i..end].copy_from_slice(&s[..rest]);
         start = end;
     }
 }
