@@ -75,6 +75,9 @@ pub enum Command {
     /// Demodulate a raw recording (raw.csv, raw.npy) into signals.csv with a per-record SNR
     #[command(after_help = crate::cmd_demodulate::DEMODULATE_EXAMPLES)]
     Demodulate(crate::cmd_demodulate::DemodulateArgs),
+    /// Angles of arrival per window and LED from raw samples on standard input (live)
+    #[command(after_help = crate::cmd_track::TRACK_EXAMPLES)]
+    Track(crate::cmd_track::TrackArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -247,6 +250,7 @@ pub enum Job {
     Map(crate::cli_locate::MapConfig),
     Report(crate::cli_report::ReportConfig),
     Demodulate(crate::cmd_demodulate::DemodulateArgs),
+    Track(crate::cmd_track::TrackArgs),
 }
 
 impl Cli {
@@ -282,6 +286,7 @@ impl Cli {
             Command::Map(args) => Job::Map(args.into_config(output)?),
             Command::Report(args) => Job::Report(args.into_config()),
             Command::Demodulate(args) => Job::Demodulate(args),
+            Command::Track(args) => Job::Track(args),
             Command::Calibrate(args) => {
                 let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;

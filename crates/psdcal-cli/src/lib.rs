@@ -23,6 +23,7 @@ mod cmd_map;
 mod cmd_report;
 mod cmd_simulate;
 mod cmd_study;
+pub mod cmd_track;
 mod guard;
 mod report;
 
@@ -54,6 +55,7 @@ pub fn main() -> ExitCode {
         Job::Study(config) => cmd_study::run(config, output),
         Job::Demo(args) => cmd_demo::run(args, output),
         Job::Demodulate(args) => cmd_demodulate::run(args, output),
+        Job::Track(args) => cmd_track::run(args, output),
         Job::Correct(config) => cmd_correct::run(config, output),
         Job::Aoa(config) => cmd_aoa::run(config, output),
         Job::Locate(config) => cmd_locate::run(config, output),

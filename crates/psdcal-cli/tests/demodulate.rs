@@ -189,3 +189,76 @@ fn bad_inputs_are_clear_errors() {
     ]);
     assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
 }
+
+/// `track` answers each window as soon as its samples have arrived: the
+/// first angles come out while the input is still open.
+#[test]
+fn track_answers_before_the_input_ends() {
+    use std::io::{BufRead, BufReader, Write};
+    use std::process::{Command, Stdio};
+    use std::sync::mpsc;
+    use std::time::Duration;
+
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    simulate(d, &["--raw", "csv", "--fdma"]);
+    let p = |f: &str| d.join(f).display().to_string();
+    let run = psdcal([
+        "-q",
+        "calibrate",
+        "-t",
+        &p("template.csv"),
+        "-s",
+        &p("signals.csv"),
+        "--out",
+        &p("cal.json"),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_psdcal"))
+        .args([
+            "-q",
+            "track",
+            "--calibration",
+            &p("cal.json"),
+            "--rate",
+            "20000",
+            "--tones",
+            &p("tones.csv"),
+            "--window",
+            "0.065",
+        ])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines() {
+            if tx.send(line.unwrap()).is_err() {
+                break;
+            }
+        }
+    });
+    let mut stdin = child.stdin.take().unwrap();
+    let raw = std::fs::read_to_string(d.join("raw.csv")).unwrap();
+    let rows: Vec<&str> = raw.lines().filter(|l| !l.starts_with('#')).collect();
+    // The header (t_s is an extra column) and one window of samples.
+    for line in &rows[..=1300] {
+        writeln!(stdin, "{line}").unwrap();
+    }
+    stdin.flush().unwrap();
+    let header = rx.recv_timeout(Duration::from_secs(20)).unwrap();
+    assert_eq!(header, "t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status");
+    let first = rx
+        .recv_timeout(Duration::from_secs(20))
+        .expect("a row before the input ends");
+    assert!(
+        first.starts_with("0,1,") && first.ends_with(",ok"),
+        "{first}"
+    );
+    drop(stdin);
+    assert!(child.wait().unwrap().success());
+    let rest: Vec<String> = rx.iter().collect();
+    assert_eq!(rest.len(), 13, "{rest:?}");
+}

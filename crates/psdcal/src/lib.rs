@@ -50,6 +50,7 @@
 //! | measured → ideal points, angles of arrival, positions, error maps | [`correct()`], [`aoa_table`], [`locate_table`], [`map_table`] |
 //! | electrical gains | [`estimate_gains`] |
 //! | raw recordings → signals.csv (band-pass, lock-in, SNR) | [`demodulate()`] |
+//! | a live stream of samples → angles per window and LED | [`track()`] |
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
 //!
@@ -81,6 +82,7 @@ mod simulate_raw;
 mod study;
 mod study_page;
 mod table;
+mod track;
 
 pub use aoa::{aoa_table, measurement, AoaTable};
 pub use calibrate::{calibrate, Calibrated};
@@ -113,6 +115,7 @@ pub use simulate_raw::{
 };
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
+pub use track::{track, TrackRequest, TrackSummary};
 
 pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, Warning};

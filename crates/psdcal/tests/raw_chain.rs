@@ -184,3 +184,92 @@ fn raw_path_calibrates_as_well_as_the_internal_chain() {
         "ratio {ratio} ± {se}"
     );
 }
+
+/// `track` on the samples of a recording, one window per record, gives the
+/// angles of the amplitudes `demodulate` finds in the same records (each
+/// window demodulated on its own, as a record is); a malformed line gets a
+/// status and the stream goes on.
+#[test]
+fn track_gives_the_angles_of_demodulate() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let raw = RawRequest {
+        format: RawFormat::Csv,
+        fdma: true,
+        impairments: Impairments::default(),
+    };
+    simulate_raw_files(&request(d, Some(40.0), 8), &raw).unwrap();
+    demodulated(d, RawFormat::Csv, true, "demodulated.csv");
+    let set = DataSet::from_files(
+        &DataSetFiles {
+            template: d.join("template.csv"),
+            points: PointSource::Signals(d.join("signals.csv")),
+            gains: None,
+        },
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    calibrate(&set, &CalibrationOptions::default())
+        .unwrap()
+        .write(&set, &d.join("cal.json"), None)
+        .unwrap();
+    // The stream: vx1..vy2 only, a malformed line after the first window.
+    let text = std::fs::read_to_string(d.join("raw.csv")).unwrap();
+    let mut stream = String::from("vx1,vx2,vy1,vy2\n");
+    for (n, line) in text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .enumerate()
+    {
+        if n == 1300 {
+            stream += "1,2,oops,4\n";
+        }
+        stream += line.split_once(',').unwrap().1;
+        stream.push('\n');
+    }
+    let mut out = Vec::new();
+    let summary = psdcal::track(
+        &psdcal::TrackRequest {
+            calibration: d.join("cal.json"),
+            rate_hz: psdcal::RAW_SAMPLE_RATE_HZ,
+            tones: d.join("tones.csv"),
+            window_s: 0.065,
+            config: DemodConfig::default(),
+        },
+        stream.as_bytes(),
+        &mut out,
+    )
+    .unwrap();
+    assert_eq!((summary.windows, summary.malformed), (9, 1));
+    let out = String::from_utf8(out).unwrap();
+    let rows: Vec<&str> = out.lines().collect();
+    assert_eq!(rows[0], "t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status");
+    assert_eq!(rows[15], "0.065,,,,,malformed_line");
+    let sensor = psdcal::LoadedSensor::read(&d.join("cal.json")).unwrap();
+    let signals = Signals::read(d.join("demodulated.csv")).unwrap();
+    let data_rows: Vec<&str> = rows[1..]
+        .iter()
+        .copied()
+        .filter(|r| !r.ends_with("malformed_line"))
+        .collect();
+    assert_eq!(data_rows.len(), signals.rows.len());
+    for (row, s) in data_rows.iter().zip(&signals.rows) {
+        let f: Vec<&str> = row.split(',').collect();
+        assert_eq!(f[1], s.led);
+        assert_eq!(f[5], "ok");
+        let answer = sensor
+            .sensor
+            .aoa(
+                &psdcal::Measurement::Amplitudes(s.amplitudes()),
+                &psdcal::LocateOptions::default(),
+            )
+            .unwrap();
+        let ax: f64 = f[2].parse().unwrap();
+        let ay: f64 = f[3].parse().unwrap();
+        // signals.csv holds the amplitudes to the last digit: the same angles.
+        assert!((ax - answer.aoa.alpha.x.to_degrees()).abs() < 1e-9, "{row}");
+        assert!((ay - answer.aoa.alpha.y.to_degrees()).abs() < 1e-9, "{row}");
+        assert_eq!(f[4].parse::<f64>().unwrap(), s.snr_db.unwrap());
+    }
+}
