@@ -35,8 +35,9 @@
 //!    the next (`D` samples apart), so
 //!    `δf_k = −arg(Σ_c Σ_j z_{j+1} z̄_j) fs / (2π D)` and
 //!    `ρ = Σ_k w_k δf_k / f_k / Σ_k w_k` with `w_k = |Σ z_{j+1} z̄_j| f_k²` (the
-//!    precision of each ratio). Repeated at the new frequencies until `ρ`
-//!    settles (at most [`MAX_FREQUENCY_PASSES`] passes); the amplitudes are then detected
+//!    precision of each ratio). Repeated at the new frequencies until a
+//!    pass moves the highest tone by less than 1e-7 cycles over the window
+//!    (at most [`MAX_FREQUENCY_PASSES`] passes); the amplitudes are then detected
 //!    at `f_k (1 + ρ)`. An offset beyond [`MAX_CLOCK_OFFSET`] is not trusted
 //!    (aliasing of the phase steps) and the nominal frequencies are kept.
 //! 6. **Noise**: the residual of the fit, `RSS = Σ y² − θᵀ Σ y φ`, over
@@ -83,8 +84,8 @@ pub const MAX_SNR_DB: f64 = 200.0;
 pub const MAX_CLOCK_OFFSET: f64 = 1e-3;
 
 /// Most passes of the frequency estimate (each shrinks the offset left by
-/// about three orders of magnitude; it stops when a pass moves `ρ` by less
-/// than 1e-13).
+/// about three orders of magnitude; it stops when a pass moves the highest
+/// tone by less than 1e-7 cycles over the window).
 pub const MAX_FREQUENCY_PASSES: usize = 4;
 
 /// Parameters of the demodulation; see the module documentation.
@@ -438,7 +439,10 @@ pub fn demodulate_record<const C: usize>(
                 match clock_offset(&window, first, sample_rate_hz, &freqs, j, &mut scratch) {
                     Some(delta) if delta.abs() <= MAX_CLOCK_OFFSET => {
                         rho += delta * (1.0 + rho);
-                        if delta.abs() < 1e-13 {
+                        // Settled when the step turns the highest tone by
+                        // under 1e-7 cycles over the window (its effect on an
+                        // amplitude is then below 1e-13).
+                        if delta.abs() * f_max * window_s < 1e-7 {
                             break;
                         }
                     }
