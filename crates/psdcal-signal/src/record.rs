@@ -63,6 +63,7 @@
 //! first sample; every record is demodulated on its own (its own filter
 //! start, frequency estimate and noise).
 
+use std::f64::consts::TAU;
 use std::ops::Range;
 
 use nalgebra::DMatrix;
@@ -243,14 +244,7 @@ fn detect<const C: usize>(
         fill_reference(f, sample_rate_hz, first, c, s);
     }
     let basis = |i: usize| &scratch[i * m..(i + 1) * m];
-    let mut gram = DMatrix::zeros(p, p);
-    for i in 0..p {
-        for j in i..p {
-            let v = dot(basis(i), basis(j));
-            gram[(i, j)] = v;
-            gram[(j, i)] = v;
-        }
-    }
+    let gram = closed_form_gram(freqs, sample_rate_hz, first, m);
     let mut b = DMatrix::zeros(p, C);
     for i in 0..p {
         let acc = frame_dot(frames, basis(i));
@@ -267,22 +261,53 @@ fn detect<const C: usize>(
     Detection { gram, b, yy }
 }
 
-/// `Σ a b` in four interleaved partial sums.
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let tail: f64 = ca
-        .remainder()
-        .iter()
-        .zip(cb.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
-    for (x, y) in ca.zip(cb) {
-        for lane in 0..4 {
-            acc[lane] += x[lane] * y[lane];
+/// `Σ_{n=n0}^{n0+M−1} e^{i 2π r n}` in closed form (the Dirichlet kernel):
+/// `e^{i 2π r (n0 + (M−1)/2)} sin(π r M) / sin(π r)`, or `M` when `r` is an
+/// integer; every angle reduced to one turn first. Returns (re, im).
+fn exp_sum(r: f64, n0: usize, m: usize) -> (f64, f64) {
+    use std::f64::consts::PI;
+    let r = r - r.round();
+    if r == 0.0 {
+        return (m as f64, 0.0);
+    }
+    let centre = n0 as f64 + 0.5 * (m as f64 - 1.0);
+    let phase = TAU * (r * centre).rem_euclid(1.0);
+    let half_turns = (r * m as f64).rem_euclid(2.0);
+    let kernel = (PI * half_turns).sin() / (PI * r).sin();
+    (kernel * phase.cos(), kernel * phase.sin())
+}
+
+/// The Gram matrix of the basis `(cos 2π f_k n/fs, sin 2π f_k n/fs)_k` over
+/// `n = first … first + m − 1`, from the products' sum and difference
+/// frequencies in closed form ([`exp_sum`]):
+/// `cos a cos b = ½ (cos(a−b) + cos(a+b))`,
+/// `sin a sin b = ½ (cos(a−b) − cos(a+b))`,
+/// `cos a sin b = ½ (sin(a+b) − sin(a−b))`. `O(K²)` per window instead of
+/// `O(K² M)`; equal to the summed products to rounding.
+fn closed_form_gram(freqs: &[f64], sample_rate_hz: f64, first: usize, m: usize) -> DMatrix<f64> {
+    let p = 2 * freqs.len();
+    let mut gram = DMatrix::zeros(p, p);
+    for (i, fi) in freqs.iter().enumerate() {
+        for (j, fj) in freqs.iter().enumerate().skip(i) {
+            let (dr, di) = exp_sum((fi - fj) / sample_rate_hz, first, m);
+            let (sr, si) = exp_sum((fi + fj) / sample_rate_hz, first, m);
+            let cc = 0.5 * (dr + sr);
+            let ss = 0.5 * (dr - sr);
+            // cos a_i sin a_j and sin a_i cos a_j.
+            let cs = 0.5 * (si - di);
+            let sc = 0.5 * (si + di);
+            let (ci, sii, cj, sj) = (2 * i, 2 * i + 1, 2 * j, 2 * j + 1);
+            gram[(ci, cj)] = cc;
+            gram[(cj, ci)] = cc;
+            gram[(sii, sj)] = ss;
+            gram[(sj, sii)] = ss;
+            gram[(ci, sj)] = cs;
+            gram[(sj, ci)] = cs;
+            gram[(sii, cj)] = sc;
+            gram[(cj, sii)] = sc;
         }
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+    gram
 }
 
 /// `Σ_n frame[n][c] r[n]` per channel, in four interleaved partial sums.
@@ -552,4 +577,43 @@ fn check_samples<const C: usize>(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The closed-form Gram matrix against the summed products of directly
+    /// computed sinusoids.
+    #[test]
+    fn closed_form_gram_equals_the_summed_products() {
+        let fs = 20_000.0;
+        for (freqs, first, m) in [
+            (vec![1000.0], 479, 821),
+            (vec![675.0, 725.0, 1000.0, 1325.0], 300, 3700),
+            (vec![999.97, 1234.5], 12_345, 999),
+        ] {
+            let gram = closed_form_gram(&freqs, fs, first, m);
+            let basis: Vec<Vec<f64>> = freqs
+                .iter()
+                .flat_map(|f| {
+                    let arg = |n: usize| TAU * f * n as f64 / fs;
+                    [
+                        (first..first + m).map(|n| arg(n).cos()).collect::<Vec<_>>(),
+                        (first..first + m).map(|n| arg(n).sin()).collect(),
+                    ]
+                })
+                .collect();
+            for (i, a) in basis.iter().enumerate() {
+                for (j, b) in basis.iter().enumerate() {
+                    let direct: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+                    assert!(
+                        (gram[(i, j)] - direct).abs() < 1e-9 * m as f64 * 1e-3,
+                        "{freqs:?} ({i}, {j}): {} vs {direct}",
+                        gram[(i, j)]
+                    );
+                }
+            }
+        }
+    }
 }
