@@ -204,14 +204,13 @@ pub struct RecordEstimate<const C: usize> {
 }
 
 /// Sums of one detection: the Gram matrix and `Σ y φ` per channel.
-struct Detection<const C: usize> {
+struct Detection {
     gram: DMatrix<f64>,
     /// `Σ y φ` per channel (columns).
     b: DMatrix<f64>,
-    yy: [f64; C],
 }
 
-impl<const C: usize> Detection<C> {
+impl Detection {
     /// `θ = G⁻¹ b` (columns per channel) and `G⁻¹`; `None` when `G` is not
     /// positive definite (tones not separable in this window).
     fn solve(&self) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
@@ -234,7 +233,7 @@ fn detect<const C: usize>(
     sample_rate_hz: f64,
     freqs: &[f64],
     scratch: &mut Vec<f64>,
-) -> Detection<C> {
+) -> Detection {
     let m = frames.len();
     let p = 2 * freqs.len();
     scratch.clear();
@@ -252,13 +251,7 @@ fn detect<const C: usize>(
             b[(i, c)] = acc[c];
         }
     }
-    let mut yy = [0.0; C];
-    for frame in frames {
-        for c in 0..C {
-            yy[c] += frame[c] * frame[c];
-        }
-    }
-    Detection { gram, b, yy }
+    Detection { gram, b }
 }
 
 /// `Σ_{n=n0}^{n0+M−1} e^{i 2π r n}` in closed form (the Dirichlet kernel):
@@ -497,7 +490,8 @@ pub fn demodulate_record<const C: usize>(
         let fitted: f64 = (0..theta.nrows())
             .map(|i| theta[(i, c)] * detection.b[(i, c)])
             .sum();
-        *sigma = ((detection.yy[c] - fitted).max(0.0) / (dof * nu)).sqrt();
+        let yy: f64 = window.iter().map(|f| f[c] * f[c]).sum();
+        *sigma = ((yy - fitted).max(0.0) / (dof * nu)).sqrt();
     }
     let tones = tones_hz
         .iter()
