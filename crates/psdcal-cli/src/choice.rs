@@ -102,9 +102,47 @@ macro_rules! same_variants {
     };
 }
 
+/// `simulate --raw`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum RawArg {
+    Csv,
+    Npy,
+}
+
+/// `simulate --impairments` (`none`: a clean card).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ImpairmentArg {
+    Dc,
+    Hum,
+    Drift,
+    Quantise,
+    Clock,
+    Transients,
+    None,
+}
+
+/// The card of `--impairments`.
+pub fn impairments(list: &[ImpairmentArg]) -> psdcal::Impairments {
+    use psdcal::Impairment as I;
+    let kinds: Vec<I> = list
+        .iter()
+        .filter_map(|a| match a {
+            ImpairmentArg::Dc => Some(I::Dc),
+            ImpairmentArg::Hum => Some(I::Hum),
+            ImpairmentArg::Drift => Some(I::Drift),
+            ImpairmentArg::Quantise => Some(I::Quantise),
+            ImpairmentArg::Clock => Some(I::Clock),
+            ImpairmentArg::Transients => Some(I::Transients),
+            ImpairmentArg::None => None,
+        })
+        .collect();
+    psdcal::Impairments::only(&kinds)
+}
+
 same_variants!(CostArg => psdcal::Cost { Template, Image });
 same_variants!(NoiseArg => psdcal::Noise { Uniform, ChannelSnr, ChannelFloor });
 same_variants!(PreliminaryArg => psdcal::Preliminary { Auto, Straightness, Homography, Off });
 same_variants!(LensArg => psdcal::Lens { One, Two });
 same_variants!(TemplateArg => psdcal::TemplateKind { Scatter14, Grid });
 same_variants!(GainsMethodArg => psdcal::GainsMethod { EqualCurrent });
+same_variants!(RawArg => psdcal::RawFormat { Csv, Npy });

@@ -86,6 +86,12 @@ pub enum Command {
     /// Simulate a calibrated rig of sensors and emitters at known positions (rig.json, rig_points.csv, truth.csv)
     #[command(after_help = crate::cmd_simulate_positioning::SIMULATE_POSITIONING_EXAMPLES)]
     SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
+    /// Demodulate a raw recording (raw.csv, raw.npy) into signals.csv with a per-record SNR
+    #[command(after_help = crate::cmd_demodulate::DEMODULATE_EXAMPLES)]
+    Demodulate(crate::cmd_demodulate::DemodulateArgs),
+    /// Angles of arrival per window and LED from raw samples on standard input (live)
+    #[command(after_help = crate::cmd_track::TRACK_EXAMPLES)]
+    Track(crate::cmd_track::TrackArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -261,6 +267,8 @@ pub enum Job {
     Report(crate::cli_report::ReportConfig),
     Evaluate(crate::cmd_evaluate::EvaluateArgs),
     SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
+    Demodulate(crate::cmd_demodulate::DemodulateArgs),
+    Track(crate::cmd_track::TrackArgs),
 }
 
 impl Cli {
@@ -299,6 +307,8 @@ impl Cli {
             Command::Report(args) => Job::Report(args.into_config()),
             Command::Evaluate(args) => Job::Evaluate(args),
             Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
+            Command::Demodulate(args) => Job::Demodulate(args),
+            Command::Track(args) => Job::Track(args),
             Command::Calibrate(args) => {
                 let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;

@@ -54,6 +54,16 @@ pub struct SimulateArgs {
     /// Output folder (created if missing)
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Also write the raw recording a card would make (raw.csv or raw.npy, 20 kHz) and schedule.csv
+    #[arg(long, value_name = "csv|npy", value_parser = choice::<crate::choice::RawArg>)]
+    pub raw: Option<crate::choice::RawArg>,
+    /// With --raw: every LED of an image on at once, each at its own tone (writes tones.csv)
+    #[arg(long, requires = "raw")]
+    pub fdma: bool,
+    /// With --raw: the card's impairments (docs/model.md §8), comma-separated, or none
+    #[arg(long, value_name = "LIST", value_delimiter = ',', requires = "raw",
+          default_value = "dc,hum,drift,quantise,clock,transients", value_parser = choice::<crate::choice::ImpairmentArg>)]
+    pub impairments: Vec<crate::choice::ImpairmentArg>,
 }
 
 /// Arguments of `psdcal study`.

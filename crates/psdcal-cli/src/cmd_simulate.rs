@@ -8,7 +8,7 @@ use crate::cli_sim::SimulateArgs;
 
 /// Runs `simulate`.
 pub fn run(args: &SimulateArgs, output: Output) -> anyhow::Result<()> {
-    let written = psdcal::simulate_files(&SimulateRequest {
+    let request = SimulateRequest {
         lens: args.lens.into(),
         snr_db: args.snr,
         imbalance: args.imbalance,
@@ -19,7 +19,25 @@ pub fn run(args: &SimulateArgs, output: Output) -> anyhow::Result<()> {
         record_cycles: args.record_cycles,
         seed: args.seed,
         out: args.out.clone(),
-    })?;
+    };
+    let (written, files) = match args.raw {
+        None => (psdcal::simulate_files(&request)?, Vec::new()),
+        Some(format) => psdcal::simulate_raw_files(
+            &request,
+            &psdcal::RawRequest {
+                format: format.into(),
+                fdma: args.fdma,
+                impairments: crate::choice::impairments(&args.impairments),
+            },
+        )?,
+    };
+    let mut names = vec![
+        "template.csv",
+        "observations.csv",
+        "signals.csv",
+        "truth.json",
+    ];
+    names.extend(files.iter().map(String::as_str));
     match output {
         Output::Quiet => {}
         Output::Json => println!(
@@ -28,14 +46,18 @@ pub fn run(args: &SimulateArgs, output: Output) -> anyhow::Result<()> {
                 "out": args.out.display().to_string(),
                 "images": written.images,
                 "points": written.points,
-                "files": ["template.csv", "observations.csv", "signals.csv", "truth.json"],
+                "files": names,
             })
         ),
         Output::Text => {
             println!("{}", written.description);
+            let shown: Vec<String> = names
+                .iter()
+                .map(|n| format!("{}/{n}", args.out.display()))
+                .collect();
             println!(
-                "wrote {0}/template.csv, {0}/observations.csv, {0}/signals.csv, {0}/truth.json ({1} images, {2} points)",
-                args.out.display(),
+                "wrote {} ({} images, {} points)",
+                shown.join(", "),
                 written.images,
                 written.points
             );

@@ -83,6 +83,14 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
             inputs.extend(e.rig.iter().map(|p| ("--rig", p.as_path())));
             (inputs, Vec::new())
         }
+        Job::Demodulate(d) => {
+            let mut inputs = vec![
+                ("--raw", d.raw.as_path()),
+                ("--schedule", d.schedule.as_path()),
+            ];
+            inputs.extend(d.tones.iter().map(|p| ("--tones", p.as_path())));
+            (inputs, vec![("--out", d.out.as_path())])
+        }
         _ => (Vec::new(), Vec::new()),
     }
 }

@@ -16,6 +16,7 @@ mod cmd_calibrate;
 mod cmd_check;
 mod cmd_correct;
 mod cmd_demo;
+pub mod cmd_demodulate;
 pub mod cmd_evaluate;
 mod cmd_gains;
 mod cmd_locate;
@@ -26,6 +27,7 @@ mod cmd_simulate;
 pub mod cmd_simulate_positioning;
 pub mod cmd_simulate_scan;
 mod cmd_study;
+pub mod cmd_track;
 mod guard;
 mod report;
 
@@ -58,6 +60,8 @@ pub fn main() -> ExitCode {
         Job::Simulate(args) => cmd_simulate::run(args, output),
         Job::Study(config) => cmd_study::run(config, output),
         Job::Demo(args) => cmd_demo::run(args, output),
+        Job::Demodulate(args) => cmd_demodulate::run(args, output),
+        Job::Track(args) => cmd_track::run(args, output),
         Job::Correct(config) => cmd_correct::run(config, output),
         Job::Aoa(config) => cmd_aoa::run(config, output),
         Job::Locate(config) => cmd_locate::run(config, output),

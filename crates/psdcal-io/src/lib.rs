@@ -16,6 +16,10 @@
 //! - [`RigFile`] — rig.json, sensors with poses in a world frame, and
 //!   [`RigObservations`], what they measured per emitter.
 //!
+//! - [`RawReader`] — raw recordings (raw.csv, raw.npy) read frame by frame
+//!   in constant memory, with [`Schedule`] (schedule.csv) and [`Tones`]
+//!   (tones.csv), the input of `demodulate`.
+//!
 //! [`validate_data_set`] checks a template and its observations together and
 //! groups the usable points by image; [`DataSetSummary`] and [`Coverage`]
 //! describe the result. Every output file is written atomically
@@ -43,10 +47,12 @@ mod observations;
 mod points;
 mod positioning;
 mod psd_map_file;
+mod raw;
 mod rig;
 mod rig_observations;
 mod same_file;
 mod scan;
+mod schedule;
 mod signals;
 mod summary;
 mod template;
@@ -80,10 +86,15 @@ pub use psd_map_file::{
     MapCovarianceRecord, MapFitRecord, MapResidualsRecord, PsdMapFile, PSD_MAP_FORMAT,
     PSD_MAP_VERSION,
 };
+pub use raw::{
+    npy_header, write_csv_frames, write_npy_frames, Frame, RawFormat, RawReader, RATE_TOLERANCE,
+    RAW_CSV_HEADER,
+};
 pub use rig::{read_rig, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION};
 pub use rig_observations::{RigObservation, RigObservations};
 pub use same_file::refuse_overwrite;
 pub use scan::{write_scan, Scan, ScanPoints, ScanReading, ScanRow, SCAN_DUPLICATE_MM};
+pub use schedule::{write_schedule, write_tones, Schedule, ScheduleRow, Tone, Tones};
 pub use signals::{SignalRow, Signals};
 pub use summary::{DataSetSummary, ImageSummary, LineSummary, TemplateSummary};
 pub use template::{Led, LineGroup, Template};

@@ -5,6 +5,7 @@
 //! | --- | --- |
 //! | `image`, `led` | as in observations.csv |
 //! | `vx1`, `vx2`, `vy1`, `vy2` | amplitude of each electrode channel (volts, or any consistent unit) |
+//! | `snr_db` (optional) | the record's estimated SNR, dB (lowest channel), as `psdcal demodulate` writes it |
 //!
 //! [`Signals::to_observations`] turns each row into an impact point with the
 //! pin-cushion formulas of docs/model.md §1 (`psdcal_model::sensor`), after
@@ -39,6 +40,9 @@ pub struct SignalRow {
     pub vy1: f64,
     /// Amplitude of channel y2, electrode at (−,+).
     pub vy2: f64,
+    /// The record's estimated SNR, dB (its lowest channel), when the file
+    /// has an `snr_db` column (`psdcal demodulate` writes it).
+    pub snr_db: Option<f64>,
     /// Physical line of the row, 1-based.
     pub line_no: usize,
 }
@@ -89,6 +93,7 @@ impl Signals {
             table.column("vy1")?,
             table.column("vy2")?,
         ];
+        let snr_col = table.find_column("snr_db")?;
         table.require_rows()?;
         let rows = table
             .rows
@@ -102,6 +107,10 @@ impl Signals {
                     table.number(row, &v_cols[2])?,
                     table.number(row, &v_cols[3])?,
                 ];
+                let snr_db = match &snr_col {
+                    Some(col) => Some(table.number(row, col)?),
+                    None => None,
+                };
                 Ok(SignalRow {
                     image,
                     led,
@@ -109,6 +118,7 @@ impl Signals {
                     vx2,
                     vy1,
                     vy2,
+                    snr_db,
                     line_no: row.line,
                 })
             })
@@ -180,6 +190,19 @@ mod tests {
     use super::*;
 
     #[test]
+    fn reads_the_optional_snr_column() {
+        let text = "image,led,vx1,vx2,vy1,vy2,snr_db\n1,a,1,2,3,4,38.5\n";
+        let s = Signals::from_str("signals.csv", text).unwrap();
+        assert_eq!(s.rows[0].snr_db, Some(38.5));
+        let bad = "image,led,vx1,vx2,vy1,vy2,snr_db\n1,a,1,2,3,4,nan\n";
+        let e = Signals::from_str("signals.csv", bad).unwrap_err();
+        assert!(
+            e.to_string().starts_with("signals.csv:2: column 'snr_db'"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn reads_reordered_columns_with_comments_crlf_and_bom() {
         let text = "\u{feff}# rig 2\r\nvy2,vy1,vx2,vx1,led,image,extra\r\n\r\n4,3,2,1,L1,im,x\r\n";
         let s = Signals::from_str("signals.csv", text).unwrap();
@@ -192,6 +215,7 @@ mod tests {
                 vx2: 2.0,
                 vy1: 3.0,
                 vy2: 4.0,
+                snr_db: None,
                 line_no: 4,
             }]
         );

@@ -9,7 +9,8 @@
 //! few seconds); a release run uses more, e.g.
 //! `PSDCAL_FUZZ_CASES=20000 cargo test --release -p psdcal-io --test fuzz`.
 //! Every input that once failed is kept in `tests/fuzz_regressions/` and
-//! read by every reader on each run. Raw recordings have no reader yet.
+//! read by every reader on each run. Raw recordings, schedules and tones are
+//! fuzzed in `tests/raw.rs`.
 
 use std::path::{Path, PathBuf};
 

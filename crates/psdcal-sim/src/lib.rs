@@ -4,13 +4,17 @@
 //! LEDs, noise at a given SNR, Butterworth band-pass, demodulation, amplifier
 //! gain imbalance (P43), PSD distortion), seeded scenarios, and whole
 //! simulated data sets with their truth; a room of sensors and emitters
-//! for positioning ([`room`]). The Monte Carlo studies that
+//! for positioning ([`room`]); raw recordings as a card records them
+//! (`raw`: sampled channels with a card's impairments). The Monte Carlo studies that
 //! calibrate them live in psdcal-study.
 #![warn(missing_docs)]
 
-pub mod butterworth;
+/// The Butterworth band-pass, now in psdcal-signal (re-exported so that
+/// `psdcal_sim::butterworth` keeps its paths).
+pub use psdcal_signal::butterworth;
 mod error;
 pub mod nonlinearity;
+pub mod raw;
 pub mod room;
 pub mod scan;
 pub mod scenario;
@@ -19,6 +23,7 @@ pub mod simulate;
 
 pub use error::SimError;
 pub use nonlinearity::PsdNonlinearity;
+pub use raw::{Impairment, Impairments, RawPlan, RawRecord};
 pub use scan::{simulate_scan, ScanOptions, ScanSample};
 pub use scenario::{Lens, TemplateKind};
 pub use signal::{ChainConfig, SignalChain};

@@ -130,14 +130,15 @@ use nalgebra::Vector2;
 use psdcal_model::sensor::{
     electrode_currents, impact_point, is_on_active_area, transimpedance_gain,
 };
-use psdcal_model::{Amplitudes, ChannelGains, ModelError, PsdGeometry};
+use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
-use thiserror::Error;
 
 use crate::butterworth::{BandPass, BandPlacement, FilterState};
+use psdcal_signal::lockin::{IqSums as Accumulator, LockIn};
+pub use psdcal_signal::SignalError;
 
 /// Largest amplitude or noise standard deviation accepted (any unit): keeps
 /// every intermediate sum finite.
@@ -146,133 +147,6 @@ pub const MAX_LEVEL: f64 = 1e100;
 /// Longest record accepted, samples (50 s at 20 kHz; a chain holds about
 /// 48 bytes of tables per sample).
 pub const MAX_RECORD_SAMPLES: usize = 1_000_000;
-
-/// Everything the signal chain refuses. Every variant carries the offending
-/// numbers; the chain never returns a NaN or a silently wrong amplitude.
-#[derive(Debug, Clone, PartialEq, Error)]
-#[non_exhaustive]
-pub enum SignalError {
-    /// A parameter is non-finite or outside its domain (e.g. `f0 ≤ 0`).
-    #[error("invalid signal-chain parameter {name} = {value}: {reason}")]
-    InvalidParameter {
-        /// Parameter name.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-        /// Why it is rejected.
-        reason: &'static str,
-    },
-    /// The filter order is 0 or above the supported maximum.
-    #[error("filter order {order} is not supported (1 to {max})")]
-    InvalidOrder {
-        /// The order asked for.
-        order: usize,
-        /// The largest supported order.
-        max: usize,
-    },
-    /// The bandwidth reaches down to 0 Hz (`B ≥ 2 f0`).
-    #[error("bandwidth {bandwidth_hz} Hz must be below twice the centre frequency {f0_hz} Hz")]
-    BandwidthTooWide {
-        /// Bandwidth, Hz.
-        bandwidth_hz: f64,
-        /// Centre frequency, Hz.
-        f0_hz: f64,
-    },
-    /// The pass band reaches the Nyquist frequency.
-    #[error(
-        "the pass band reaches {high_hz} Hz, at or above the Nyquist frequency {nyquist_hz} Hz"
-    )]
-    BandAboveNyquist {
-        /// Upper band edge, Hz.
-        high_hz: f64,
-        /// Half the sample rate, Hz.
-        nyquist_hz: f64,
-    },
-    /// The sample rate is below `4 · (f0 + B/2)`.
-    #[error("sample rate {sample_rate_hz} Hz is below the minimum {minimum_hz} Hz = 4·(f0 + B/2)")]
-    SampleRateTooLow {
-        /// Sample rate, Hz.
-        sample_rate_hz: f64,
-        /// `4 · (f0 + B/2)`, Hz.
-        minimum_hz: f64,
-    },
-    /// No whole cycle is left after the transient.
-    #[error(
-        "a record of {record_cycles} cycles leaves no whole cycle after a transient of \
-         {transient_cycles} cycles"
-    )]
-    RecordTooShort {
-        /// Record length, cycles of f0.
-        record_cycles: usize,
-        /// Transient skipped, cycles of f0.
-        transient_cycles: usize,
-    },
-    /// The record would exceed [`MAX_RECORD_SAMPLES`].
-    #[error("a record of {samples} samples exceeds the maximum of {max}")]
-    RecordTooLong {
-        /// Samples asked for.
-        samples: f64,
-        /// [`MAX_RECORD_SAMPLES`].
-        max: usize,
-    },
-    /// The SNR is NaN or infinite.
-    #[error("SNR must be finite, got {snr_db} dB (use no noise for an infinite SNR)")]
-    NonFiniteSnr {
-        /// The SNR asked for, dB.
-        snr_db: f64,
-    },
-    /// A channel amplitude is negative, non-finite or above [`MAX_LEVEL`].
-    #[error(
-        "amplitude of channel {channel} is {value}: must be finite, non-negative and at most 1e100"
-    )]
-    InvalidAmplitude {
-        /// Channel name (`x1`, `x2`, `y1`, `y2`, or `channel` for a single record).
-        channel: &'static str,
-        /// The amplitude.
-        value: f64,
-    },
-    /// The noise standard deviation implied by the SNR exceeds [`MAX_LEVEL`].
-    #[error("noise standard deviation {sigma} exceeds the maximum 1e100 (SNR too low for this amplitude)")]
-    NoiseTooLarge {
-        /// `σ` implied by the amplitude and SNR.
-        sigma: f64,
-    },
-    /// A record handed to [`SignalChain::demodulate`] has the wrong length.
-    #[error("record has {found} samples, the chain expects {expected}")]
-    RecordLength {
-        /// [`SignalChain::record_samples`].
-        expected: usize,
-        /// Length handed in.
-        found: usize,
-    },
-    /// The impact point lies off the PSD's active area (negative electrode
-    /// currents in the forward model).
-    #[error("impact point ({x_mm}, {y_mm}) mm is off the active area")]
-    OffActiveArea {
-        /// x, mm.
-        x_mm: f64,
-        /// y, mm.
-        y_mm: f64,
-    },
-    /// The measured amplitudes sum to zero or less: no light (docs/model.md §1).
-    #[error("measured amplitudes sum to {total}: no usable light spot")]
-    NonPositiveTotal {
-        /// `Vx1 + Vx2 + Vy1 + Vy2` as measured.
-        total: f64,
-    },
-    /// The sensor model refused an input (e.g. a non-positive channel gain).
-    #[error(transparent)]
-    Model(ModelError),
-}
-
-impl From<ModelError> for SignalError {
-    fn from(e: ModelError) -> Self {
-        match e {
-            ModelError::NonPositiveTotal { total } => SignalError::NonPositiveTotal { total },
-            other => SignalError::Model(other),
-        }
-    }
-}
 
 /// How a channel's amplitude is estimated from the filtered record.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -434,12 +308,9 @@ pub struct SignalChain {
     record_len: usize,
     /// `n_s`, first sample of the demodulation window.
     window_start: usize,
-    /// `cos(2π f0 n / fs)`, `n = 0 … L−1`.
-    cos: Vec<f64>,
-    /// `sin(2π f0 n / fs)`, `n = 0 … L−1`.
-    sin: Vec<f64>,
-    /// `G⁻¹`, row-major.
-    gram_inv: [[f64; 2]; 2],
+    /// The I/Q detector: `cos(2π f0 n / fs)`, `sin(2π f0 n / fs)`,
+    /// `n = 0 … L−1`, and `G⁻¹`.
+    lockin: LockIn,
     /// `1 / |H(f0)|`.
     inv_gain: f64,
     /// `κ`.
@@ -521,25 +392,12 @@ impl SignalChain {
         let cycle = config.sample_rate_hz / config.f0_hz;
         let record_len = (config.record_cycles as f64 * cycle).round() as usize;
         let window_start = (config.transient_cycles as f64 * cycle).round() as usize;
-        let ratio = config.f0_hz / config.sample_rate_hz;
-        let (mut cos, mut sin) = (
-            Vec::with_capacity(record_len),
-            Vec::with_capacity(record_len),
+        let lockin = LockIn::new_valid(
+            config.f0_hz,
+            config.sample_rate_hz,
+            record_len,
+            window_start,
         );
-        for n in 0..record_len {
-            // Reduce n·f0/fs to [0, 1) before scaling: accurate for long records.
-            let arg = TAU * (n as f64 * ratio).fract();
-            cos.push(arg.cos());
-            sin.push(arg.sin());
-        }
-        let (mut gcc, mut gcs, mut gss) = (0.0, 0.0, 0.0);
-        for n in window_start..record_len {
-            gcc += cos[n] * cos[n];
-            gcs += cos[n] * sin[n];
-            gss += sin[n] * sin[n];
-        }
-        let det = gcc * gss - gcs * gcs;
-        let gram_inv = [[gss / det, -gcs / det], [-gcs / det, gcc / det]];
         let gain = filter.magnitude(config.f0_hz);
         let inv_gain = 1.0 / gain;
         let mut chain = Self {
@@ -547,9 +405,7 @@ impl SignalChain {
             filter,
             record_len,
             window_start,
-            cos,
-            sin,
-            gram_inv,
+            lockin,
             inv_gain,
             noise_factor: 0.0,
             noise_weights: Vec::new(),
@@ -570,12 +426,12 @@ impl SignalChain {
     /// the time-reversed demodulation weights (module documentation).
     fn reversed_weights(&self) -> Vec<[f64; 2]> {
         let mut g = vec![[0.0; 2]; self.record_len];
-        for (r, row) in self.gram_inv.iter().enumerate() {
+        for (r, row) in self.lockin.gram_inv().iter().enumerate() {
             let mut state = FilterState::new();
             for m in 0..self.record_len {
                 let n = self.record_len - 1 - m;
                 let w = if n >= self.window_start {
-                    row[0] * self.cos[n] + row[1] * self.sin[n]
+                    row[0] * self.lockin.cos()[n] + row[1] * self.lockin.sin()[n]
                 } else {
                     0.0
                 };
@@ -589,12 +445,15 @@ impl SignalChain {
     /// included), as the columns of a 2×2 matrix.
     fn clean_response(&self) -> [[f64; 2]; 2] {
         let mut out = [[0.0; 2]; 2];
-        for (col, table) in [&self.cos, &self.sin].into_iter().enumerate() {
-            let mut y = table.clone();
+        for (col, table) in [self.lockin.cos(), self.lockin.sin()]
+            .into_iter()
+            .enumerate()
+        {
+            let mut y = table.to_vec();
             self.filter.filter(&mut y);
             let mut acc = Accumulator::default();
             for (n, &v) in y.iter().enumerate().skip(self.window_start) {
-                acc.add(v, self.cos[n], self.sin[n]);
+                acc.add(v, self.lockin.cos()[n], self.lockin.sin()[n]);
             }
             let (i, q) = self.iq(&acc);
             out[0][col] = i;
@@ -652,7 +511,7 @@ impl SignalChain {
     /// The clean sample `A sin(ω n + φ) = (A sin φ) c_n + (A cos φ) s_n`.
     #[inline(always)]
     fn clean(&self, n: usize, a_cos: f64, a_sin: f64) -> f64 {
-        a_cos * self.cos[n] + a_sin * self.sin[n]
+        a_cos * self.lockin.cos()[n] + a_sin * self.lockin.sin()[n]
     }
 
     /// Writes the noisy record `x[n] = A sin(2π f0 n/fs + φ) + e[n]`,
@@ -696,7 +555,7 @@ impl SignalChain {
         }
         let mut acc = Accumulator::default();
         for (n, &y) in filtered.iter().enumerate().skip(self.window_start) {
-            acc.add(y, self.cos[n], self.sin[n]);
+            acc.add(y, self.lockin.cos()[n], self.lockin.sin()[n]);
         }
         self.finish(&acc)
     }
@@ -824,18 +683,14 @@ impl SignalChain {
         for n in self.window_start..self.record_len {
             let x = sample(n);
             let y = state.process(filter, x);
-            acc.add(y, self.cos[n], self.sin[n]);
+            acc.add(y, self.lockin.cos()[n], self.lockin.sin()[n]);
         }
         self.finish(&acc)
     }
 
     /// `(I, Q) = G⁻¹ (Σ y c, Σ y s)`.
     fn iq(&self, acc: &Accumulator) -> (f64, f64) {
-        let g = &self.gram_inv;
-        (
-            g[0][0] * acc.yc + g[0][1] * acc.ys,
-            g[1][0] * acc.yc + g[1][1] * acc.ys,
-        )
+        self.lockin.iq(acc)
     }
 
     /// The estimate from the window sums.
@@ -965,22 +820,5 @@ impl SignalChain {
         let measured = self.measure(&clean, snr_db, rng)?;
         let point = impact_point(geometry, &measured)?;
         Ok((measured, point))
-    }
-}
-
-/// Window sums `Σ y c`, `Σ y s`, `Σ y²`.
-#[derive(Default)]
-struct Accumulator {
-    yc: f64,
-    ys: f64,
-    yy: f64,
-}
-
-impl Accumulator {
-    #[inline(always)]
-    fn add(&mut self, y: f64, c: f64, s: f64) {
-        self.yc += y * c;
-        self.ys += y * s;
-        self.yy += y * y;
     }
 }

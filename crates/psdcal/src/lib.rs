@@ -51,6 +51,8 @@
 //! | electrical gains | [`estimate_gains`] |
 //! | the PSD's non-linearity map from a lensless scan | [`psd_map_from_scan`], [`simulate_scan_file`] |
 //! | positions (and angles) against a surveyed truth: the standard metrics | [`evaluate()`] |
+//! | raw recordings → signals.csv (band-pass, lock-in, SNR) | [`demodulate()`] |
+//! | a live stream of samples → angles per window and LED | [`track()`] |
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
 //! | simulate a calibrated rig and emitters (rig.json, rig_points.csv, truth.csv) | [`simulate_positioning`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
@@ -67,6 +69,7 @@ mod convert;
 mod correct;
 mod dataset;
 mod demo;
+mod demodulate;
 mod error;
 mod evaluate;
 mod fit_report;
@@ -84,11 +87,13 @@ mod residuals;
 mod sensor;
 mod simulate;
 mod simulate_positioning;
+mod simulate_raw;
 mod simulate_scan;
 mod study;
 mod study_page;
 mod summary_text;
 mod table;
+mod track;
 
 pub use advice::advice;
 pub use aoa::{aoa_table, measurement, AoaTable};
@@ -96,6 +101,9 @@ pub use calibrate::{calibrate, Calibrated};
 pub use correct::{correct, Corrected};
 pub use dataset::{source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
 pub use demo::{demo, Demo, DemoParameter};
+pub use demodulate::{
+    demodulate, DemodulateRequest, Demodulated, RecordOutcome, RecordStatus, MAX_RECORD_SAMPLES,
+};
 pub use error::{Error, Result};
 pub use evaluate::{evaluate, EvaluateRequest, Evaluation};
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
@@ -108,7 +116,10 @@ pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
 pub use psd_map::{
     parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, RESIDUAL_MAP_CELLS,
 };
+pub use psdcal_io::RawFormat;
 pub use psdcal_psdmap::ModelChoice as PsdMapModel;
+pub use psdcal_signal::DemodConfig;
+pub use psdcal_sim::{Impairment, Impairments};
 pub use report::{report_content, write_report, ReportFiles, ReportRequest};
 pub use residuals::{ImageResiduals, Residual, ResidualTable};
 pub use sensor::{covariance_warning, sensor_of, LoadedSensor};
@@ -117,10 +128,14 @@ pub use simulate::{
     SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
 };
 pub use simulate_positioning::{simulate_positioning, PositioningRequest, SimulatedRig};
+pub use simulate_raw::{
+    simulate_raw_files, RawRequest, FDMA_SPACING_HZ, RAW_F0_HZ, RAW_SAMPLE_RATE_HZ,
+};
 pub use simulate_scan::{scan_samples, simulate_scan_file, ScanRequest, SimulatedScan};
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
 pub use summary_text::summary_text;
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
+pub use track::{track, TrackRequest, TrackSummary};
 
 pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, Warning};

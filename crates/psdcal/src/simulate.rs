@@ -85,6 +85,14 @@ pub struct SimulatedFiles {
 
 /// Simulates and writes the data set.
 pub fn simulate_files(request: &SimulateRequest) -> Result<SimulatedFiles> {
+    simulate_and_write(request).map(|(files, _)| files)
+}
+
+/// [`simulate_files`], also returning the simulation (for the raw
+/// recording of the same data set).
+pub(crate) fn simulate_and_write(
+    request: &SimulateRequest,
+) -> Result<(SimulatedFiles, Simulation)> {
     let out = &request.out;
     std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
         path: out.clone(),
@@ -143,14 +151,15 @@ pub fn simulate_files(request: &SimulateRequest) -> Result<SimulatedFiles> {
         &signals,
     )?;
     write_truth(out.join("truth.json"), &truth(&sim, request))?;
-    Ok(SimulatedFiles {
+    let files = SimulatedFiles {
         description: what,
         images: sim.images.len(),
         points: observations.len(),
-    })
+    };
+    Ok((files, sim))
 }
 
-fn led_id(index: usize) -> String {
+pub(crate) fn led_id(index: usize) -> String {
     format!("{}", index + 1)
 }
 

@@ -64,7 +64,7 @@
 use nalgebra::Complex;
 use serde::{Deserialize, Serialize};
 
-use crate::signal::SignalError;
+use crate::error::SignalError;
 
 /// Largest supported filter order `N` (the cascade has `N` second-order
 /// sections, i.e. `2N` poles).
@@ -300,7 +300,7 @@ impl BandPass {
 
     /// [`BandPass::design`] for arguments already validated by the caller
     /// (the signal chain's configuration check implies the filter's).
-    pub(crate) fn design_valid(
+    pub fn design_valid(
         order: usize,
         centre_hz: f64,
         bandwidth_hz: f64,

@@ -1,0 +1,617 @@
+//! Raw recordings (docs/formats.md, "Raw recordings"): the four electrode
+//! channels as a data-acquisition card sampled them, read as a stream of
+//! frames `[vx1, vx2, vy1, vy2]` (volts) in constant memory, whatever the
+//! file size.
+//!
+//! - **raw.csv**: columns `vx1`, `vx2`, `vy1`, `vy2` (found by name) and
+//!   optionally `t_s`. The sample rate is `--rate` or, without it,
+//!   `1 / (t_1 − t_0)` from the first two rows; every step `t_n − t_{n−1}` must
+//!   then stay within [`RATE_TOLERANCE`] of `1/rate` (a gap, a repeated or a
+//!   backward time is an error naming the line). With both, they must agree
+//!   to the same tolerance. Write `t_s` with enough digits (or give the
+//!   rate): the rate comes from the first step.
+//! - **raw.npy**: a NumPy array (format versions 1–3), dtype `float32` or
+//!   `float64` (`<f4`, `<f8`, `>f4`, `>f8`), shape `(N, 4)`, C order; the rate
+//!   is `--rate`. A wrong dtype, shape or order, a truncated array and bytes
+//!   after it are errors naming the file (and the sample row).
+//!
+//! Every sample must be finite. Row numbers in `.npy` messages are 0-based
+//! sample indices; CSV messages give the physical line.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
+use std::path::Path;
+
+use crate::csv_table::{Col, CsvStream};
+use crate::error::{IoError, Location};
+use crate::limits::excerpt;
+
+/// A header excerpt for a one-line message (control characters shown as `?`).
+fn shown(text: &str) -> String {
+    excerpt(text)
+        .chars()
+        .map(|c| if c.is_control() { '?' } else { c })
+        .collect()
+}
+
+/// One sample of the four channels, volts: `[vx1, vx2, vy1, vy2]`.
+pub type Frame = [f64; 4];
+
+/// Relative tolerance on the time steps of a `t_s` column (and on the
+/// agreement of `t_s` with `--rate`).
+pub const RATE_TOLERANCE: f64 = 1e-3;
+
+const CHANNELS: [&str; 4] = ["vx1", "vx2", "vy1", "vy2"];
+const EXPECTED_COLUMNS: &str = "vx1, vx2, vy1, vy2 (and optionally t_s)";
+
+/// The layout of a raw recording, from its file name's extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum RawFormat {
+    /// raw.csv.
+    Csv,
+    /// raw.npy.
+    Npy,
+}
+
+impl RawFormat {
+    /// The format of `path` by its extension (`.csv`, `.npy`; case ignored).
+    pub fn of_path(path: &Path) -> Option<Self> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "csv" => Some(Self::Csv),
+            "npy" => Some(Self::Npy),
+            _ => None,
+        }
+    }
+}
+
+/// A raw recording read frame by frame.
+pub struct RawReader {
+    source: String,
+    sample_rate_hz: f64,
+    inner: Inner,
+    /// Frames handed out so far.
+    frames: u64,
+}
+
+enum Inner {
+    Csv(Box<CsvFrames<Box<dyn BufRead>>>),
+    Npy(NpyFrames<Box<dyn Read>>),
+}
+
+impl std::fmt::Debug for RawReader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RawReader")
+            .field("source", &self.source)
+            .field("sample_rate_hz", &self.sample_rate_hz)
+            .field("frames", &self.frames)
+            .finish()
+    }
+}
+
+impl RawReader {
+    /// Opens `path` (its format by extension) with the sample rate
+    /// `rate_hz` when given.
+    pub fn open(path: &Path, rate_hz: Option<f64>) -> Result<Self, IoError> {
+        let source = path.display().to_string();
+        let format = RawFormat::of_path(path).ok_or_else(|| IoError::Structure {
+            at: Location::file(&source),
+            message: "unknown raw recording format; expected a file ending in .csv or .npy"
+                .to_string(),
+        })?;
+        let file = File::open(path).map_err(|e| IoError::Read {
+            file: source.clone(),
+            source: e,
+        })?;
+        Self::from_reader(&source, format, BufReader::new(file), rate_hz)
+    }
+
+    /// Reads a recording of `format` from `reader`; `source` names it in
+    /// messages.
+    pub fn from_reader(
+        source: &str,
+        format: RawFormat,
+        reader: impl BufRead + 'static,
+        rate_hz: Option<f64>,
+    ) -> Result<Self, IoError> {
+        if let Some(rate) = rate_hz {
+            if !(rate.is_finite() && rate > 0.0) {
+                return Err(IoError::Structure {
+                    at: Location::file(source),
+                    message: format!(
+                        "the sample rate {rate} Hz is not usable; expected a finite, positive --rate"
+                    ),
+                });
+            }
+        }
+        let (inner, sample_rate_hz) = match format {
+            RawFormat::Csv => {
+                let csv = CsvFrames::new(source, Box::new(reader) as Box<dyn BufRead>, rate_hz)?;
+                let rate = csv.rate_hz;
+                (Inner::Csv(Box::new(csv)), rate)
+            }
+            RawFormat::Npy => {
+                let rate = rate_hz.ok_or_else(|| IoError::Structure {
+                    at: Location::file(source),
+                    message: "a .npy recording carries no sample rate; expected --rate HZ"
+                        .to_string(),
+                })?;
+                let npy = NpyFrames::new(source, Box::new(reader) as Box<dyn Read>)?;
+                (Inner::Npy(npy), rate)
+            }
+        };
+        Ok(Self {
+            source: source.to_string(),
+            sample_rate_hz,
+            inner,
+            frames: 0,
+        })
+    }
+
+    /// The file, as named in messages.
+    pub fn source(&self) -> &str {
+        &self.source
+    }
+
+    /// The sample rate, Hz.
+    pub fn sample_rate_hz(&self) -> f64 {
+        self.sample_rate_hz
+    }
+
+    /// Frames handed out so far.
+    pub fn frames_read(&self) -> u64 {
+        self.frames
+    }
+
+    /// Appends up to `max` frames to `out`; returns how many (0 at the end).
+    pub fn read_frames(&mut self, out: &mut Vec<Frame>, max: usize) -> Result<usize, IoError> {
+        let n = match &mut self.inner {
+            Inner::Csv(csv) => csv.read(out, max)?,
+            Inner::Npy(npy) => npy.read(out, max)?,
+        };
+        self.frames += n as u64;
+        Ok(n)
+    }
+}
+
+/// raw.csv, row by row.
+struct CsvFrames<R> {
+    stream: CsvStream<R>,
+    cols: [Col; 4],
+    time: Option<Col>,
+    rate_hz: f64,
+    /// The first row, read ahead to find the rate from `t_s`.
+    pending: Vec<Frame>,
+    /// The last time and its line.
+    last_time: Option<(f64, usize)>,
+}
+
+impl<R: BufRead> CsvFrames<R> {
+    fn new(source: &str, reader: R, rate_hz: Option<f64>) -> Result<Self, IoError> {
+        let stream = CsvStream::new(source, reader, EXPECTED_COLUMNS, None)?;
+        let head = &stream.head;
+        let cols = [
+            head.column(CHANNELS[0])?,
+            head.column(CHANNELS[1])?,
+            head.column(CHANNELS[2])?,
+            head.column(CHANNELS[3])?,
+        ];
+        let time = head.find_column("t_s")?;
+        let header_line = head.header_line;
+        let mut frames = Self {
+            stream,
+            cols,
+            time,
+            rate_hz: rate_hz.unwrap_or(f64::NAN),
+            pending: Vec::new(),
+            last_time: None,
+        };
+        let structure = |line: usize, message: String| IoError::Structure {
+            at: Location::line(source, line),
+            message,
+        };
+        match (rate_hz, frames.time.is_some()) {
+            (None, false) => {
+                return Err(structure(
+                    header_line,
+                    "no t_s column and no --rate: expected a t_s column (seconds) or the \
+                     sample rate as --rate HZ"
+                        .to_string(),
+                ))
+            }
+            (None, true) => {
+                // The rate from the first step.
+                let mut rows = Vec::new();
+                for _ in 0..2 {
+                    if let Some(row) = frames.stream.next_row()? {
+                        let frame = frames.frame(&row)?;
+                        rows.push((frame, frames.time_of(&row)?, row.line));
+                    }
+                }
+                let [(f0, t0, _), (f1, t1, line1)] = rows.as_slice() else {
+                    return Err(structure(
+                        header_line,
+                        "fewer than two rows: the sample rate cannot come from t_s; expected \
+                         more rows or --rate HZ"
+                            .to_string(),
+                    ));
+                };
+                let step = t1 - t0;
+                if !(step > 0.0 && (1.0 / step).is_finite()) {
+                    return Err(structure(
+                        *line1,
+                        format!(
+                            "t_s does not increase ({t0} then {t1}); expected uniformly \
+                             increasing times"
+                        ),
+                    ));
+                }
+                frames.rate_hz = 1.0 / step;
+                frames.last_time = Some((*t1, *line1));
+                frames.pending = vec![*f1, *f0];
+            }
+            (Some(_), _) => {}
+        }
+        Ok(frames)
+    }
+
+    fn frame(&self, row: &crate::csv_table::CsvRow) -> Result<Frame, IoError> {
+        let head = &self.stream.head;
+        Ok([
+            head.number(row, &self.cols[0])?,
+            head.number(row, &self.cols[1])?,
+            head.number(row, &self.cols[2])?,
+            head.number(row, &self.cols[3])?,
+        ])
+    }
+
+    fn time_of(&self, row: &crate::csv_table::CsvRow) -> Result<f64, IoError> {
+        match &self.time {
+            Some(col) => self.stream.head.number(row, col),
+            None => Ok(f64::NAN),
+        }
+    }
+
+    /// Checks the step from the previous time to `t` (line `line`).
+    fn check_time(&mut self, t: f64, line: usize) -> Result<(), IoError> {
+        if let Some((previous, previous_line)) = self.last_time {
+            let step = t - previous;
+            let expected = 1.0 / self.rate_hz;
+            let within = (step - expected).abs() <= RATE_TOLERANCE * expected;
+            if !within {
+                return Err(IoError::Structure {
+                    at: Location::line(&self.stream.head.source, line),
+                    message: format!(
+                        "t_s steps from {previous} (line {previous_line}) to {t}; expected a \
+                         step of {expected} s (a uniform sample rate of {} Hz)",
+                        self.rate_hz
+                    ),
+                });
+            }
+        }
+        self.last_time = Some((t, line));
+        Ok(())
+    }
+
+    fn read(&mut self, out: &mut Vec<Frame>, max: usize) -> Result<usize, IoError> {
+        let mut n = 0;
+        while n < max {
+            if let Some(frame) = self.pending.pop() {
+                out.push(frame);
+                n += 1;
+                continue;
+            }
+            let Some(row) = self.stream.next_row()? else {
+                break;
+            };
+            let frame = self.frame(&row)?;
+            if self.time.is_some() {
+                let t = self.time_of(&row)?;
+                self.check_time(t, row.line)?;
+            }
+            out.push(frame);
+            n += 1;
+        }
+        Ok(n)
+    }
+}
+
+/// The element type of a .npy array.
+#[derive(Debug, Clone, Copy)]
+struct NpyType {
+    bytes: usize,
+    big_endian: bool,
+}
+
+/// raw.npy, row by row.
+struct NpyFrames<R> {
+    source: String,
+    reader: R,
+    dtype: NpyType,
+    rows: u64,
+    next_row: u64,
+    buf: Vec<u8>,
+}
+
+impl<R: Read> NpyFrames<R> {
+    fn new(source: &str, mut reader: R) -> Result<Self, IoError> {
+        let bad = |message: String| IoError::Structure {
+            at: Location::file(source),
+            message,
+        };
+        let read_err = |e: std::io::Error| {
+            if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                bad("the file ends inside the .npy header; expected a whole NumPy file".to_string())
+            } else {
+                IoError::Read {
+                    file: source.to_string(),
+                    source: e,
+                }
+            }
+        };
+        let mut magic = [0u8; 8];
+        read_full(&mut reader, &mut magic).map_err(read_err)?;
+        if &magic[..6] != b"\x93NUMPY" {
+            return Err(bad(
+                "not a NumPy .npy file (no \\x93NUMPY magic); expected an array saved with numpy.save"
+                    .to_string(),
+            ));
+        }
+        let header_len = match magic[6] {
+            1 => {
+                let mut len = [0u8; 2];
+                read_full(&mut reader, &mut len).map_err(read_err)?;
+                u16::from_le_bytes(len) as usize
+            }
+            2 | 3 => {
+                let mut len = [0u8; 4];
+                read_full(&mut reader, &mut len).map_err(read_err)?;
+                u32::from_le_bytes(len) as usize
+            }
+            v => {
+                return Err(bad(format!(
+                    "NumPy format version {v} is not supported; expected version 1, 2 or 3"
+                )))
+            }
+        };
+        if header_len > 1 << 16 {
+            return Err(bad(format!(
+                "a .npy header of {header_len} bytes; expected at most 65536"
+            )));
+        }
+        let mut header = vec![0u8; header_len];
+        read_full(&mut reader, &mut header).map_err(read_err)?;
+        let header = String::from_utf8_lossy(&header).to_string();
+        let (dtype, rows) = parse_npy_header(&header).map_err(bad)?;
+        Ok(Self {
+            source: source.to_string(),
+            reader,
+            dtype,
+            rows,
+            next_row: 0,
+            buf: Vec::new(),
+        })
+    }
+
+    fn read(&mut self, out: &mut Vec<Frame>, max: usize) -> Result<usize, IoError> {
+        let remaining = self.rows - self.next_row;
+        let n = (max as u64).min(remaining) as usize;
+        if n == 0 {
+            if remaining == 0 {
+                // Bytes after the array?
+                let mut extra = [0u8; 1];
+                let more = self.reader.read(&mut extra).map_err(|e| IoError::Read {
+                    file: self.source.clone(),
+                    source: e,
+                })?;
+                if more > 0 {
+                    return Err(IoError::Structure {
+                        at: Location::file(&self.source),
+                        message: format!(
+                            "bytes after the {} rows the header announces; expected the file \
+                             to end with the array",
+                            self.rows
+                        ),
+                    });
+                }
+            }
+            return Ok(0);
+        }
+        let row_bytes = 4 * self.dtype.bytes;
+        self.buf.resize(n * row_bytes, 0);
+        let got = read_up_to(&mut self.reader, &mut self.buf).map_err(|e| IoError::Read {
+            file: self.source.clone(),
+            source: e,
+        })?;
+        if got < self.buf.len() {
+            let row = self.next_row + (got / row_bytes) as u64;
+            return Err(IoError::Structure {
+                at: Location::file(&self.source),
+                message: format!(
+                    "the file is truncated at sample row {row} (0-based); the header announces \
+                     {} rows of 4 values",
+                    self.rows
+                ),
+            });
+        }
+        for (i, chunk) in self.buf.chunks_exact(row_bytes).enumerate() {
+            let mut frame = [0.0; 4];
+            for (c, value) in frame.iter_mut().enumerate() {
+                let b = &chunk[c * self.dtype.bytes..(c + 1) * self.dtype.bytes];
+                *value = decode(b, self.dtype);
+                if !value.is_finite() {
+                    return Err(IoError::Structure {
+                        at: Location::file(&self.source),
+                        message: format!(
+                            "sample row {} (0-based), channel {}: not a finite number; expected \
+                             finite volts",
+                            self.next_row + i as u64,
+                            CHANNELS[c]
+                        ),
+                    });
+                }
+            }
+            out.push(frame);
+        }
+        self.next_row += n as u64;
+        Ok(n)
+    }
+}
+
+fn decode(b: &[u8], dtype: NpyType) -> f64 {
+    match (b.len(), dtype.big_endian) {
+        (4, false) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        (4, true) => f32::from_be_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        (8, false) => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
+        (8, true) => f64::from_be_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
+        _ => f64::NAN,
+    }
+}
+
+/// Reads exactly `buf.len()` bytes; a short file is `UnexpectedEof`.
+fn read_full(reader: &mut impl Read, buf: &mut [u8]) -> std::io::Result<()> {
+    reader.read_exact(buf)
+}
+
+/// Reads until `buf` is full or the input ends; returns the bytes read.
+fn read_up_to(reader: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match reader.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
+}
+
+/// The dtype and the row count of a .npy header dictionary, e.g.
+/// `{'descr': '<f8', 'fortran_order': False, 'shape': (1000, 4), }`.
+fn parse_npy_header(header: &str) -> Result<(NpyType, u64), String> {
+    let text = header.trim();
+    let value = |key: &str| -> Result<&str, String> {
+        let at = text
+            .find(&format!("'{key}'"))
+            .ok_or_else(|| format!("the .npy header has no '{key}'; expected a NumPy header"))?;
+        let rest = text[at + key.len() + 2..].trim_start();
+        let rest = rest
+            .strip_prefix(':')
+            .ok_or_else(|| format!("the .npy header's '{key}' has no value"))?;
+        Ok(rest.trim_start())
+    };
+    let descr = value("descr")?;
+    let descr = descr
+        .strip_prefix('\'')
+        .and_then(|d| d.split('\'').next())
+        .ok_or_else(|| "the .npy header's 'descr' is not a string".to_string())?;
+    let dtype = match descr {
+        "<f8" => NpyType {
+            bytes: 8,
+            big_endian: false,
+        },
+        ">f8" => NpyType {
+            bytes: 8,
+            big_endian: true,
+        },
+        "<f4" => NpyType {
+            bytes: 4,
+            big_endian: false,
+        },
+        ">f4" => NpyType {
+            bytes: 4,
+            big_endian: true,
+        },
+        other => {
+            return Err(format!(
+                "dtype '{}' is not supported; expected float32 or float64 (save with \
+                 array.astype(numpy.float64))",
+                shown(other)
+            ))
+        }
+    };
+    let fortran = value("fortran_order")?;
+    if fortran.starts_with("True") {
+        return Err(
+            "the array is in Fortran order; expected C order (save numpy.ascontiguousarray(a))"
+                .to_string(),
+        );
+    }
+    if !fortran.starts_with("False") {
+        return Err("the .npy header's 'fortran_order' is not True or False".to_string());
+    }
+    let shape = value("shape")?;
+    let inner = shape
+        .strip_prefix('(')
+        .and_then(|s| s.split(')').next())
+        .ok_or_else(|| "the .npy header's 'shape' is not a tuple".to_string())?;
+    let dims: Vec<&str> = inner
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .collect();
+    let parsed: Result<Vec<u64>, _> = dims.iter().map(|d| d.parse::<u64>()).collect();
+    match parsed.as_deref() {
+        Ok([rows, 4]) => Ok((dtype, *rows)),
+        _ => Err(format!(
+            "the array has shape ({}); expected (N, 4): one row per sample, columns vx1, vx2, \
+             vy1, vy2",
+            shown(inner)
+        )),
+    }
+}
+
+/// The header of a little-endian float64 `.npy` array of shape `(rows, 4)`,
+/// C order (format version 1.0, padded to 64 bytes).
+pub fn npy_header(rows: u64) -> Vec<u8> {
+    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, 4), }}");
+    let mut header = dict.into_bytes();
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(b' ');
+    }
+    header.push(b'\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    // The dictionary of a (u64, 4) shape stays far below 65535 bytes.
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(&header);
+    out
+}
+
+/// Writes `frames` as rows of a `.npy` array (after [`npy_header`]).
+pub fn write_npy_frames(w: &mut impl std::io::Write, frames: &[Frame]) -> std::io::Result<()> {
+    for frame in frames {
+        for v in frame {
+            w.write_all(&v.to_le_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+/// The header line of raw.csv as psdcal writes it.
+pub const RAW_CSV_HEADER: &str = "t_s,vx1,vx2,vy1,vy2";
+
+/// Writes `frames` as raw.csv rows, the first at sample `first` of a
+/// recording sampled at `rate_hz` (`t_s = n / rate`).
+pub fn write_csv_frames(
+    w: &mut impl std::io::Write,
+    first: u64,
+    rate_hz: f64,
+    frames: &[Frame],
+) -> std::io::Result<()> {
+    use crate::number_text::number_text;
+    for (i, f) in frames.iter().enumerate() {
+        let t = (first + i as u64) as f64 / rate_hz;
+        writeln!(
+            w,
+            "{},{},{},{},{}",
+            number_text(t),
+            number_text(f[0]),
+            number_text(f[1]),
+            number_text(f[2]),
+            number_text(f[3])
+        )?;
+    }
+    Ok(())
+}
