@@ -258,7 +258,7 @@ fn calibrate_as_given(
     // not depend on it): one linearisation at the solution serves the
     // covariance and the linearity check; the fit statistics, the residual
     // structure tests and the valid region need no covariance.
-    let (after_fit, (statistics, mut diagnosed, valid_region)) = rayon::join(
+    let (after_fit, (statistics, mut diagnosed, valid_region)) = join(
         || -> Result<_, CalibError> {
             let at = AtSolution::new(data, &refined, &options.refine)?;
             let method = analytic_method(&refined, &options.refine);
@@ -499,4 +499,24 @@ impl CalibrationResult {
             })
             .collect()
     }
+}
+
+/// `(a(), b())` with `b` on a second thread (a scoped OS thread, not the
+/// rayon pool: rayon's idle workers spin, which on a small fit costs more
+/// than the second core gains). The results do not depend on it.
+fn join<A, B, RA, RB>(a: A, b: B) -> (RA, RB)
+where
+    A: FnOnce() -> RA,
+    B: FnOnce() -> RB + Send,
+    RB: Send,
+{
+    std::thread::scope(|scope| {
+        let handle = scope.spawn(b);
+        let ra = a();
+        let rb = match handle.join() {
+            Ok(rb) => rb,
+            Err(panic) => std::panic::resume_unwind(panic),
+        };
+        (ra, rb)
+    })
 }
