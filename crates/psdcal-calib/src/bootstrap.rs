@@ -88,6 +88,10 @@ fn resampled(data: &CalibrationData, drawn: &[usize]) -> CalibrationData {
             .amplitudes
             .as_ref()
             .map(|a| drawn.iter().map(|&i| a[i].clone()).collect()),
+        noise_scale: data
+            .noise_scale
+            .as_ref()
+            .map(|s| drawn.iter().map(|&i| s[i].clone()).collect()),
     }
 }
 

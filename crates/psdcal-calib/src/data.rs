@@ -43,6 +43,12 @@ pub struct CalibrationData {
     /// amplitudes (docs/model.md §1). `measured` then holds the points computed
     /// with the starting gains.
     pub amplitudes: Option<Vec<Vec<Amplitudes>>>,
+    /// Per image and point (same order as `images`), the variance of the
+    /// point's channel noise relative to the others', when each record has
+    /// its own SNR (`10^(−SNR/10)` from signals.csv's `snr_db`): the
+    /// `channel-snr` noise model scales the point's covariance by it
+    /// ([`crate::weighting`]). Ignored by the other noise models.
+    pub noise_scale: Option<Vec<Vec<f64>>>,
 }
 
 impl CalibrationData {
@@ -69,6 +75,7 @@ impl CalibrationData {
             .collect();
         Self {
             amplitudes: None,
+            noise_scale: None,
             template: template.to_vec(),
             lines: lines.to_vec(),
             images,
@@ -121,6 +128,20 @@ impl CalibrationData {
                 return Err(CalibError::UnknownLed {
                     led,
                     template_len: self.template.len(),
+                });
+            }
+        }
+        if let Some(scale) = &self.noise_scale {
+            let fits = scale.len() == self.images.len()
+                && scale
+                    .iter()
+                    .zip(&self.images)
+                    .all(|(s, im)| s.len() == im.points.len());
+            if !fits || scale.iter().flatten().any(|v| !(v.is_finite() && *v > 0.0)) {
+                return Err(CalibError::InvalidInput {
+                    reason: "the per-point noise scales must match the points and be finite and \
+                             positive"
+                        .into(),
                 });
             }
         }

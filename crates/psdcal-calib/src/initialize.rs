@@ -460,6 +460,7 @@ fn subset_images(
             .collect(),
         geometry: data.geometry,
         amplitudes: None,
+        noise_scale: None,
     }
 }
 

@@ -217,6 +217,7 @@ mod tests {
             .collect();
         let data = CalibrationData {
             amplitudes: None,
+            noise_scale: None,
             template,
             lines,
             images: vec![ImageObservations {

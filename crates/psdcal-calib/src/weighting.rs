@@ -30,6 +30,9 @@
 //!   (`psdcal_model::sensor::electrode_currents`, `q = (1±u)(1±v)/4`). Points near the electrodes are far less noisy
 //!   than points at the centre (at `u = v = 0.9`, a quarter of the centre's
 //!   standard deviation);
+//!   With a per-record SNR ([`CalibrationData::noise_scale`], `10^(−SNR/10)`
+//!   from signals.csv's `snr_db`) each point's `C_m` is multiplied by its
+//!   record's scale;
 //! - `ChannelFloor`: the same absolute noise on every channel (an amplifier
 //!   or thermal floor), `σ_k = σ`: `C_m ∝ Σ_k d_k d_kᵀ / S²`, brighter
 //!   spots (larger `S`) weigh more; without amplitudes every spot counts as
@@ -176,7 +179,11 @@ impl PointWeights {
                     .amplitudes
                     .as_ref()
                     .map(|a| a[i][k].divide_gains(&model.gains().unwrap_or(ChannelGains::UNIT)));
-                let c_m = point_covariance(noise, &data.geometry, &m, corrected.as_ref());
+                let scale = match (noise, data.noise_scale.as_ref()) {
+                    (NoiseModel::ChannelSnr, Some(s)) => s[i][k],
+                    _ => 1.0,
+                };
+                let c_m = point_covariance(noise, &data.geometry, &m, corrected.as_ref()) * scale;
                 let c = match cost {
                     CostKind::Image => c_m,
                     CostKind::Template => {
@@ -303,5 +310,69 @@ mod tests {
         assert!((centre[(0, 0)] / (1.0 + COVARIANCE_FLOOR) - 4.5f64.powi(2) / 4.0).abs() < 1e-9);
         let ratio = (corner[(0, 0)] / centre[(0, 0)]).sqrt();
         assert!(ratio > 0.2 && ratio < 0.3, "std ratio {ratio}");
+    }
+
+    /// A per-record SNR scales each point's covariance by `10^(−SNR/10)`:
+    /// two copies of the same image, the second 6.0206 dB noisier (four
+    /// times the variance), get whitening matrices exactly half as large
+    /// (`chol(4 C) = 2 chol(C)`), under channel-snr only.
+    #[test]
+    fn a_per_record_snr_scales_the_weights() {
+        use crate::{ImageObservations, Observation};
+        use psdcal_model::{Model, Pose, SensorModel};
+        let truth = SensorModel::paper_lens2();
+        let pose = Pose::new(
+            nalgebra::Vector3::new(0.1, -0.2, 0.05),
+            nalgebra::Vector3::new(10.0, -20.0, 1200.0),
+        );
+        let template: Vec<Vector2<f64>> =
+            [(-100.0, -80.0), (90.0, -60.0), (0.0, 70.0), (60.0, 40.0)]
+                .iter()
+                .map(|&(x, y)| Vector2::new(x, y))
+                .collect();
+        let points: Vec<Observation> = template
+            .iter()
+            .enumerate()
+            .map(|(led, p)| Observation {
+                led,
+                measured: truth.project(&pose, p).unwrap(),
+            })
+            .collect();
+        let image = |id: &str| ImageObservations {
+            id: id.into(),
+            points: points.clone(),
+        };
+        let mut data = CalibrationData {
+            template,
+            lines: Vec::new(),
+            images: vec![image("quiet"), image("noisy")],
+            geometry: PsdGeometry::default(),
+            amplitudes: None,
+            noise_scale: None,
+        };
+        data.noise_scale = Some(vec![vec![1.0; 4], vec![4.0; 4]]);
+        let model = Model::standard(&truth);
+        for cost in [CostKind::Image, CostKind::Template] {
+            let w =
+                PointWeights::compute(&data, NoiseModel::ChannelSnr, cost, &model, &[pose, pose])
+                    .unwrap()
+                    .unwrap();
+            for k in 0..4 {
+                let ratio = w.get(1, k).component_div(w.get(0, k));
+                for v in ratio.iter().filter(|v| v.is_finite()) {
+                    assert!((v - 0.5).abs() < 1e-12, "{cost:?}, point {k}: {ratio}");
+                }
+            }
+            // The floor model ignores the scales.
+            let f =
+                PointWeights::compute(&data, NoiseModel::ChannelFloor, cost, &model, &[pose, pose])
+                    .unwrap()
+                    .unwrap();
+            for k in 0..4 {
+                assert!((f.get(1, k) - f.get(0, k)).norm() < 1e-12 * f.get(0, k).norm());
+            }
+        }
+        data.noise_scale = Some(vec![vec![1.0; 4], vec![0.0; 4]]);
+        assert!(data.check().is_err());
     }
 }

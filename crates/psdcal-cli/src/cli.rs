@@ -145,8 +145,9 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "KIND", value_enum, default_value_t = CostArg::Template)]
     pub cost: CostArg,
     /// Noise weighting of the cost: uniform (unweighted, the paper's),
-    /// channel-snr (the same SNR on every electrode channel: points near the
-    /// electrodes weigh more) or channel-floor (the same absolute noise on
+    /// channel-snr (the same SNR on every electrode channel, each record's own
+    /// from signals.csv's snr_db when given: points near the electrodes weigh
+    /// more) or channel-floor (the same absolute noise on
     /// every channel: brighter spots weigh more)
     #[arg(long, value_name = "MODEL", value_enum, default_value_t = NoiseArg::Uniform)]
     pub noise: NoiseArg,

@@ -195,3 +195,95 @@ fn refusals_exit_non_zero_with_the_reason() {
     assert_eq!(run.status.code(), Some(1));
     assert!(stderr(&run).contains("missing"), "{}", stderr(&run));
 }
+
+/// `--noise channel-snr` takes each record's SNR from signals.csv's
+/// `snr_db` (as `psdcal demodulate` writes it): one SNR for every record
+/// changes nothing (the weights are relative), records of different SNR
+/// change the fit.
+#[test]
+fn channel_snr_uses_each_records_snr() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = psdcal([
+        "simulate",
+        "--lens",
+        "2",
+        "--snr",
+        "40",
+        "--images",
+        "9",
+        "--seed",
+        "5",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let signals = std::fs::read_to_string(d.join("signals.csv")).unwrap();
+    let with_snr = |snr: &dyn Fn(&str) -> f64, name: &str| -> String {
+        let mut text = String::new();
+        for line in signals.lines() {
+            if line.starts_with('#') {
+                text.push_str(line);
+            } else if line.starts_with("image,") {
+                text.push_str(&format!("{line},snr_db"));
+            } else {
+                let image = line.split(',').next().unwrap();
+                text.push_str(&format!("{line},{}", snr(image)));
+            }
+            text.push('\n');
+        }
+        let path = d.join(name);
+        std::fs::write(&path, text).unwrap();
+        path.display().to_string()
+    };
+    let t = d.join("template.csv").display().to_string();
+    let fit = |signals: &str, tag: &str| -> Vec<f64> {
+        let cal = d.join(format!("{tag}.json"));
+        let out = psdcal([
+            "calibrate",
+            "-q",
+            "-t",
+            &t,
+            "-s",
+            signals,
+            "--noise",
+            "channel-snr",
+            "--out",
+            cal.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{tag}: {}", stderr(&out));
+        let m = read_calibration(&cal).unwrap().to_model();
+        let (i, d) = (m.intrinsics, m.distortion);
+        vec![i.f, i.cx, i.cy, d.k1, d.k2]
+    };
+    let plain = fit(d.join("signals.csv").to_str().unwrap(), "plain");
+    let same = fit(&with_snr(&|_| 40.0, "same.csv"), "same");
+    let mixed = fit(
+        &with_snr(
+            &|image| {
+                if image.ends_with(['1', '3', '5', '7', '9']) {
+                    30.0
+                } else {
+                    50.0
+                }
+            },
+            "mixed.csv",
+        ),
+        "mixed",
+    );
+    for (k, (a, b)) in plain.iter().zip(&same).enumerate() {
+        assert!(
+            (a - b).abs() <= 1e-9 * a.abs().max(1e-6),
+            "parameter {k}: {a} vs {b}"
+        );
+    }
+    let moved = plain
+        .iter()
+        .zip(&mixed)
+        .map(|(a, b)| (a - b).abs() / a.abs().max(1e-6))
+        .fold(0.0, f64::max);
+    assert!(
+        moved > 1e-6,
+        "records of 30 and 50 dB weighed alike ({moved:e})"
+    );
+}

@@ -14,6 +14,7 @@ pub trait SimulationData {
 impl SimulationData for Simulation {
     fn calibration_data(&self) -> CalibrationData {
         CalibrationData {
+            noise_scale: None,
             amplitudes: Some(
                 self.images
                     .iter()

@@ -28,6 +28,7 @@ pub fn calibration_data(set: &DataSet, with_amplitudes: bool) -> CalibrationData
     let template = &set.template;
     let mut data = CalibrationData {
         amplitudes: None,
+        noise_scale: None,
         template: template
             .leds
             .iter()
@@ -76,7 +77,34 @@ pub fn calibration_data(set: &DataSet, with_amplitudes: bool) -> CalibrationData
             })
             .collect();
     }
+    data.noise_scale = record_noise_scale(set);
     data
+}
+
+/// Each point's channel-noise variance relative to the others' from its
+/// record's SNR (signals.csv's `snr_db`, `10^(−SNR/10)`), when every point
+/// has one; what the `channel-snr` weighting scales each point by.
+fn record_noise_scale(set: &DataSet) -> Option<Vec<Vec<f64>>> {
+    let signals = set.signals.as_ref()?;
+    let by_key: HashMap<(&str, &str), f64> = signals
+        .rows
+        .iter()
+        .filter_map(|r| Some(((r.image.as_str(), r.led.as_str()), r.snr_db?)))
+        .collect();
+    set.validated
+        .images
+        .iter()
+        .map(|im| {
+            im.points
+                .iter()
+                .map(|(led, _)| {
+                    let snr_db =
+                        by_key.get(&(im.id.as_str(), set.template.leds[*led].id.as_str()))?;
+                    Some(10f64.powf(-snr_db / 10.0)).filter(|v| v.is_finite() && *v > 0.0)
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// psdcal-calib's options.

@@ -55,6 +55,7 @@ pub fn data(s: &WideScenario) -> CalibrationData {
         images,
         geometry: PsdGeometry::default(),
         amplitudes: None,
+        noise_scale: None,
     }
 }
 
