@@ -360,3 +360,34 @@ fn one_mistyped_led_is_named_not_blamed_on_the_poses() {
     assert!(err.contains(&format!("line {}", row + 1)), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
 }
+
+#[test]
+fn a_report_on_a_degenerate_calibration_is_drawn() {
+    // The reproducer's kind: a calibration whose correction folds at once
+    // (its valid region is empty: the PSD term's determinant is negative
+    // already at the optical centre), and one with an absurd focal length.
+    let dir = tempfile::tempdir().unwrap();
+    let text = fs::read_to_string(valid("calibration.json")).unwrap();
+    // Edited as text: the file's order of names is part of its format.
+    let cases = [
+        ("l1", "\"l1\": 0.0", "\"l1\": -1.0"),
+        ("f", "\"f\": 8.0", "\"f\": 10000.0"),
+    ];
+    for (name, from, to) in cases {
+        assert_eq!(text.matches(from).count(), 2, "{name}: the fixture changed");
+        let cal = dir.path().join(format!("{name}.json"));
+        fs::write(&cal, text.replace(from, to)).unwrap();
+        let folder = dir.path().join(format!("report-{name}"));
+        let out = psdcal([
+            "report",
+            "-c",
+            cal.to_str().unwrap(),
+            "--out",
+            folder.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
+        let page = fs::read_to_string(folder.join("report.html")).unwrap();
+        assert!(page.contains("<svg"), "{name}: no plot in the page");
+        assert!(!stderr(&out).contains("cannot plot"), "{}", stderr(&out));
+    }
+}
