@@ -11,7 +11,7 @@
 //! distortion; removing a correct LED changes little. So `s_k = e_all / e₋ₖ`
 //! is large for a misplaced LED and near 1 for the others (measured: 5 to
 //! 200 for a typo of 36–1 260 mm in one LED of the 14-LED template, at most
-//! 1.3 for any correct LED, on noise-free and 40 dB data of both lenses).
+//! 1.6 for any correct LED, on noise-free and 40 dB data of both lenses).
 //! An LED's score is the median of its `s_k` over the images that see it (at
 //! least [`MIN_IMAGES_SEEN`]). The LED with the highest score is blamed when
 //! its score is at least [`MIN_SCORE`] and at least [`MIN_SEPARATION`] times
