@@ -99,6 +99,16 @@ fn bad_inputs_are_clear_errors() {
         "{}",
         stderr(&run)
     );
+    // A sample rate below twice the modulation frequency (a wrong --rate).
+    let run = demodulate(d, "raw.npy", "schedule.csv", &["--rate", "1500"]);
+    assert_eq!(run.status.code(), Some(1));
+    let err = stderr(&run);
+    assert!(
+        err.contains("schedule.csv:") && err.contains("Nyquist"),
+        "{err}"
+    );
+    assert!(err.contains("is the sample rate right?"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
     // An interval past the end.
     write(
         "late.csv",

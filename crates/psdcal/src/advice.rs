@@ -31,6 +31,9 @@ fn advice_of(error: &(dyn StdError + 'static)) -> Option<&'static str> {
             Error::Calibrate(e) | Error::Estimate(e) => Some(calib_advice(e)),
             Error::Locate(e) => Some(locate_advice(e)),
             Error::MisplacedLed { .. } => Some("correct that LED's row and calibrate again"),
+            Error::Input(_) | Error::Options(_) => {
+                Some("change the options or the data as the message says")
+            }
             _ => None,
         };
     }

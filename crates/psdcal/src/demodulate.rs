@@ -265,8 +265,16 @@ pub fn demodulate(request: &DemodulateRequest) -> Result<Demodulated> {
                     SignalError::Saturated { .. } => RecordStatus::Saturated,
                     SignalError::TonesNotSeparable { .. } => RecordStatus::ToneCollision,
                     _ => {
+                        let advice = match &e {
+                            SignalError::BandAboveNyquist { .. }
+                            | SignalError::SampleRateTooLow { .. } => {
+                                "; is the sample rate right? (--rate, or raw.csv's t_s: it must \
+                                 be well above twice the modulation frequency)"
+                            }
+                            _ => "",
+                        };
                         return Err(Error::Input(format!(
-                            "{}: {e}",
+                            "{}: {e}{advice}",
                             what(
                                 &leds
                                     .iter()
@@ -274,7 +282,7 @@ pub fn demodulate(request: &DemodulateRequest) -> Result<Demodulated> {
                                     .collect::<Vec<_>>()
                                     .join(";")
                             )
-                        )))
+                        )));
                     }
                 };
                 let leds_text: Vec<&str> = leds.iter().map(|l| l.0.as_str()).collect();
