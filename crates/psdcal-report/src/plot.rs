@@ -238,18 +238,18 @@ pub fn count_label(v: f64) -> String {
     }
 }
 
+/// A chart in data coordinates (mm, degrees or counts on both axes).
+pub(crate) type Chart<'a, DB> = ChartContext<
+    'a,
+    DB,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
 /// The chart of a frame on `area`, with its mesh and axis labels drawn.
 pub(crate) fn chart<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
     frame: &Frame,
-) -> Result<
-    ChartContext<
-        'a,
-        DB,
-        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
-    >,
-    ReportError,
-> {
+) -> Result<Chart<'a, DB>, ReportError> {
     build_chart(area, frame, false, false, false)
 }
 
@@ -258,14 +258,7 @@ pub(crate) fn chart<'a, DB: DrawingBackend>(
 pub(crate) fn chart_legend<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
     frame: &Frame,
-) -> Result<
-    ChartContext<
-        'a,
-        DB,
-        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
-    >,
-    ReportError,
-> {
+) -> Result<Chart<'a, DB>, ReportError> {
     build_chart(area, frame, false, false, true)
 }
 
@@ -279,14 +272,7 @@ pub(crate) fn chart_with<'a, DB: DrawingBackend>(
     frame: &Frame,
     x_counts: bool,
     y_counts: bool,
-) -> Result<
-    ChartContext<
-        'a,
-        DB,
-        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
-    >,
-    ReportError,
-> {
+) -> Result<Chart<'a, DB>, ReportError> {
     build_chart(area, frame, x_counts, y_counts, false)
 }
 
@@ -297,14 +283,7 @@ pub(crate) fn build_chart<'a, DB: DrawingBackend>(
     x_counts: bool,
     y_counts: bool,
     legend: bool,
-) -> Result<
-    ChartContext<
-        'a,
-        DB,
-        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
-    >,
-    ReportError,
-> {
+) -> Result<Chart<'a, DB>, ReportError> {
     let mut chart = ChartBuilder::on(area)
         .caption(&frame.title, (FAMILY, 20))
         .margin(12)
