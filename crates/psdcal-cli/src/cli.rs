@@ -8,7 +8,9 @@ use psdcal::option_text::{
     parse_assignment, parse_fit, parse_robust, parse_uncertainty, positive_mm, side_mm, FitList,
 };
 pub use psdcal::PointSource;
-use psdcal::{CalibrationOptions, Param, PsdGeometry, Robust, Uncertainty};
+use psdcal::{
+    CalibrationOptions, DataSetFiles, LoadOptions, Param, PsdGeometry, Robust, Uncertainty,
+};
 
 use crate::choice::{CostArg, NoiseArg, PreliminaryArg};
 
@@ -96,8 +98,15 @@ pub enum Command {
 
 /// Arguments of `psdcal check`.
 #[derive(Debug, Args)]
-#[command(group(ArgGroup::new("input").required(true).args(["observations", "signals"])))]
 pub struct CheckArgs {
+    #[command(flatten)]
+    pub data: DataSetArgs,
+}
+
+/// A calibration data set's files and options (`check`, `calibrate`).
+#[derive(Debug, Args)]
+#[command(group(ArgGroup::new("input").required(true).args(["observations", "signals"])))]
+pub struct DataSetArgs {
     /// Template: led, X_mm, Y_mm[, lines]
     #[arg(long, short = 't', value_name = "FILE")]
     pub template: PathBuf,
@@ -113,24 +122,16 @@ pub struct CheckArgs {
     /// Active area side along y, mm
     #[arg(long, value_name = "MM", default_value = "9", value_parser = side_mm, allow_negative_numbers = true)]
     pub ly: f64,
-    /// Treat every warning as an error instead of dropping the data
+    /// Treat every data warning as an error instead of dropping the data
     #[arg(long)]
     pub strict: bool,
 }
 
 /// Arguments of `psdcal calibrate`.
 #[derive(Debug, Args)]
-#[command(group(ArgGroup::new("input").required(true).args(["observations", "signals"])))]
 pub struct CalibrateArgs {
-    /// Template: led, X_mm, Y_mm[, lines]
-    #[arg(long, short = 't', value_name = "FILE")]
-    pub template: PathBuf,
-    /// Measured impact points: image, led, x_mm, y_mm
-    #[arg(long, short = 'o', value_name = "FILE")]
-    pub observations: Option<PathBuf>,
-    /// Electrode amplitudes instead of impact points: image, led, vx1, vx2, vy1, vy2
-    #[arg(long, short = 's', value_name = "FILE")]
-    pub signals: Option<PathBuf>,
+    #[command(flatten)]
+    pub data: DataSetArgs,
     /// Where to write calibration.json (atomically)
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
@@ -184,19 +185,10 @@ pub struct CalibrateArgs {
     /// Also write every point's residuals to this CSV
     #[arg(long, value_name = "FILE")]
     pub residuals: Option<PathBuf>,
-    /// Active area side along x, mm
-    #[arg(long, value_name = "MM", default_value = "9", value_parser = side_mm, allow_negative_numbers = true)]
-    pub lx: f64,
-    /// Active area side along y, mm
-    #[arg(long, value_name = "MM", default_value = "9", value_parser = side_mm, allow_negative_numbers = true)]
-    pub ly: f64,
-    /// Treat every data warning as an error instead of dropping the data
-    #[arg(long)]
-    pub strict: bool,
 }
 
 /// Arguments of `psdcal correct`.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 pub struct CorrectArgs {
     /// Calibration written by psdcal (calibration.json)
     #[arg(long, short = 'c', value_name = "FILE")]
@@ -220,33 +212,13 @@ pub enum Output {
     Json,
 }
 
-/// Validated configuration of `psdcal check`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CheckConfig {
-    pub template: PathBuf,
-    pub points: PointSource,
-    pub geometry: PsdGeometry,
-    pub strict: bool,
-}
-
-/// Validated configuration of `psdcal correct`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CorrectConfig {
-    pub calibration: PathBuf,
-    pub points: PathBuf,
-    pub out: Option<PathBuf>,
-}
-
 /// Validated configuration of `psdcal calibrate`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CalibrateConfig {
-    pub template: PathBuf,
-    pub points: PointSource,
-    pub geometry: PsdGeometry,
-    pub strict: bool,
+    pub files: DataSetFiles,
+    pub load: LoadOptions,
     pub out: PathBuf,
     pub residuals: Option<PathBuf>,
-    pub gains_file: Option<PathBuf>,
     pub options: CalibrationOptions,
 }
 
@@ -259,13 +231,13 @@ pub enum Job {
     Simulate(crate::cli_sim::SimulateArgs),
     Study(psdcal::StudyRequest),
     Demo(crate::cli_sim::DemoArgs),
-    Check(CheckConfig),
+    Check(DataSetFiles, LoadOptions),
     Calibrate(CalibrateConfig),
-    Correct(CorrectConfig),
-    Aoa(crate::cli_locate::AoaConfig),
+    Correct(CorrectArgs),
+    Aoa(crate::cli_locate::AoaArgs),
     Locate(crate::cli_locate::LocateConfig),
-    Map(crate::cli_locate::MapConfig),
-    Report(crate::cli_report::ReportConfig),
+    Map(psdcal::MapRequest, Option<PathBuf>),
+    Report(crate::cli_report::ReportArgs),
     Evaluate(crate::cmd_evaluate::EvaluateArgs),
     SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
     Demodulate(crate::cmd_demodulate::DemodulateArgs),
@@ -285,16 +257,8 @@ impl Cli {
         };
         let job = match self.command {
             Command::Check(args) => {
-                let points = point_source(args.observations, args.signals)?;
-                Job::Check(CheckConfig {
-                    template: args.template,
-                    points,
-                    geometry: PsdGeometry {
-                        lx: args.lx,
-                        ly: args.ly,
-                    },
-                    strict: args.strict,
-                })
+                let (files, load) = args.data.into_files(None)?;
+                Job::Check(files, load)
             }
             Command::Gains(args) => Job::Gains(args),
             Command::PsdMap(args) => Job::PsdMap(args),
@@ -302,16 +266,22 @@ impl Cli {
             Command::Simulate(args) => Job::Simulate(args),
             Command::Study(args) => Job::Study(args.into_config()),
             Command::Demo(args) => Job::Demo(args),
-            Command::Aoa(args) => Job::Aoa(args.into_config(output)?),
+            Command::Aoa(args) => {
+                crate::cli_locate::json_needs_out("aoa", &args.out, output)?;
+                Job::Aoa(args)
+            }
             Command::Locate(args) => Job::Locate(args.into_config(output)?),
-            Command::Map(args) => Job::Map(args.into_config(output)?),
-            Command::Report(args) => Job::Report(args.into_config()),
+            Command::Map(args) => {
+                let (request, out) = args.into_config(output)?;
+                Job::Map(request, out)
+            }
+            Command::Report(args) => Job::Report(args),
             Command::Evaluate(args) => Job::Evaluate(args),
             Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
             Command::Demodulate(args) => Job::Demodulate(args),
             Command::Track(args) => Job::Track(args),
             Command::Calibrate(args) => {
-                let points = point_source(args.observations, args.signals)?;
+                let (files, load) = args.data.into_files(args.gains)?;
                 let FitList(free, fit_gains) = args.fit;
                 let options = CalibrationOptions {
                     free,
@@ -330,50 +300,58 @@ impl Cli {
                     uncertainty: args.uncertainty,
                     psd_map: args.psd_map,
                 };
-                let signals = matches!(points, PointSource::Signals(_));
-                options.check(signals, args.gains.is_some()).map_err(|m| {
+                let signals = matches!(files.points, PointSource::Signals(_));
+                options.check(signals, files.gains.is_some()).map_err(|m| {
                     Cli::command().error(clap::error::ErrorKind::ArgumentConflict, m)
                 })?;
                 Job::Calibrate(CalibrateConfig {
-                    template: args.template,
-                    points,
-                    geometry: PsdGeometry {
-                        lx: args.lx,
-                        ly: args.ly,
-                    },
-                    strict: args.strict,
+                    files,
+                    load,
                     out: args.out,
                     residuals: args.residuals,
-                    gains_file: args.gains,
                     options,
                 })
             }
             Command::Correct(args) => {
                 crate::cli_locate::json_needs_out("correct", &args.out, output)?;
-                Job::Correct(CorrectConfig {
-                    calibration: args.calibration,
-                    points: args.points,
-                    out: args.out,
-                })
+                Job::Correct(args)
             }
         };
         Ok((output, job))
     }
 }
 
-/// `--fit`: comma-separated parameter names, each at most once.
-/// Where a data set's points come from: exactly one of `--observations`
-/// and `--signals` (clap's group makes one required; this refuses both).
-fn point_source(
-    observations: Option<PathBuf>,
-    signals: Option<PathBuf>,
-) -> Result<PointSource, clap::Error> {
-    match (observations, signals) {
-        (Some(path), None) => Ok(PointSource::Observations(path)),
-        (None, Some(path)) => Ok(PointSource::Signals(path)),
-        _ => Err(Cli::command().error(
-            clap::error::ErrorKind::ArgumentConflict,
-            "give exactly one of --observations and --signals",
-        )),
+impl DataSetArgs {
+    /// The files (with `gains`) and load options; the points come from
+    /// exactly one of `--observations` and `--signals` (clap's group makes
+    /// one required; this refuses both).
+    fn into_files(
+        self,
+        gains: Option<PathBuf>,
+    ) -> Result<(DataSetFiles, LoadOptions), clap::Error> {
+        let points = match (self.observations, self.signals) {
+            (Some(path), None) => PointSource::Observations(path),
+            (None, Some(path)) => PointSource::Signals(path),
+            _ => {
+                return Err(Cli::command().error(
+                    clap::error::ErrorKind::ArgumentConflict,
+                    "give exactly one of --observations and --signals",
+                ))
+            }
+        };
+        let files = DataSetFiles {
+            template: self.template,
+            points,
+            gains,
+        };
+        let geometry = PsdGeometry {
+            lx: self.lx,
+            ly: self.ly,
+        };
+        let load = LoadOptions {
+            geometry,
+            strict: self.strict,
+        };
+        Ok((files, load))
     }
 }

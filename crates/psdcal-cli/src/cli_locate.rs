@@ -8,7 +8,7 @@ use psdcal::option_text::{
     angle_deg, grid_size, non_negative_mm, parse_error_list, parse_plane, positive_mm,
     within_k_sigma,
 };
-use psdcal::{LocateOptions, Param, Plane};
+use psdcal::{LocateOptions, MapRequest, Param, Plane};
 pub use psdcal::{LocateTarget, MapModel, MapSource};
 
 use crate::choice::LensArg;
@@ -21,7 +21,7 @@ pub const LOCATE_EXAMPLES: &str = include_str!("../help/locate.txt");
 pub const MAP_EXAMPLES: &str = include_str!("../help/map.txt");
 
 /// Arguments of `psdcal aoa`.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 pub struct AoaArgs {
     /// Calibration written by psdcal (calibration.json)
     #[arg(long, short = 'c', value_name = "FILE")]
@@ -110,15 +110,6 @@ pub struct MapArgs {
     pub out: Option<PathBuf>,
 }
 
-/// Validated configuration of `psdcal aoa`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AoaConfig {
-    pub calibration: PathBuf,
-    pub points: PathBuf,
-    pub out: Option<PathBuf>,
-    pub point_sigma_mm: Option<f64>,
-}
-
 /// Validated configuration of `psdcal locate`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LocateConfig {
@@ -127,17 +118,6 @@ pub struct LocateConfig {
     pub out: Option<PathBuf>,
     pub options: LocateOptions,
     pub point_sigma_given: bool,
-}
-
-/// Validated configuration of `psdcal map`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MapConfig {
-    pub model: MapModel,
-    pub source: MapSource,
-    pub distance_mm: f64,
-    pub grid: usize,
-    pub paper: bool,
-    pub out: Option<PathBuf>,
 }
 
 fn usage(kind: clap::error::ErrorKind, message: impl std::fmt::Display) -> clap::Error {
@@ -161,19 +141,8 @@ pub(crate) fn json_needs_out(
     Ok(())
 }
 
-impl AoaArgs {
-    pub fn into_config(self, output: Output) -> Result<AoaConfig, clap::Error> {
-        json_needs_out("aoa", &self.out, output)?;
-        Ok(AoaConfig {
-            calibration: self.calibration,
-            points: self.points,
-            out: self.out,
-            point_sigma_mm: self.point_sigma,
-        })
-    }
-}
-
 impl LocateArgs {
+    /// The validated configuration.
     pub fn into_config(self, output: Output) -> Result<LocateConfig, clap::Error> {
         json_needs_out("locate", &self.out, output)?;
         let conflict = |m: &str| usage(clap::error::ErrorKind::ArgumentConflict, m);
@@ -210,7 +179,8 @@ impl LocateArgs {
 }
 
 impl MapArgs {
-    pub fn into_config(self, output: Output) -> Result<MapConfig, clap::Error> {
+    /// The map's request and where its table goes.
+    pub fn into_config(self, output: Output) -> Result<(MapRequest, Option<PathBuf>), clap::Error> {
         json_needs_out("map", &self.out, output)?;
         let conflict = |m: &str| usage(clap::error::ErrorKind::ArgumentConflict, m);
         if self.k_sigma.is_some() && self.calibration.is_none() {
@@ -238,13 +208,13 @@ impl MapArgs {
             }
             _ => usage(clap::error::ErrorKind::ArgumentConflict, e),
         })?;
-        Ok(MapConfig {
+        let request = MapRequest {
             model,
             source,
             distance_mm: self.distance,
             grid: self.grid,
             paper: self.paper,
-            out: self.out,
-        })
+        };
+        Ok((request, self.out))
     }
 }

@@ -1,4 +1,4 @@
-//! Arguments and validated configuration of `psdcal report`.
+//! Arguments of `psdcal report`.
 
 use std::path::PathBuf;
 
@@ -7,7 +7,7 @@ use clap::Args;
 pub const REPORT_EXAMPLES: &str = include_str!("../help/report.txt");
 
 /// Arguments of `psdcal report`.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 pub struct ReportArgs {
     /// Calibration written by psdcal (calibration.json)
     #[arg(long, short = 'c', value_name = "FILE")]
@@ -21,27 +21,4 @@ pub struct ReportArgs {
     /// Output folder (created if missing) for report.html and the plots
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-}
-
-/// Validated configuration of `psdcal report`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ReportConfig {
-    pub calibration: PathBuf,
-    /// `(template, observations)`.
-    pub data: Option<(PathBuf, PathBuf)>,
-    pub out: PathBuf,
-    /// `out/report.html`, the page (checked against the inputs).
-    pub page: PathBuf,
-}
-
-impl ReportArgs {
-    /// The configuration.
-    pub fn into_config(self) -> ReportConfig {
-        ReportConfig {
-            calibration: self.calibration,
-            data: self.template.zip(self.observations),
-            page: self.out.join("report.html"),
-            out: self.out,
-        }
-    }
 }

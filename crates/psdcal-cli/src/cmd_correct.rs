@@ -1,19 +1,19 @@
 //! `psdcal correct`: measured points (or amplitudes) → ideal points, with
 //! a status per row.
 
-use crate::cli::{CorrectConfig, Output};
-use crate::report::{print_points_answer, PointsSummary};
+use crate::cli::{CorrectArgs, Output};
 
 /// Runs `correct`.
-pub fn run(config: &CorrectConfig, output: Output) -> anyhow::Result<()> {
-    let corrected = psdcal::correct(&config.calibration, &config.points, config.out.as_deref())?;
-    let summary = PointsSummary {
-        command: "correct",
-        verb: "corrected",
-        calibration: &config.calibration,
-        out: config.out.as_deref(),
-        extra: serde_json::json!({}),
-        name_columns: true,
-    };
-    print_points_answer(&corrected.answer, &summary, output)
+pub fn run(args: &CorrectArgs, output: Output) -> anyhow::Result<()> {
+    let out = args.out.as_deref();
+    let corrected = psdcal::correct(&args.calibration, &args.points, out)?;
+    let summary = corrected.answer.summary(
+        "correct",
+        "corrected",
+        &args.calibration,
+        out,
+        serde_json::json!({}),
+        true,
+    );
+    crate::report::emit(output, &summary)
 }

@@ -50,13 +50,6 @@ pub fn run(args: &DemodulateArgs, output: Output) -> anyhow::Result<()> {
         },
     };
     let done = psdcal::demodulate(&request)?;
-    for warning in &done.warnings {
-        eprintln!("warning: {warning}");
-    }
-    match output {
-        Output::Quiet => {}
-        Output::Json => println!("{}", serde_json::to_string_pretty(&done.to_json())?),
-        Output::Text => println!("{}", done.summary(&args.out)),
-    }
-    Ok(())
+    let summary = psdcal::Summary::new(done.summary(&args.out), done.to_json());
+    crate::report::emit(output, &summary.warn(&done.warnings))
 }

@@ -33,26 +33,9 @@ pub fn run(args: &EvaluateArgs, output: Output) -> anyhow::Result<()> {
         estimates: args.estimates.clone(),
         rig: args.rig.clone(),
     })?;
-    for w in evaluation.warnings() {
-        eprintln!("warning: {w}");
-    }
     let files = match &args.report {
         Some(dir) => evaluation.write_report(dir)?,
         None => Vec::new(),
     };
-    match output {
-        Output::Quiet => {}
-        Output::Json => {
-            let mut json = evaluation.to_json();
-            json["report"] = serde_json::json!(files.first().map(|f| f.display().to_string()));
-            println!("{}", serde_json::to_string_pretty(&json)?);
-        }
-        Output::Text => {
-            print!("{}", evaluation.text());
-            if let Some(page) = files.first() {
-                println!("wrote {} and {} figures", page.display(), files.len() - 1);
-            }
-        }
-    }
-    Ok(())
+    crate::report::emit(output, &evaluation.summary(&files))
 }

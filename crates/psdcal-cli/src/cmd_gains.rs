@@ -1,34 +1,19 @@
 //! `psdcal gains`: relative channel gains from equal-current records.
 
-use psdcal_io::write_gains;
-
 use crate::cli::Output;
 use crate::cli_gains::GainsArgs;
 
-/// Runs `gains`.
+/// Runs `gains` (without `--out`, gains.json goes to standard output).
 pub fn run(args: &GainsArgs, output: Output) -> anyhow::Result<()> {
     let file = psdcal::estimate_gains(&args.signals, args.method.into())?;
-    if let Some(path) = &args.out {
-        write_gains(path, &file)?;
-    }
-    match (output, &args.out) {
-        (Output::Quiet, _) => {}
-        (Output::Json, _) | (_, None) => println!("{}", serde_json::to_string_pretty(&file)?),
-        (Output::Text, Some(path)) => {
-            println!(
-                "gains relative to x1 from {} equal-current records ({}):",
-                file.records,
-                args.signals.display()
-            );
-            for (name, g, s) in [
-                ("g_x2", file.x2, file.std.g_x2),
-                ("g_y1", file.y1, file.std.g_y1),
-                ("g_y2", file.y2, file.std.g_y2),
-            ] {
-                println!("  {name} = {g:.8} ± {s:.2e}");
-            }
-            println!("wrote {}", path.display());
+    match &args.out {
+        Some(path) => psdcal_io::write_gains(path, &file)?,
+        None if output != Output::Json => {
+            println!("{}", serde_json::to_string_pretty(&file)?);
+            return Ok(());
         }
+        None => {}
     }
-    Ok(())
+    let summary = psdcal::gains_summary(&file, &args.signals, args.out.as_deref())?;
+    crate::report::emit(output, &summary)
 }

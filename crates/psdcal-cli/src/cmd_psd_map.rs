@@ -48,13 +48,7 @@ pub fn run(args: &PsdMapArgs, output: Output) -> anyhow::Result<()> {
     };
     let outcome = psdcal::psd_map_from_scan(&request)?;
     outcome.write(&args.out)?;
-    match output {
-        Output::Quiet => {}
-        Output::Json => println!("{}", serde_json::to_string_pretty(&outcome.file)?),
-        Output::Text => {
-            print!("{}", outcome.text);
-            println!("wrote {}", args.out.display());
-        }
-    }
-    Ok(())
+    let json = serde_json::to_value(&outcome.file)?;
+    let summary = psdcal::Summary::new(outcome.text.clone(), json).wrote([args.out.as_path()]);
+    crate::report::emit(output, &summary)
 }

@@ -4,33 +4,14 @@
 use psdcal::ReportRequest;
 
 use crate::cli::Output;
-use crate::cli_report::ReportConfig;
-use crate::report::print_warnings;
+use crate::cli_report::ReportArgs;
 
 /// Runs `report`.
-pub fn run(config: &ReportConfig, output: Output) -> anyhow::Result<()> {
+pub fn run(args: &ReportArgs, output: Output) -> anyhow::Result<()> {
     let written = psdcal::write_report(&ReportRequest {
-        calibration: config.calibration.clone(),
-        data: config.data.clone(),
-        out: config.out.clone(),
+        calibration: args.calibration.clone(),
+        data: args.template.clone().zip(args.observations.clone()),
+        out: args.out.clone(),
     })?;
-    print_warnings(&written.warnings);
-    match output {
-        Output::Quiet => {}
-        Output::Json => {
-            let json = serde_json::json!({
-                "report": written.html.display().to_string(),
-                "plots": written.plots,
-                "files": written.files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>(),
-            });
-            println!("{}", serde_json::to_string_pretty(&json)?);
-        }
-        Output::Text => println!(
-            "wrote {} and {} plots (SVG and PNG) into {}",
-            written.html.display(),
-            written.plots.len(),
-            config.out.display()
-        ),
-    }
-    Ok(())
+    crate::report::emit(output, &written.summary(&args.out))
 }

@@ -31,37 +31,5 @@ pub fn run(args: &SimulateArgs, output: Output) -> anyhow::Result<()> {
             },
         )?,
     };
-    let mut names = vec![
-        "template.csv",
-        "observations.csv",
-        "signals.csv",
-        "truth.json",
-    ];
-    names.extend(files.iter().map(String::as_str));
-    match output {
-        Output::Quiet => {}
-        Output::Json => println!(
-            "{}",
-            serde_json::json!({
-                "out": args.out.display().to_string(),
-                "images": written.images,
-                "points": written.points,
-                "files": names,
-            })
-        ),
-        Output::Text => {
-            println!("{}", written.description);
-            let shown: Vec<String> = names
-                .iter()
-                .map(|n| format!("{}/{n}", args.out.display()))
-                .collect();
-            println!(
-                "wrote {} ({} images, {} points)",
-                shown.join(", "),
-                written.images,
-                written.points
-            );
-        }
-    }
-    Ok(())
+    crate::report::emit(output, &written.summary(&args.out, &files))
 }

@@ -62,10 +62,6 @@ pub fn run(a: &PositioningArgs, output: Output) -> anyhow::Result<()> {
         seed: a.seed,
         out: a.out.clone(),
     })?;
-    match output {
-        Output::Quiet => {}
-        Output::Json => println!("{}", rig.to_json(&a.out)),
-        Output::Text => println!("{}", rig.text(&a.out)),
-    }
-    Ok(())
+    let summary = psdcal::Summary::new(rig.text(&a.out), rig.to_json(&a.out));
+    crate::report::emit(output, &summary)
 }

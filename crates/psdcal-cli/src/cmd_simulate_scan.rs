@@ -52,20 +52,5 @@ pub fn run(args: &SimulateScanArgs, output: Output) -> anyhow::Result<()> {
         seed: args.seed,
         out: args.out.clone(),
     })?;
-    match output {
-        Output::Quiet => {}
-        Output::Json => println!(
-            "{}",
-            serde_json::json!({"out": args.out.display().to_string(), "points": scan.samples.len()})
-        ),
-        Output::Text => {
-            println!("{}", scan.description);
-            println!(
-                "wrote {} ({} points)",
-                args.out.display(),
-                scan.samples.len()
-            );
-        }
-    }
-    Ok(())
+    crate::report::emit(output, &scan.summary(&args.out))
 }

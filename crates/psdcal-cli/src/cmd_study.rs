@@ -28,21 +28,7 @@ pub fn run(config: &StudyRequest, output: Output) -> anyhow::Result<()> {
     let outcome = plan.run(&tick, &cancel);
     bar.finish_and_clear();
     let outcome = outcome?;
-    match output {
-        Output::Quiet => {}
-        Output::Json => println!("{}", serde_json::to_string_pretty(&outcome.json)?),
-        Output::Text => {
-            print!("{}", outcome.markdown);
-            println!(
-                "wrote {0}/study.md, {0}/study.csv, {0}/study.json",
-                config.out.display()
-            );
-            if let Some(path) = &outcome.page {
-                println!("wrote {}", path.display());
-            }
-        }
-    }
-    Ok(())
+    crate::report::emit(output, &outcome.summary(&config.out))
 }
 
 fn progress_bar(total: u64, output: Output) -> ProgressBar {

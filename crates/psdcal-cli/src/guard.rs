@@ -13,7 +13,7 @@ type Named<'a> = (&'static str, &'a Path);
 /// The input and output files of `job` (folders of `simulate`, `study` and
 /// `demo` are not checked: they read no file; `report`'s page is, and the
 /// calibrations a rig lists).
-fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
+fn files<'a>(job: &'a Job, page: &'a Path) -> (Vec<Named<'a>>, Vec<Named<'a>>) {
     fn points(p: &PointSource) -> Named<'_> {
         match p {
             PointSource::Observations(path) => ("--observations", path.as_path()),
@@ -25,8 +25,11 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
     }
     match job {
         Job::Calibrate(c) => {
-            let mut inputs = vec![("--template", c.template.as_path()), points(&c.points)];
-            inputs.extend(c.gains_file.iter().map(|p| ("--gains", p.as_path())));
+            let mut inputs = vec![
+                ("--template", c.files.template.as_path()),
+                points(&c.files.points),
+            ];
+            inputs.extend(c.files.gains.iter().map(|p| ("--gains", p.as_path())));
             inputs.extend(c.options.psd_map.iter().map(|p| ("--psd-map", p.as_path())));
             let mut outputs = vec![("--out", c.out.as_path())];
             outputs.extend(c.residuals.iter().map(|p| ("--residuals", p.as_path())));
@@ -59,21 +62,24 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
             };
             (vec![target, ("--points", c.points.as_path())], out(&c.out))
         }
-        Job::Map(c) => {
-            let inputs = match &c.model {
+        Job::Map(request, o) => {
+            let inputs = match &request.model {
                 MapModel::Calibration(path) => vec![("--calibration", path.as_path())],
                 _ => Vec::new(),
             };
-            (inputs, out(&c.out))
+            (inputs, out(o))
         }
         Job::Report(c) => {
             let mut inputs = vec![("--calibration", c.calibration.as_path())];
-            if let Some((t, o)) = &c.data {
-                inputs.extend([("--template", t.as_path()), ("--observations", o.as_path())]);
-            }
+            inputs.extend(c.template.iter().map(|t| ("--template", t.as_path())));
+            inputs.extend(
+                c.observations
+                    .iter()
+                    .map(|o| ("--observations", o.as_path())),
+            );
             // The page is the one output whose name an input could have
             // (the plots are .svg and .png files).
-            (inputs, vec![("--out", c.page.as_path())])
+            (inputs, vec![("--out", page)])
         }
         Job::Evaluate(e) => {
             let mut inputs = vec![
@@ -98,7 +104,11 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
 /// Refuses a job whose output is one of its inputs (or two outputs that are
 /// one file).
 pub fn check(job: &Job) -> Result<(), psdcal::IoError> {
-    let (inputs, outputs) = files(job);
+    let page = match job {
+        Job::Report(c) => c.out.join("report.html"),
+        _ => std::path::PathBuf::new(),
+    };
+    let (inputs, outputs) = files(job, &page);
     psdcal_io::refuse_overwrite(&inputs, &outputs)?;
     // The calibrations a rig lists are inputs too (a rig that cannot be read
     // is the job's own error, reported when it runs).

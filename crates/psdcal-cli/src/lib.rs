@@ -52,7 +52,7 @@ pub fn main() -> ExitCode {
         return ExitCode::from(2);
     }
     let result = match &job {
-        Job::Check(config) => cmd_check::run(config, output),
+        Job::Check(files, load) => cmd_check::run(files, load, output),
         Job::Calibrate(config) => cmd_calibrate::run(config, output),
         Job::Gains(args) => cmd_gains::run(args, output),
         Job::PsdMap(args) => cmd_psd_map::run(args, output),
@@ -65,7 +65,7 @@ pub fn main() -> ExitCode {
         Job::Correct(config) => cmd_correct::run(config, output),
         Job::Aoa(config) => cmd_aoa::run(config, output),
         Job::Locate(config) => cmd_locate::run(config, output),
-        Job::Map(config) => cmd_map::run(config, output),
+        Job::Map(request, out) => cmd_map::run(request, out.as_deref(), output),
         Job::Report(config) => cmd_report::run(config, output),
         Job::Evaluate(args) => cmd_evaluate::run(args, output),
         Job::SimulatePositioning(args) => cmd_simulate_positioning::run(args, output),

@@ -1,7 +1,9 @@
 //! How failures and warnings reach the user: one `error: <what happened>;
 //! <what to do>` line, and `warning: ...` lines, on standard error.
 
-use psdcal_io::{IoError, Warning};
+use psdcal_io::IoError;
+
+use crate::cli::Output;
 
 /// At most this many warnings are printed one by one.
 const MAX_WARNINGS: usize = 50;
@@ -33,7 +35,7 @@ pub fn print_error(error: &anyhow::Error) {
 }
 
 /// Prints warnings on standard error, at most [`MAX_WARNINGS`] of them.
-pub fn print_warnings(warnings: &[Warning]) {
+pub fn print_warnings<W: std::fmt::Display>(warnings: &[W]) {
     for warning in warnings.iter().take(MAX_WARNINGS) {
         eprintln!("warning: {warning}");
     }
@@ -45,59 +47,16 @@ pub fn print_warnings(warnings: &[Warning]) {
     }
 }
 
-/// Prints the warnings kept for the table rows that are not `ok` (the
-/// first [`psdcal::MAX_ROW_WARNINGS`]) and how many more there are.
-pub fn print_row_warnings(count: &psdcal::StatusCount) {
-    for w in &count.warnings {
-        eprintln!("warning: {w}");
-    }
-    let more = count.not_ok().saturating_sub(count.warnings.len());
-    if more > 0 {
-        eprintln!("warning: {more} more rows with a status other than ok (see the status column)");
-    }
-}
-
-/// What a points command (`aoa`, `correct`) answered, and how to say it.
-pub struct PointsSummary<'a> {
-    /// The command's name (`aoa`, `correct`).
-    pub command: &'a str,
-    /// The summary line's opening (`aoa:`, `corrected`).
-    pub verb: &'a str,
-    /// The calibration file.
-    pub calibration: &'a std::path::Path,
-    /// Where the table went (`None`: standard output).
-    pub out: Option<&'a std::path::Path>,
-    /// Command-specific JSON fields.
-    pub extra: serde_json::Value,
-    /// Whether the text summary names the added columns.
-    pub name_columns: bool,
-}
-
-/// Prints the row warnings and the summary of a points command: one line
-/// (on standard error when the table is on standard output) or JSON.
-pub fn print_points_answer(
-    answer: &psdcal::PointsAnswer,
-    summary: &PointsSummary<'_>,
-    output: crate::cli::Output,
-) -> anyhow::Result<()> {
-    use crate::cli::Output;
-    print_row_warnings(&answer.count);
-    let line = answer.summary_line(summary.verb, summary.calibration);
-    match (output, summary.out) {
-        (Output::Quiet, _) => {}
-        (Output::Json, out) => {
-            let json =
-                answer.summary_json(summary.command, summary.calibration, out, &summary.extra);
-            println!("{}", serde_json::to_string_pretty(&json)?);
-        }
-        (Output::Text, Some(out)) if summary.name_columns => println!(
-            "{line}; wrote {} (added {})",
-            out.display(),
-            answer.added.join(", ")
-        ),
-        (Output::Text, Some(out)) => println!("{line}; wrote {}", out.display()),
-        // The table is on standard output: the summary goes to standard error.
-        (Output::Text, None) => eprintln!("{line}"),
+/// Shows a job's summary: its warnings on standard error, then its text
+/// (on standard error when the job's table is on standard output) or its
+/// JSON.
+pub fn emit(output: Output, summary: &psdcal::Summary) -> anyhow::Result<()> {
+    print_warnings(&summary.warnings);
+    match output {
+        Output::Quiet => {}
+        Output::Json => println!("{}", serde_json::to_string_pretty(&summary.json)?),
+        Output::Text if summary.table_on_stdout => eprint!("{}", summary.text),
+        Output::Text => print!("{}", summary.text),
     }
     Ok(())
 }

@@ -2,7 +2,8 @@
 //! configurations, and usage errors (exit 2).
 
 use clap::{CommandFactory, Parser};
-use psdcal_cli::cli::{CheckConfig, Cli, CorrectConfig, Job, Output, PointSource};
+use psdcal::{DataSetFiles, LoadOptions};
+use psdcal_cli::cli::{Cli, CorrectArgs, Job, Output, PointSource};
 use psdcal_model::PsdGeometry;
 
 fn parse(args: &[&str]) -> Result<(Output, Job), clap::Error> {
@@ -20,12 +21,17 @@ fn check_with_observations_and_defaults() {
     assert_eq!(output, Output::Text);
     assert_eq!(
         job,
-        Job::Check(CheckConfig {
-            template: "t.csv".into(),
-            points: PointSource::Observations("o.csv".into()),
-            geometry: PsdGeometry { lx: 9.0, ly: 9.0 },
-            strict: false,
-        })
+        Job::Check(
+            DataSetFiles {
+                template: "t.csv".into(),
+                points: PointSource::Observations("o.csv".into()),
+                gains: None,
+            },
+            LoadOptions {
+                geometry: PsdGeometry { lx: 9.0, ly: 9.0 },
+                strict: false,
+            }
+        )
     );
 }
 
@@ -47,12 +53,12 @@ fn check_with_signals_geometry_strict_and_json_after_the_subcommand() {
     ])
     .unwrap();
     assert_eq!(output, Output::Json);
-    let Job::Check(config) = job else {
+    let Job::Check(files, load) = job else {
         panic!("expected check")
     };
-    assert_eq!(config.points, PointSource::Signals("s.csv".into()));
-    assert_eq!(config.geometry, PsdGeometry { lx: 10.0, ly: 8.5 });
-    assert!(config.strict);
+    assert_eq!(files.points, PointSource::Signals("s.csv".into()));
+    assert_eq!(load.geometry, PsdGeometry { lx: 10.0, ly: 8.5 });
+    assert!(load.strict);
 }
 
 #[test]
@@ -98,7 +104,7 @@ fn correct_config() {
     assert_eq!(output, Output::Quiet);
     assert_eq!(
         job,
-        Job::Correct(CorrectConfig {
+        Job::Correct(CorrectArgs {
             calibration: "c.json".into(),
             points: "p.csv".into(),
             out: Some("o.csv".into()),

@@ -4,7 +4,7 @@
 use clap::Parser;
 use psdcal::Plane;
 use psdcal_cli::cli::{Cli, Job, Output};
-use psdcal_cli::cli_locate::{AoaConfig, LocateTarget, MapModel, MapSource};
+use psdcal_cli::cli_locate::{AoaArgs, LocateTarget, MapModel, MapSource};
 use psdcal_model::Param;
 
 fn parse(args: &[&str]) -> Result<(Output, Job), clap::Error> {
@@ -26,11 +26,11 @@ fn aoa_config() {
     .unwrap();
     assert_eq!(
         job,
-        Job::Aoa(AoaConfig {
+        Job::Aoa(AoaArgs {
             calibration: "c.json".into(),
             points: "p.csv".into(),
             out: None,
-            point_sigma_mm: Some(0.001),
+            point_sigma: Some(0.001),
         })
     );
 }
@@ -106,7 +106,7 @@ fn map_config() {
         "--paper",
     ])
     .unwrap();
-    let Job::Map(config) = job else { panic!() };
+    let Job::Map(config, _) = job else { panic!() };
     assert_eq!(config.model, MapModel::PaperLens(1));
     assert_eq!(
         config.source,
@@ -128,7 +128,7 @@ fn map_config() {
         "5",
     ])
     .unwrap();
-    let Job::Map(config) = job else { panic!() };
+    let Job::Map(config, _) = job else { panic!() };
     assert_eq!(config.source, MapSource::KSigma(2.0));
 }
 

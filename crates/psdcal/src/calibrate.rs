@@ -18,6 +18,7 @@ use crate::fit_report::FitReport;
 use crate::options::CalibrationOptions;
 use crate::provenance::provenance;
 use crate::residuals::ResidualTable;
+use crate::summary::Summary;
 
 /// A calibrated data set.
 #[derive(Debug, Clone)]
@@ -201,10 +202,17 @@ impl Calibrated {
         Ok(())
     }
 
-    /// The summary as pretty JSON (what `calibrate --json` prints).
-    pub fn summary_json(&self) -> Result<String> {
-        serde_json::to_string_pretty(&self.result.summary())
-            .map_err(|e| Error::Input(format!("cannot encode the summary: {e}")))
+    /// The summary after writing to `out` (and `residuals`): the fit's
+    /// report as text, the result's summary as JSON, and the fit's warnings
+    /// and diagnostics.
+    pub fn summary(&self, out: &Path, residuals: Option<&Path>) -> Result<Summary> {
+        let json = serde_json::to_value(self.result.summary())
+            .map_err(|e| Error::Input(format!("cannot encode the summary: {e}")))?;
+        let diagnostics = self.report.diagnostics.iter().map(|d| &d.message);
+        Ok(Summary::new(self.report.to_string(), json)
+            .wrote(std::iter::once(out).chain(residuals))
+            .warn(&self.report.warnings)
+            .warn(diagnostics))
     }
 }
 

@@ -267,6 +267,22 @@ impl Evaluation {
         out
     }
 
+    /// The summary, with the report's `files` (the page first) when one
+    /// was written.
+    pub fn summary(&self, files: &[PathBuf]) -> crate::Summary {
+        let mut json = self.to_json();
+        json["report"] = json!(files.first().map(|f| f.display().to_string()));
+        let mut text = self.text();
+        if let Some(page) = files.first() {
+            text.push_str(&format!(
+                "wrote {} and {} figures\n",
+                page.display(),
+                files.len() - 1
+            ));
+        }
+        crate::Summary::new(text, json).warn(self.warnings())
+    }
+
     /// The metrics as text, one per line.
     pub fn text(&self) -> String {
         let mut out = format!("evaluate: {} against {}\n", self.estimates, self.truth);

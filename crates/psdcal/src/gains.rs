@@ -10,6 +10,7 @@ use psdcal_io::{
 use psdcal_model::Amplitudes;
 
 use crate::error::{Error, Result};
+use crate::summary::Summary;
 
 /// How the gains are estimated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -32,6 +33,26 @@ impl GainsMethod {
 /// equal-current record: the channels carry the same current, so their
 /// amplitudes differ only by the amplifier gains.
 pub const MAX_GAIN_RATIO: f64 = 10.0;
+
+/// The summary of gains estimated from `signals` (and written to `out`):
+/// each gain with its σ; the JSON is gains.json itself.
+pub fn gains_summary(file: &GainsFile, signals: &Path, out: Option<&Path>) -> Result<Summary> {
+    let json = serde_json::to_value(file)
+        .map_err(|e| Error::Input(format!("cannot encode the gains: {e}")))?;
+    let mut text = format!(
+        "gains relative to x1 from {} equal-current records ({}):\n",
+        file.records,
+        signals.display()
+    );
+    for (name, g, s) in [
+        ("g_x2", file.x2, file.std.g_x2),
+        ("g_y1", file.y1, file.std.g_y1),
+        ("g_y2", file.y2, file.std.g_y2),
+    ] {
+        text.push_str(&format!("  {name} = {g:.8} ± {s:.2e}\n"));
+    }
+    Ok(Summary::new(text, json).wrote(out))
+}
 
 /// The gains.json record estimated from the amplitude records in `signals`.
 /// Every record must have four positive amplitudes within a factor

@@ -91,6 +91,7 @@ mod simulate_raw;
 mod simulate_scan;
 mod study;
 mod study_page;
+mod summary;
 mod summary_text;
 mod table;
 mod track;
@@ -107,7 +108,7 @@ pub use demodulate::{
 pub use error::{Error, Result};
 pub use evaluate::{evaluate, EvaluateRequest, Evaluation};
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
-pub use gains::{estimate_gains, GainsMethod};
+pub use gains::{estimate_gains, gains_summary, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
 pub use map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
 pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
@@ -133,6 +134,7 @@ pub use simulate_raw::{
 };
 pub use simulate_scan::{scan_samples, simulate_scan_file, ScanRequest, SimulatedScan};
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
+pub use summary::Summary;
 pub use summary_text::summary_text;
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
 pub use track::{track, TrackRequest, TrackSummary};

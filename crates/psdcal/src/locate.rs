@@ -13,6 +13,7 @@ use crate::aoa::measurement;
 use crate::error::Result;
 use crate::point_rows::answer_points;
 use crate::sensor::{covariance_warning, LoadedSensor};
+use crate::summary::{path_json, Summary};
 use crate::table::{deg, empty, num, StatusCount, Table};
 
 /// Where the emitters are located.
@@ -40,6 +41,52 @@ pub struct LocateTable {
     pub what: String,
     /// Warnings about the inputs (before any row).
     pub warnings: Vec<String>,
+}
+
+impl LocateTable {
+    /// The summary of `locate` on `target` for the `points` file, its table
+    /// written to `out` (`None`: standard output); `point_sigma_mm` as the
+    /// user gave it.
+    pub fn summary(
+        &self,
+        target: &LocateTarget,
+        points: &Path,
+        out: Option<&Path>,
+        options: &LocateOptions,
+        point_sigma_mm: Option<f64>,
+    ) -> Summary {
+        let target_json = match target {
+            LocateTarget::Plane { calibration, plane } => serde_json::json!({
+                "calibration": calibration.display().to_string(),
+                "plane_normal": plane.normal().as_slice(),
+                "plane_offset_mm": plane.offset_mm(),
+                "frame": "sensor",
+            }),
+            LocateTarget::Rig(rig) => serde_json::json!({
+                "rig": rig.display().to_string(),
+                "frame": "world",
+                "weighted": options.weight_rays,
+            }),
+        };
+        let json = serde_json::json!({
+            "command": "locate",
+            "points": points.display().to_string(),
+            "target": target_json,
+            "out": path_json(out),
+            "point_sigma_mm": point_sigma_mm,
+            "rows": self.count.to_json(),
+        });
+        let text = format!(
+            "locate: {} {}: {}",
+            self.rows,
+            self.what,
+            self.count.summary()
+        );
+        Summary::new(text, json)
+            .table_at(out)
+            .warn(&self.warnings)
+            .warn(self.count.warning_lines())
+    }
 }
 
 /// The position and covariance columns in `frame` (`sensor` or `world`).

@@ -1,13 +1,14 @@
 //! AoA and position error maps over the sensor area (the paper's Figure 9,
 //! (P40)–(P42)): the table `psdcal map` writes.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use psdcal_locate::{error_map, ErrorSource, MapOptions, ParameterErrors};
 use psdcal_model::{Param, PsdGeometry, SensorModel};
 
 use crate::error::{Error, Result};
 use crate::sensor::LoadedSensor;
+use crate::summary::{path_json, Summary};
 use crate::table::{deg, empty, num, StatusCount, Table};
 use psdcal_model::Stage as _;
 
@@ -93,6 +94,44 @@ pub struct MapTable {
     pub max_aoa_deg: Option<f64>,
     /// Largest position error, mm.
     pub max_position_mm: Option<f64>,
+}
+
+impl MapTable {
+    /// The summary of `map` for `request`, its table written to `out`
+    /// (`None`: standard output): the largest errors and the rows' counts.
+    pub fn summary(&self, request: &MapRequest, out: Option<&Path>) -> Summary {
+        let json = serde_json::json!({
+            "command": "map",
+            "model": self.model_name,
+            "errors": self.source_text,
+            "grid": request.grid,
+            "distance_mm": request.distance_mm,
+            "out": path_json(out),
+            "max_aoa_error_deg": self.max_aoa_deg,
+            "max_position_error_mm": self.max_position_mm,
+            "rows": self.count.to_json(),
+        });
+        let text = format!(
+            "map: {}, {}, {n} x {n} grid over {lx} x {ly} mm, plane at {s} mm: largest AoA \
+             error {aoa}°, largest position error {pos} mm; {counts}",
+            self.model_name,
+            self.source_text,
+            n = request.grid,
+            lx = self.geometry.lx,
+            ly = self.geometry.ly,
+            s = request.distance_mm,
+            aoa = self.max_aoa_deg.map_or("-".into(), |v| format!("{v:.4}")),
+            pos = self.max_position_mm.map_or("-".into(), |v| if v < 1e6 {
+                format!("{v:.2}")
+            } else {
+                format!("{v:.3e}")
+            }),
+            counts = self.count.summary(),
+        );
+        Summary::new(text, json)
+            .table_at(out)
+            .warn(self.count.warning_lines())
+    }
 }
 
 /// Computes the map of `request`.

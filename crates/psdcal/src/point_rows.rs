@@ -17,6 +17,7 @@ use psdcal_io::{write_atomic, IoError, Location, PointInput, PointStream};
 use psdcal_locate::{Caution, LocateError, Measurement};
 
 use crate::error::{Error, Result};
+use crate::summary::{path_json, Summary};
 use crate::table::{empty, StatusCount};
 
 /// What a streamed answer wrote.
@@ -35,33 +36,33 @@ pub struct PointsAnswer {
 }
 
 impl PointsAnswer {
-    /// The one-line summary: `<verb> N point(s) of <points> with
-    /// <calibration>: <status counts>`.
-    pub fn summary_line(&self, verb: &str, calibration: &Path) -> String {
-        format!(
+    /// The summary of a points command (`aoa`, `correct`): the line
+    /// `<verb> N point(s) of <points> with <calibration>: <status counts>`
+    /// (naming the added columns when `name_columns`), the JSON with the
+    /// command's own fields `extra` (an object) merged in, and the rows'
+    /// warnings.
+    pub fn summary(
+        &self,
+        command: &str,
+        verb: &str,
+        calibration: &Path,
+        out: Option<&Path>,
+        extra: serde_json::Value,
+        name_columns: bool,
+    ) -> Summary {
+        let line = format!(
             "{verb} {} point{} of {} with {}: {}",
             self.rows,
             if self.rows == 1 { "" } else { "s" },
             self.source,
             calibration.display(),
             self.count.summary()
-        )
-    }
-
-    /// The JSON summary of a points command (`aoa`, `correct`), with the
-    /// command's own fields `extra` (an object) merged in.
-    pub fn summary_json(
-        &self,
-        command: &str,
-        calibration: &Path,
-        out: Option<&Path>,
-        extra: &serde_json::Value,
-    ) -> serde_json::Value {
+        );
         let mut json = serde_json::json!({
             "command": command,
             "calibration": calibration.display().to_string(),
             "points": self.source,
-            "out": out.map(|p| p.display().to_string()),
+            "out": path_json(out),
             "from_amplitudes": self.amplitudes,
             "added_columns": self.added,
             "rows": self.count.to_json(),
@@ -69,7 +70,20 @@ impl PointsAnswer {
         if let (Some(map), Some(extra)) = (json.as_object_mut(), extra.as_object()) {
             map.extend(extra.clone());
         }
-        json
+        let summary = Summary::new(line, json)
+            .table_at(out)
+            .warn(self.count.warning_lines());
+        match out {
+            Some(_) if name_columns => Summary {
+                text: format!(
+                    "{} (added {})\n",
+                    summary.text.trim_end(),
+                    self.added.join(", ")
+                ),
+                ..summary
+            },
+            _ => summary,
+        }
     }
 }
 

@@ -48,6 +48,25 @@ pub struct ReportFiles {
     pub warnings: Vec<Warning>,
 }
 
+impl ReportFiles {
+    /// The summary of a report written into the folder `out`.
+    pub fn summary(&self, out: &std::path::Path) -> crate::Summary {
+        let files: Vec<String> = self.files.iter().map(|f| f.display().to_string()).collect();
+        let json = serde_json::json!({
+            "report": self.html.display().to_string(),
+            "plots": self.plots,
+            "files": files,
+        });
+        let text = format!(
+            "wrote {} and {} plots (SVG and PNG) into {}",
+            self.html.display(),
+            self.plots.len(),
+            out.display()
+        );
+        crate::Summary::new(text, json).warn(&self.warnings)
+    }
+}
+
 /// Builds and writes the report.
 pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
     let loaded = LoadedSensor::read(&request.calibration)?;

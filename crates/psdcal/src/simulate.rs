@@ -15,6 +15,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::error::{Error, Result};
+use crate::summary::Summary;
 
 /// Default record length of the signal chain, cycles.
 pub const DEFAULT_RECORD_CYCLES: usize = 65;
@@ -81,6 +82,38 @@ pub struct SimulatedFiles {
     pub images: usize,
     /// Points written.
     pub points: usize,
+}
+
+impl SimulatedFiles {
+    /// The summary of a data set written into the folder `out` (with the
+    /// files `more` besides the four every simulation writes).
+    pub fn summary(&self, out: &std::path::Path, more: &[String]) -> Summary {
+        let mut names = vec![
+            "template.csv".to_string(),
+            "observations.csv".to_string(),
+            "signals.csv".to_string(),
+            "truth.json".to_string(),
+        ];
+        names.extend(more.iter().cloned());
+        let json = serde_json::json!({
+            "out": out.display().to_string(),
+            "images": self.images,
+            "points": self.points,
+            "files": names,
+        });
+        let shown: Vec<String> = names
+            .iter()
+            .map(|n| out.join(n).display().to_string())
+            .collect();
+        let text = format!(
+            "{}\nwrote {} ({} images, {} points)",
+            self.description,
+            shown.join(", "),
+            self.images,
+            self.points
+        );
+        Summary::new(text, json)
+    }
 }
 
 /// Simulates and writes the data set.

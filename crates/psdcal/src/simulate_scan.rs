@@ -41,6 +41,21 @@ pub struct SimulatedScan {
     pub description: String,
 }
 
+impl SimulatedScan {
+    /// The summary of the scan written to `out`.
+    pub fn summary(&self, out: &std::path::Path) -> crate::Summary {
+        let json =
+            serde_json::json!({"out": out.display().to_string(), "points": self.samples.len()});
+        let text = format!(
+            "{}\nwrote {} ({} points)",
+            self.description,
+            out.display(),
+            self.samples.len()
+        );
+        crate::Summary::new(text, json)
+    }
+}
+
 /// Simulates the scan (without writing it).
 pub fn scan_samples(request: &ScanRequest) -> Result<SimulatedScan> {
     let options = ScanOptions {

@@ -88,6 +88,18 @@ pub struct StudyOutcome {
     pub page: Option<PathBuf>,
 }
 
+impl StudyOutcome {
+    /// The summary of a study written into the folder `out`.
+    pub fn summary(&self, out: &std::path::Path) -> crate::Summary {
+        let text = format!(
+            "{}wrote {1}/study.md, {1}/study.csv, {1}/study.json",
+            self.markdown,
+            out.display()
+        );
+        crate::Summary::new(text, self.json.clone()).wrote(self.page.as_deref())
+    }
+}
+
 /// Checks everything before the work starts: the tables, the signal chain,
 /// that the output folders can be written.
 pub fn plan_study(request: &StudyRequest) -> Result<StudyPlan> {

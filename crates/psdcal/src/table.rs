@@ -102,6 +102,19 @@ impl StatusCount {
         }
     }
 
+    /// The rows' warnings as lines: the first [`MAX_ROW_WARNINGS`] kept,
+    /// then how many more rows are not `ok`.
+    pub fn warning_lines(&self) -> Vec<String> {
+        let mut lines = self.warnings.clone();
+        let more = self.not_ok().saturating_sub(self.warnings.len());
+        if more > 0 {
+            lines.push(format!(
+                "{more} more rows with a status other than ok (see the status column)"
+            ));
+        }
+        lines
+    }
+
     /// Rows whose status is not `ok` (each has a warning, the first ones
     /// kept in [`StatusCount::warnings`]).
     pub fn not_ok(&self) -> usize {
