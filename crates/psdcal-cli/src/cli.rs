@@ -14,17 +14,9 @@ use psdcal::{
 
 use crate::choice::{CostArg, NoiseArg, PreliminaryArg};
 
-const MAIN_EXAMPLES: &str = include_str!("../help/main.txt");
-
-const CHECK_EXAMPLES: &str = include_str!("../help/check.txt");
-
-const CALIBRATE_EXAMPLES: &str = include_str!("../help/calibrate.txt");
-
-const CORRECT_EXAMPLES: &str = include_str!("../help/correct.txt");
-
 /// psdcal: calibrate infrared position-sensitive-device (PSD) sensors.
 #[derive(Debug, Parser)]
-#[command(name = "psdcal", version, after_help = MAIN_EXAMPLES)]
+#[command(name = "psdcal", version, after_help = include_str!("../help/main.txt"))]
 pub struct Cli {
     /// Print no summary; only errors, warnings and requested data
     #[arg(long, short = 'q', global = true, conflicts_with = "json")]
@@ -44,55 +36,55 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Validate a calibration data set and summarise images, points and sensor coverage
-    #[command(after_help = CHECK_EXAMPLES)]
+    #[command(after_help = include_str!("../help/check.txt"))]
     Check(CheckArgs),
     /// Calibrate a sensor from images of an LED template (adapted Zhang method + Levenberg-Marquardt)
-    #[command(after_help = CALIBRATE_EXAMPLES)]
+    #[command(after_help = include_str!("../help/calibrate.txt"))]
     Calibrate(CalibrateArgs),
     /// Simulate a calibration data set through the whole signal chain
-    #[command(after_help = crate::cli_sim::SIMULATE_EXAMPLES)]
+    #[command(after_help = include_str!("../help/simulate.txt"))]
     Simulate(crate::cli_sim::SimulateArgs),
     /// Run the paper's Monte Carlo evaluation (Tables 1-10, Figure 9) next to the paper's numbers
-    #[command(after_help = crate::cli_sim::STUDY_EXAMPLES)]
+    #[command(after_help = include_str!("../help/study.txt"))]
     Study(crate::cli_sim::StudyArgs),
     /// Simulate, calibrate and compare with the truth in a few seconds (start here)
-    #[command(after_help = crate::cli_sim::DEMO_EXAMPLES)]
+    #[command(after_help = include_str!("../help/demo.txt"))]
     Demo(crate::cli_sim::DemoArgs),
     /// Estimate the amplifier gains from equal-current records (electrical calibration)
-    #[command(after_help = crate::cli_gains::GAINS_EXAMPLES)]
-    Gains(crate::cli_gains::GainsArgs),
+    #[command(after_help = include_str!("../help/gains.txt"))]
+    Gains(crate::cmd_gains::GainsArgs),
     /// The PSD's own non-linearity map from a lensless scan (psd_map.json for calibrate --psd-map)
-    #[command(after_help = crate::cmd_psd_map::PSD_MAP_EXAMPLES)]
+    #[command(after_help = include_str!("../help/psd_map.txt"))]
     PsdMap(crate::cmd_psd_map::PsdMapArgs),
     /// Simulate a lensless raster scan of the PSD (scan.csv for psd-map)
-    #[command(after_help = crate::cmd_psd_map::PSD_MAP_EXAMPLES)]
+    #[command(after_help = include_str!("../help/psd_map.txt"))]
     SimulateScan(crate::cmd_simulate_scan::SimulateScanArgs),
     /// Correct measured points (or electrode amplitudes) to ideal points with a calibration
-    #[command(after_help = CORRECT_EXAMPLES)]
+    #[command(after_help = include_str!("../help/correct.txt"))]
     Correct(CorrectArgs),
     /// Angles of arrival of measured points (or amplitudes) with their uncertainty
-    #[command(after_help = crate::cli_locate::AOA_EXAMPLES)]
+    #[command(after_help = include_str!("../help/aoa.txt"))]
     Aoa(crate::cli_locate::AoaArgs),
     /// Emitter positions on a plane, or from a rig of sensors, with their 3-D covariance
-    #[command(after_help = crate::cli_locate::LOCATE_EXAMPLES)]
+    #[command(after_help = include_str!("../help/locate.txt"))]
     Locate(crate::cli_locate::LocateArgs),
     /// Maps of the AoA and position errors over the sensor area (the paper's Figure 9)
-    #[command(after_help = crate::cli_locate::MAP_EXAMPLES)]
+    #[command(after_help = include_str!("../help/map.txt"))]
     Map(crate::cli_locate::MapArgs),
     /// A self-contained HTML report of a calibration with its plots (SVG and PNG)
-    #[command(after_help = crate::cli_report::REPORT_EXAMPLES)]
-    Report(crate::cli_report::ReportArgs),
+    #[command(after_help = include_str!("../help/report.txt"))]
+    Report(crate::cmd_report::ReportArgs),
     /// Judge estimated positions against a surveyed truth (mean, RMS, 75th/95th percentiles, CE95, SE95, honest error bars)
-    #[command(after_help = crate::cmd_evaluate::EVALUATE_EXAMPLES)]
+    #[command(after_help = include_str!("../help/evaluate.txt"))]
     Evaluate(crate::cmd_evaluate::EvaluateArgs),
     /// Simulate a calibrated rig of sensors and emitters at known positions (rig.json, rig_points.csv, truth.csv)
-    #[command(after_help = crate::cmd_simulate_positioning::SIMULATE_POSITIONING_EXAMPLES)]
+    #[command(after_help = include_str!("../help/simulate-positioning.txt"))]
     SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
     /// Demodulate a raw recording (raw.csv, raw.npy) into signals.csv with a per-record SNR
-    #[command(after_help = crate::cmd_demodulate::DEMODULATE_EXAMPLES)]
+    #[command(after_help = include_str!("../help/demodulate.txt"))]
     Demodulate(crate::cmd_demodulate::DemodulateArgs),
     /// Angles of arrival per window and LED from raw samples on standard input (live)
-    #[command(after_help = crate::cmd_track::TRACK_EXAMPLES)]
+    #[command(after_help = include_str!("../help/track.txt"))]
     Track(crate::cmd_track::TrackArgs),
 }
 
@@ -225,7 +217,7 @@ pub struct CalibrateConfig {
 /// What to run.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Job {
-    Gains(crate::cli_gains::GainsArgs),
+    Gains(crate::cmd_gains::GainsArgs),
     PsdMap(crate::cmd_psd_map::PsdMapArgs),
     SimulateScan(crate::cmd_simulate_scan::SimulateScanArgs),
     Simulate(crate::cli_sim::SimulateArgs),
@@ -237,7 +229,7 @@ pub enum Job {
     Aoa(crate::cli_locate::AoaArgs),
     Locate(crate::cli_locate::LocateConfig),
     Map(psdcal::MapRequest, Option<PathBuf>),
-    Report(crate::cli_report::ReportArgs),
+    Report(crate::cmd_report::ReportArgs),
     Evaluate(crate::cmd_evaluate::EvaluateArgs),
     SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
     Demodulate(crate::cmd_demodulate::DemodulateArgs),

@@ -14,12 +14,6 @@ pub use psdcal::{LocateTarget, MapModel, MapSource};
 use crate::choice::LensArg;
 use crate::cli::{Cli, Output};
 
-pub const AOA_EXAMPLES: &str = include_str!("../help/aoa.txt");
-
-pub const LOCATE_EXAMPLES: &str = include_str!("../help/locate.txt");
-
-pub const MAP_EXAMPLES: &str = include_str!("../help/map.txt");
-
 /// Arguments of `psdcal aoa`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct AoaArgs {

@@ -11,12 +11,6 @@ use psdcal::StudyRequest;
 
 use crate::choice::{choice, name, LensArg, TableArg, TemplateArg};
 
-pub const SIMULATE_EXAMPLES: &str = include_str!("../help/simulate.txt");
-
-pub const STUDY_EXAMPLES: &str = include_str!("../help/study.txt");
-
-pub const DEMO_EXAMPLES: &str = include_str!("../help/demo.txt");
-
 /// Arguments of `psdcal simulate`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct SimulateArgs {

@@ -7,8 +7,6 @@ use clap::Args;
 
 use crate::cli::Output;
 
-pub const DEMODULATE_EXAMPLES: &str = include_str!("../help/demodulate.txt");
-
 /// Arguments of `psdcal demodulate`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct DemodulateArgs {

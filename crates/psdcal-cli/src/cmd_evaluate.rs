@@ -7,8 +7,6 @@ use clap::Args;
 
 use crate::cli::Output;
 
-pub const EVALUATE_EXAMPLES: &str = include_str!("../help/evaluate.txt");
-
 /// Arguments of `psdcal evaluate`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct EvaluateArgs {

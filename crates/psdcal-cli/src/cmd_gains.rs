@@ -1,7 +1,23 @@
 //! `psdcal gains`: relative channel gains from equal-current records.
 
+use crate::choice::GainsMethodArg;
 use crate::cli::Output;
-use crate::cli_gains::GainsArgs;
+use clap::Args;
+use std::path::PathBuf;
+
+/// Arguments of `psdcal gains`.
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct GainsArgs {
+    /// Equal-current records: vx1, vx2, vy1, vy2
+    #[arg(long, short = 's', value_name = "FILE")]
+    pub signals: PathBuf,
+    /// Estimation method (equal-current: all four channels carry the same current)
+    #[arg(long, value_name = "METHOD", value_enum, default_value_t = GainsMethodArg::EqualCurrent)]
+    pub method: GainsMethodArg,
+    /// Where to write gains.json (atomically); standard output when absent
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+}
 
 /// Runs `gains` (without `--out`, gains.json goes to standard output).
 pub fn run(args: &GainsArgs, output: Output) -> anyhow::Result<()> {

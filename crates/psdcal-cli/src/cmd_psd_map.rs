@@ -9,8 +9,6 @@ use psdcal::{PsdGeometry, PsdMapModel, PsdMapRequest};
 use crate::cli::Output;
 use psdcal::option_text::side_mm;
 
-pub const PSD_MAP_EXAMPLES: &str = include_str!("../help/psd_map.txt");
-
 /// Arguments of `psdcal psd-map`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct PsdMapArgs {

@@ -1,10 +1,28 @@
 //! `psdcal report`: a self-contained HTML page of a calibration with its
 //! plots (the library's `write_report`, drawn by psdcal-report).
 
+use clap::Args;
 use psdcal::ReportRequest;
+use std::path::PathBuf;
 
 use crate::cli::Output;
-use crate::cli_report::ReportArgs;
+
+/// Arguments of `psdcal report`.
+#[derive(Debug, Clone, PartialEq, Args)]
+pub struct ReportArgs {
+    /// Calibration written by psdcal (calibration.json)
+    #[arg(long, short = 'c', value_name = "FILE")]
+    pub calibration: PathBuf,
+    /// Template of the calibration data (with --observations: coverage and residual plots)
+    #[arg(long, short = 't', value_name = "FILE", requires = "observations")]
+    pub template: Option<PathBuf>,
+    /// Measured impact points of the calibration data: image, led, x_mm, y_mm
+    #[arg(long, short = 'o', value_name = "FILE", requires = "template")]
+    pub observations: Option<PathBuf>,
+    /// Output folder (created if missing) for report.html and the plots
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
 
 /// Runs `report`.
 pub fn run(args: &ReportArgs, output: Output) -> anyhow::Result<()> {

@@ -11,8 +11,6 @@ use crate::cli::Output;
 use psdcal::option_text::positive_mm;
 use psdcal::option_text::{parse_images, parse_snr};
 
-pub const SIMULATE_POSITIONING_EXAMPLES: &str = include_str!("../help/simulate-positioning.txt");
-
 /// Arguments of `psdcal simulate-positioning`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct PositioningArgs {

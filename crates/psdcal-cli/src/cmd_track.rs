@@ -6,8 +6,6 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-pub const TRACK_EXAMPLES: &str = include_str!("../help/track.txt");
-
 /// Arguments of `psdcal track`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct TrackArgs {

@@ -1,133 +1,81 @@
-//! Before any work: the files a job reads and writes, so that no output
+//! Before any work: the files a command reads and writes, so that no output
 //! replaces an input (psdcal-io's `refuse_overwrite`; exit 2).
+//!
+//! Read off the command's definition, so that every command is covered:
+//! each option whose value is a `FILE` names an input, but `--out` and
+//! `--residuals`, which name outputs; `report`'s page (`--out DIR`'s
+//! report.html) is an output too, and the calibrations a `--rig` file lists
+//! are inputs. Folders (`simulate`, `study`, `--report DIR`) are not
+//! checked: nothing is read from them.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use psdcal::{LocateTarget, MapModel, PointSource};
+use clap::{ArgMatches, CommandFactory};
 
-use crate::cli::Job;
+use crate::cli::Cli;
 
-/// A path and the option that names it.
-type Named<'a> = (&'static str, &'a Path);
-
-/// The input and output files of `job` (folders of `simulate`, `study` and
-/// `demo` are not checked: they read no file; `report`'s page is, and the
-/// calibrations a rig lists).
-fn files<'a>(job: &'a Job, page: &'a Path) -> (Vec<Named<'a>>, Vec<Named<'a>>) {
-    fn points(p: &PointSource) -> Named<'_> {
-        match p {
-            PointSource::Observations(path) => ("--observations", path.as_path()),
-            PointSource::Signals(path) => ("--signals", path.as_path()),
-        }
-    }
-    fn out(o: &Option<std::path::PathBuf>) -> Vec<Named<'_>> {
-        o.iter().map(|p| ("--out", p.as_path())).collect()
-    }
-    match job {
-        Job::Calibrate(c) => {
-            let mut inputs = vec![
-                ("--template", c.files.template.as_path()),
-                points(&c.files.points),
-            ];
-            inputs.extend(c.files.gains.iter().map(|p| ("--gains", p.as_path())));
-            inputs.extend(c.options.psd_map.iter().map(|p| ("--psd-map", p.as_path())));
-            let mut outputs = vec![("--out", c.out.as_path())];
-            outputs.extend(c.residuals.iter().map(|p| ("--residuals", p.as_path())));
-            (inputs, outputs)
-        }
-        Job::Gains(g) => (vec![("--signals", g.signals.as_path())], out(&g.out)),
-        Job::SimulateScan(s) => (Vec::new(), vec![("--out", s.out.as_path())]),
-        Job::PsdMap(m) => (
-            vec![("--scan", m.scan.as_path())],
-            vec![("--out", m.out.as_path())],
-        ),
-        Job::Correct(c) => (
-            vec![
-                ("--calibration", c.calibration.as_path()),
-                ("--points", c.points.as_path()),
-            ],
-            out(&c.out),
-        ),
-        Job::Aoa(c) => (
-            vec![
-                ("--calibration", c.calibration.as_path()),
-                ("--points", c.points.as_path()),
-            ],
-            out(&c.out),
-        ),
-        Job::Locate(c) => {
-            let target = match &c.target {
-                LocateTarget::Plane { calibration, .. } => ("--calibration", calibration.as_path()),
-                LocateTarget::Rig(rig) => ("--rig", rig.as_path()),
-            };
-            (vec![target, ("--points", c.points.as_path())], out(&c.out))
-        }
-        Job::Map(request, o) => {
-            let inputs = match &request.model {
-                MapModel::Calibration(path) => vec![("--calibration", path.as_path())],
-                _ => Vec::new(),
-            };
-            (inputs, out(o))
-        }
-        Job::Report(c) => {
-            let mut inputs = vec![("--calibration", c.calibration.as_path())];
-            inputs.extend(c.template.iter().map(|t| ("--template", t.as_path())));
-            inputs.extend(
-                c.observations
-                    .iter()
-                    .map(|o| ("--observations", o.as_path())),
-            );
-            // The page is the one output whose name an input could have
-            // (the plots are .svg and .png files).
-            (inputs, vec![("--out", page)])
-        }
-        Job::Evaluate(e) => {
-            let mut inputs = vec![
-                ("--truth", e.truth.as_path()),
-                ("--estimates", e.estimates.as_path()),
-            ];
-            inputs.extend(e.rig.iter().map(|p| ("--rig", p.as_path())));
-            (inputs, Vec::new())
-        }
-        Job::Demodulate(d) => {
-            let mut inputs = vec![
-                ("--raw", d.raw.as_path()),
-                ("--schedule", d.schedule.as_path()),
-            ];
-            inputs.extend(d.tones.iter().map(|p| ("--tones", p.as_path())));
-            (inputs, vec![("--out", d.out.as_path())])
-        }
-        _ => (Vec::new(), Vec::new()),
-    }
-}
-
-/// Refuses a job whose output is one of its inputs (or two outputs that are
-/// one file).
-pub fn check(job: &Job) -> Result<(), psdcal::IoError> {
-    let page = match job {
-        Job::Report(c) => c.out.join("report.html"),
-        _ => std::path::PathBuf::new(),
+/// Refuses a command whose output is one of its inputs (or two outputs that
+/// are one file).
+pub fn check(matches: &ArgMatches) -> Result<(), psdcal::IoError> {
+    let Some((name, given)) = matches.subcommand() else {
+        return Ok(());
     };
-    let (inputs, outputs) = files(job, &page);
-    psdcal_io::refuse_overwrite(&inputs, &outputs)?;
-    // The calibrations a rig lists are inputs too (a rig that cannot be read
-    // is the job's own error, reported when it runs).
-    if let Job::Locate(c) = job {
-        if let LocateTarget::Rig(rig) = &c.target {
-            if let Ok(file) = psdcal_io::read_rig(rig) {
-                let listed: Vec<Named<'_>> = file
-                    .sensors
-                    .iter()
-                    .map(|s| {
-                        (
-                            "a calibration listed in --rig",
-                            s.calibration_path.as_path(),
-                        )
-                    })
-                    .collect();
-                psdcal_io::refuse_overwrite(&listed, &outputs)?;
+    let command = Cli::command();
+    let Some(definition) = command.find_subcommand(name) else {
+        return Ok(());
+    };
+    let mut inputs: Vec<(String, PathBuf)> = Vec::new();
+    let mut outputs: Vec<(String, PathBuf)> = Vec::new();
+    for arg in definition.get_arguments() {
+        let id = arg.get_id().as_str();
+        let (Some(long), Some(value_names)) = (arg.get_long(), arg.get_value_names()) else {
+            continue;
+        };
+        let Ok(Some(values)) = given.try_get_raw(id) else {
+            continue;
+        };
+        let option = format!("--{long}");
+        let file = value_names.iter().any(|n| n == "FILE");
+        for path in values.map(PathBuf::from) {
+            match (id, file) {
+                ("out" | "residuals", true) => outputs.push((option.clone(), path)),
+                ("out", false) if name == "report" => {
+                    outputs.push((option.clone(), path.join("report.html")));
+                }
+                (_, true) => {
+                    if id == "rig" {
+                        inputs.extend(listed_calibrations(&path));
+                    }
+                    inputs.push((option.clone(), path));
+                }
+                _ => {}
             }
         }
     }
-    Ok(())
+    psdcal_io::refuse_overwrite(&borrowed(&inputs), &borrowed(&outputs))
+}
+
+/// The calibrations a rig file lists (none when it cannot be read: that is
+/// the command's own error, reported when it runs).
+fn listed_calibrations(rig: &Path) -> Vec<(String, PathBuf)> {
+    psdcal_io::read_rig(rig).map_or_else(
+        |_| Vec::new(),
+        |file| {
+            file.sensors
+                .into_iter()
+                .map(|s| {
+                    (
+                        "a calibration listed in --rig".to_string(),
+                        s.calibration_path,
+                    )
+                })
+                .collect()
+        },
+    )
+}
+
+fn borrowed(list: &[(String, PathBuf)]) -> Vec<(&str, &Path)> {
+    list.iter()
+        .map(|(o, p)| (o.as_str(), p.as_path()))
+        .collect()
 }

@@ -7,9 +7,7 @@
 
 pub mod choice;
 pub mod cli;
-pub mod cli_gains;
 pub mod cli_locate;
-pub mod cli_report;
 pub mod cli_sim;
 mod cmd_aoa;
 mod cmd_calibrate;
@@ -18,11 +16,11 @@ mod cmd_correct;
 mod cmd_demo;
 pub mod cmd_demodulate;
 pub mod cmd_evaluate;
-mod cmd_gains;
+pub mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
 pub mod cmd_psd_map;
-mod cmd_report;
+pub mod cmd_report;
 mod cmd_simulate;
 pub mod cmd_simulate_positioning;
 pub mod cmd_simulate_scan;
@@ -33,13 +31,17 @@ mod report;
 
 use std::process::ExitCode;
 
-use clap::Parser;
+use clap::{CommandFactory, FromArgMatches};
 
 use crate::cli::{Cli, Job};
 
 /// Parses the arguments, runs the job and prints; the process's exit code.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(usage) => usage.exit(),
+    };
     if let Some(mb) = cli.max_input_mb {
         psdcal_io::set_max_file_bytes(mb << 20);
     }
@@ -47,7 +49,7 @@ pub fn main() -> ExitCode {
         Ok(parsed) => parsed,
         Err(usage) => usage.exit(),
     };
-    if let Err(clash) = guard::check(&job) {
+    if let Err(clash) = guard::check(&matches) {
         eprintln!("error: {clash}");
         return ExitCode::from(2);
     }
