@@ -92,6 +92,9 @@ pub enum Command {
     /// Angles of arrival per window and LED from raw samples on standard input (live)
     #[command(after_help = crate::cmd_track::TRACK_EXAMPLES)]
     Track(crate::cmd_track::TrackArgs),
+    /// A calibration as an OpenCV, mrcal or ROS camera model (fitted, with its error)
+    #[command(after_help = crate::cmd_export::EXPORT_EXAMPLES)]
+    Export(crate::cmd_export::ExportArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -270,6 +273,7 @@ pub enum Job {
     SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
     Demodulate(crate::cmd_demodulate::DemodulateArgs),
     Track(crate::cmd_track::TrackArgs),
+    Export(crate::cmd_export::ExportArgs),
 }
 
 impl Cli {
@@ -310,6 +314,7 @@ impl Cli {
             Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
             Command::Demodulate(args) => Job::Demodulate(args),
             Command::Track(args) => Job::Track(args),
+            Command::Export(args) => Job::Export(args),
             Command::Calibrate(args) => {
                 let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;

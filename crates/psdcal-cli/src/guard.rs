@@ -91,6 +91,10 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
             inputs.extend(d.tones.iter().map(|p| ("--tones", p.as_path())));
             (inputs, vec![("--out", d.out.as_path())])
         }
+        Job::Export(e) => (
+            vec![("--calibration", e.calibration.as_path())],
+            vec![("--out", e.out.as_path())],
+        ),
         _ => (Vec::new(), Vec::new()),
     }
 }

@@ -18,6 +18,7 @@ mod cmd_correct;
 mod cmd_demo;
 pub mod cmd_demodulate;
 pub mod cmd_evaluate;
+pub mod cmd_export;
 mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
@@ -69,6 +70,7 @@ pub fn main() -> ExitCode {
         Job::Report(config) => cmd_report::run(config, output),
         Job::Evaluate(args) => cmd_evaluate::run(args, output),
         Job::SimulatePositioning(args) => cmd_simulate_positioning::run(args, output),
+        Job::Export(args) => cmd_export::run(args, output),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -56,6 +56,7 @@
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
 //! | simulate a calibrated rig and emitters (rig.json, rig_points.csv, truth.csv) | [`simulate_positioning`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
+//! | a calibration as an OpenCV, mrcal or ROS camera model | [`export()`] |
 //!
 //! Every failure is an [`Error`]; nothing here prints, and every output
 //! file is written atomically.
@@ -72,6 +73,7 @@ mod demo;
 mod demodulate;
 mod error;
 mod evaluate;
+mod export;
 mod fit_report;
 mod gains;
 mod locate;
@@ -106,6 +108,9 @@ pub use demodulate::{
 };
 pub use error::{Error, Result};
 pub use evaluate::{evaluate, EvaluateRequest, Evaluation};
+pub use export::{
+    export, ExportRequest, ExportTarget, Exported, DEFAULT_MAX_ERROR_DEG, DEFAULT_PIXEL_UM,
+};
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
 pub use gains::{estimate_gains, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
