@@ -95,6 +95,9 @@ pub enum Command {
     /// A calibration as an OpenCV, mrcal or ROS camera model (fitted, with its error)
     #[command(after_help = crate::cmd_export::EXPORT_EXAMPLES)]
     Export(crate::cmd_export::ExportArgs),
+    /// Two calibrations of one sensor compared in angles over the active area (did it drift?)
+    #[command(after_help = crate::cmd_diff::DIFF_EXAMPLES)]
+    Diff(crate::cmd_diff::DiffArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -274,6 +277,7 @@ pub enum Job {
     Demodulate(crate::cmd_demodulate::DemodulateArgs),
     Track(crate::cmd_track::TrackArgs),
     Export(crate::cmd_export::ExportArgs),
+    Diff(crate::cmd_diff::DiffArgs),
 }
 
 impl Cli {
@@ -315,6 +319,7 @@ impl Cli {
             Command::Demodulate(args) => Job::Demodulate(args),
             Command::Track(args) => Job::Track(args),
             Command::Export(args) => Job::Export(args),
+            Command::Diff(args) => Job::Diff(args),
             Command::Calibrate(args) => {
                 let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;

@@ -95,6 +95,10 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
             vec![("--calibration", e.calibration.as_path())],
             vec![("--out", e.out.as_path())],
         ),
+        Job::Diff(d) => (
+            vec![("A", d.a.as_path()), ("B", d.b.as_path())],
+            out(&d.out),
+        ),
         _ => (Vec::new(), Vec::new()),
     }
 }

@@ -18,6 +18,8 @@
 //!   with known poses in a world frame (least-squares ray intersection);
 //! - [`sensitivity`] and [`maps`]: the paper's small-angle sensitivity
 //!   (P40)–(P42), the full-model error, and error maps over the sensor area;
+//! - [`calibration_diff`]: two calibrations of one sensor compared in
+//!   angles over the active area, with the combined σ;
 //! - [`camera_fit`] and [`opencv_model`]: the sensor as OpenCV's rational
 //!   camera model, fitted over the valid region, with the conversion's error;
 //! - [`evaluate`]: positions and angles against the truth by the standard
@@ -48,6 +50,7 @@
 #![warn(missing_docs)]
 
 pub mod aoa;
+pub mod calibration_diff;
 pub mod camera_fit;
 pub mod caution;
 mod error;
@@ -66,6 +69,7 @@ pub use aoa::{
     alpha_from_ray, angle_of_arrival, angle_of_arrival_with_jacobians, measured_from_ray,
     ray_of_point, AngleOfArrival, AoaJacobians,
 };
+pub use calibration_diff::{diff_calibrations, CalibrationDiff, DiffPoint, DiffValues};
 pub use camera_fit::{fit_opencv, CameraFit, CameraFitOptions, OpenCvKind};
 pub use caution::{status_of, Caution};
 pub use error::LocateError;

@@ -57,6 +57,7 @@
 //! | simulate a calibrated rig and emitters (rig.json, rig_points.csv, truth.csv) | [`simulate_positioning`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
 //! | a calibration as an OpenCV, mrcal or ROS camera model | [`export()`] |
+//! | two calibrations compared in angles, with the combined σ | [`diff()`] |
 //!
 //! Every failure is an [`Error`]; nothing here prints, and every output
 //! file is written atomically.
@@ -71,6 +72,7 @@ mod correct;
 mod dataset;
 mod demo;
 mod demodulate;
+mod diff;
 mod error;
 mod evaluate;
 mod export;
@@ -106,6 +108,7 @@ pub use demo::{demo, Demo, DemoParameter};
 pub use demodulate::{
     demodulate, DemodulateRequest, Demodulated, RecordOutcome, RecordStatus, MAX_RECORD_SAMPLES,
 };
+pub use diff::{diff, DiffRequest, Diffed, DEFAULT_DIFF_GRID, DIFF_COLUMNS};
 pub use error::{Error, Result};
 pub use evaluate::{evaluate, EvaluateRequest, Evaluation};
 pub use export::{
