@@ -146,3 +146,24 @@ same_variants!(LensArg => psdcal::Lens { One, Two });
 same_variants!(TemplateArg => psdcal::TemplateKind { Scatter14, Grid });
 same_variants!(GainsMethodArg => psdcal::GainsMethod { EqualCurrent });
 same_variants!(RawArg => psdcal::RawFormat { Csv, Npy });
+
+/// `export --to`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ExportTo {
+    /// OpenCV FileStorage YAML (the rational model)
+    Opencv,
+    /// mrcal .cameramodel (LENSMODEL_OPENCV8)
+    Mrcal,
+    /// ROS camera_info YAML (plumb_bob or rational_polynomial)
+    Ros,
+}
+
+impl From<ExportTo> for psdcal::ExportTarget {
+    fn from(to: ExportTo) -> Self {
+        match to {
+            ExportTo::Opencv => psdcal::ExportTarget::OpenCv,
+            ExportTo::Mrcal => psdcal::ExportTarget::Mrcal,
+            ExportTo::Ros => psdcal::ExportTarget::Ros,
+        }
+    }
+}

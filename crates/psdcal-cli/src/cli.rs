@@ -86,6 +86,12 @@ pub enum Command {
     /// Angles of arrival per window and LED from raw samples on standard input (live)
     #[command(after_help = include_str!("../help/track.txt"))]
     Track(crate::cmd_track::TrackArgs),
+    /// A calibration as an OpenCV, mrcal or ROS camera model (fitted, with its error)
+    #[command(after_help = include_str!("../help/export.txt"))]
+    Export(crate::cmd_export::ExportArgs),
+    /// Two calibrations of one sensor compared in angles over the active area (did it drift?)
+    #[command(after_help = include_str!("../help/diff.txt"))]
+    Diff(crate::cmd_diff::DiffArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -234,6 +240,8 @@ pub enum Job {
     SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
     Demodulate(crate::cmd_demodulate::DemodulateArgs),
     Track(crate::cmd_track::TrackArgs),
+    Export(crate::cmd_export::ExportArgs),
+    Diff(crate::cmd_diff::DiffArgs),
 }
 
 impl Cli {
@@ -272,6 +280,8 @@ impl Cli {
             Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
             Command::Demodulate(args) => Job::Demodulate(args),
             Command::Track(args) => Job::Track(args),
+            Command::Export(args) => Job::Export(args),
+            Command::Diff(args) => Job::Diff(args),
             Command::Calibrate(args) => {
                 let (files, load) = args.data.into_files(args.gains)?;
                 let FitList(free, fit_gains) = args.fit;

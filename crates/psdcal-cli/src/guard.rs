@@ -2,7 +2,8 @@
 //! replaces an input (psdcal-io's `refuse_overwrite`; exit 2).
 //!
 //! Read off the command's definition, so that every command is covered:
-//! each option whose value is a `FILE` names an input, but `--out` and
+//! each option whose value is a `FILE` (or a positional `NAME.json`) names
+//! an input, but `--out` and
 //! `--residuals`, which name outputs; `report`'s page (`--out DIR`'s
 //! report.html) is an output too, and the calibrations a `--rig` file lists
 //! are inputs. Folders (`simulate`, `study`, `--report DIR`) are not
@@ -28,14 +29,19 @@ pub fn check(matches: &ArgMatches) -> Result<(), psdcal::IoError> {
     let mut outputs: Vec<(String, PathBuf)> = Vec::new();
     for arg in definition.get_arguments() {
         let id = arg.get_id().as_str();
-        let (Some(long), Some(value_names)) = (arg.get_long(), arg.get_value_names()) else {
+        let Some(value_names) = arg.get_value_names() else {
             continue;
         };
         let Ok(Some(values)) = given.try_get_raw(id) else {
             continue;
         };
-        let option = format!("--{long}");
-        let file = value_names.iter().any(|n| n == "FILE");
+        // A positional file is named by its value name (`diff`'s `A.json`).
+        let option = arg
+            .get_long()
+            .map_or_else(|| value_names.join(" "), |long| format!("--{long}"));
+        let file = value_names
+            .iter()
+            .any(|n| n == "FILE" || n.ends_with(".json"));
         for path in values.map(PathBuf::from) {
             match (id, file) {
                 ("out" | "residuals", true) => outputs.push((option.clone(), path)),

@@ -15,7 +15,9 @@ mod cmd_check;
 mod cmd_correct;
 mod cmd_demo;
 pub mod cmd_demodulate;
+pub mod cmd_diff;
 pub mod cmd_evaluate;
+pub mod cmd_export;
 pub mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
@@ -71,6 +73,8 @@ pub fn main() -> ExitCode {
         Job::Report(config) => cmd_report::run(config, output),
         Job::Evaluate(args) => cmd_evaluate::run(args, output),
         Job::SimulatePositioning(args) => cmd_simulate_positioning::run(args, output),
+        Job::Export(args) => cmd_export::run(args, output),
+        Job::Diff(args) => cmd_diff::run(args, output),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

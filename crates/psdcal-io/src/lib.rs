@@ -16,6 +16,9 @@
 //! - [`RigFile`] — rig.json, sensors with poses in a world frame, and
 //!   [`RigObservations`], what they measured per emitter.
 //!
+//! - [`CameraModelFile`] — camera models for OpenCV, mrcal and ROS
+//!   ([`write_camera_model`], written by `psdcal export`).
+//!
 //! - [`RawReader`] — raw recordings (raw.csv, raw.npy) read frame by frame
 //!   in constant memory, with [`Schedule`] (schedule.csv) and [`Tones`]
 //!   (tones.csv), the input of `demodulate`.
@@ -34,6 +37,7 @@
 
 mod atomic;
 mod calibration;
+mod camera_model_file;
 mod coverage;
 mod csv_fields;
 mod csv_lines;
@@ -67,6 +71,7 @@ pub use calibration::{
     PsdMapStageCovariance, PsdMapStageRecord, SensorSize, Software, StdDevs, ValidRegionRecord,
     CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
 };
+pub use camera_model_file::{float_text, write_camera_model, CameraFormat, CameraModelFile};
 pub use coverage::{Bounds, Coverage};
 pub use error::{ColumnRef, IoError, Location};
 pub use export::{

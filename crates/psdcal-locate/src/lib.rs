@@ -18,6 +18,10 @@
 //!   with known poses in a world frame (least-squares ray intersection);
 //! - [`sensitivity`] and [`maps`]: the paper's small-angle sensitivity
 //!   (P40)–(P42), the full-model error, and error maps over the sensor area;
+//! - [`calibration_diff`]: two calibrations of one sensor compared in
+//!   angles over the active area, with the combined σ;
+//! - [`camera_fit`] and [`opencv_model`]: the sensor as OpenCV's rational
+//!   camera model, fitted over the valid region, with the conversion's error;
 //! - [`evaluate`]: positions and angles against the truth by the standard
 //!   metrics (mean, median, RMS, 75th/95th percentiles, CE95/SE95, bias,
 //!   the fraction inside the 95 % covariance region).
@@ -46,10 +50,13 @@
 #![warn(missing_docs)]
 
 pub mod aoa;
+pub mod calibration_diff;
+pub mod camera_fit;
 pub mod caution;
 mod error;
 pub mod evaluate;
 pub mod maps;
+pub mod opencv_model;
 pub mod plane;
 pub mod psd_map;
 pub mod rig;
@@ -62,6 +69,8 @@ pub use aoa::{
     alpha_from_ray, angle_of_arrival, angle_of_arrival_with_jacobians, measured_from_ray,
     ray_of_point, AngleOfArrival, AoaJacobians,
 };
+pub use calibration_diff::{diff_calibrations, CalibrationDiff, DiffPoint, DiffValues};
+pub use camera_fit::{fit_opencv, CameraFit, CameraFitOptions, OpenCvKind};
 pub use caution::{status_of, Caution};
 pub use error::LocateError;
 pub use evaluate::{
@@ -69,6 +78,7 @@ pub use evaluate::{
     PositionEvaluation, PositionPair, CHI2_95_2D, CHI2_95_3D,
 };
 pub use maps::{error_map, ErrorMap, ErrorSource, MapCell, MapOptions, MapValues, MAX_GRID};
+pub use opencv_model::{OpenCv8, OPENCV8_LEN, OPENCV8_NAMES};
 pub use plane::{intersect_plane, Plane, PlaneIntersection};
 pub use psd_map::{MapCorrection, SensorPsdMap};
 pub use rig::{Rig, RigLocation, RigSensor};

@@ -56,6 +56,8 @@
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
 //! | simulate a calibrated rig and emitters (rig.json, rig_points.csv, truth.csv) | [`simulate_positioning`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
+//! | a calibration as an OpenCV, mrcal or ROS camera model | [`export()`] |
+//! | two calibrations compared in angles, with the combined σ | [`diff()`] |
 //!
 //! Every failure is an [`Error`]; nothing here prints, and every output
 //! file is written atomically.
@@ -70,8 +72,10 @@ mod correct;
 mod dataset;
 mod demo;
 mod demodulate;
+mod diff;
 mod error;
 mod evaluate;
+mod export;
 mod fit_report;
 mod gains;
 mod locate;
@@ -105,8 +109,12 @@ pub use demo::{demo, Demo, DemoParameter};
 pub use demodulate::{
     demodulate, DemodulateRequest, Demodulated, RecordOutcome, RecordStatus, MAX_RECORD_SAMPLES,
 };
+pub use diff::{diff, DiffRequest, Diffed, DEFAULT_DIFF_GRID, DIFF_COLUMNS};
 pub use error::{Error, Result};
 pub use evaluate::{evaluate, EvaluateRequest, Evaluation};
+pub use export::{
+    export, ExportRequest, ExportTarget, Exported, DEFAULT_MAX_ERROR_DEG, DEFAULT_PIXEL_UM,
+};
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
 pub use gains::{estimate_gains, gains_summary, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
