@@ -54,3 +54,9 @@ pub fn covariance_warning(loaded: &LoadedSensor) -> Option<String> {
         )
     })
 }
+
+/// Writes `record` as calibration.json at `path` (atomically), as
+/// `psdcal calibrate --out` does.
+pub fn save_calibration(record: &Calibration, path: &Path) -> Result<()> {
+    Ok(psdcal_io::write_calibration(path, record)?)
+}
