@@ -47,12 +47,10 @@ fn option_pairs(
                         v.push(format!("{}={}", option_text(&k)?, option_text(&x)?));
                     }
                     v
+                } else if value.is_instance_of::<pyo3::types::PyString>() {
+                    vec![value.extract::<String>()?]
                 } else if let Ok(items) = value.extract::<Vec<String>>() {
-                    if value.extract::<String>().is_ok() {
-                        vec![value.extract::<String>()?]
-                    } else {
-                        items
-                    }
+                    items
                 } else {
                     vec![option_text(&value)?]
                 }
@@ -161,9 +159,17 @@ fn id_number(id: &str) -> PyResult<f64> {
 }
 
 /// Simulates a calibration data set through the whole signal chain, as
-/// `psdcal simulate` does, and returns it as a dict of arrays.
+/// `psdcal simulate --lens L --snr S --images N --seed K` does, and returns
+/// it in memory as a dict: `template` `(N, 2)` (LEDs 1 … N), `observations`
+/// `(M, 4)`, `signals` `(M, 6)` (ready for `psdcal.calibrate`), `truth` (the
+/// true parameters by name, gains too), `poses` `(images, 6)` (`rx, ry, rz,
+/// tx, ty, tz`, the true sensor_from_template poses) and `description`.
+/// `noise=False` simulates without noise (`snr_db` is then ignored).
 #[pyfunction]
-#[pyo3(signature = (lens=None, snr_db=None, images=None, seed=1, imbalance=false, psd_distortion=false, psd_nonlinearity=false, template=None, record_cycles=None, noise=true))]
+#[pyo3(
+    signature = (lens=None, snr_db=None, images=None, seed=1, imbalance=false, psd_distortion=false, psd_nonlinearity=false, template=None, record_cycles=None, noise=true),
+    text_signature = "(lens=2, snr_db=40.0, images=9, seed=1, imbalance=False, psd_distortion=False, psd_nonlinearity=False, template='scatter14', record_cycles=65, noise=True)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate<'py>(
     py: Python<'py>,
@@ -261,9 +267,14 @@ pub fn simulate<'py>(
     Ok(d)
 }
 
-/// Demodulates a raw recording (raw.csv or raw.npy) with its schedule, as
-/// `psdcal demodulate` does; returns a dict of the demodulated records
-/// (and writes signals.csv when `out` is given).
+/// Demodulates a raw recording (raw.csv or raw.npy; `rate` in Hz, needed by
+/// raw.npy) with its schedule (schedule.csv) and, for frequency
+/// multiplexing, `tones` (tones.csv), as `psdcal demodulate` does. Returns a
+/// dict: `image`, `led` (lists of identifiers), `amplitudes` `(M, 4)`
+/// (`vx1, vx2, vy1, vy2`, peak volts) and `snr_db` `(M,)` of the records
+/// demodulated, `status` (every (image, LED) → `ok`, `too_short`,
+/// `saturated`, `dark` or `tone_collision`), `sample_rate_hz` and
+/// `warnings`; also writes signals.csv when `out` is given.
 #[pyfunction]
 #[pyo3(signature = (raw, rate=None, schedule=None, tones=None, frequency=1000.0, full_scale=10.0, out=None))]
 #[allow(clippy::too_many_arguments)]

@@ -57,6 +57,22 @@ def test_bad_data_file_has_the_cli_message(cli, example, tmp_path):
     assert ":6" in want
 
 
+def test_failed_calibration_has_the_cli_message(cli, example, tmp_path):
+    # Two images: too few for a calibration.
+    few = tmp_path / "observations.csv"
+    lines = (example / "observations.csv").read_text().splitlines()
+    few.write_text("\n".join(l for l in lines if l.split(",")[0] in ("image", "1", "2")) + "\n")
+    with pytest.raises(psdcal.PsdcalError) as e:
+        psdcal.calibrate(example / "template.csv", observations=few)
+    want = cli_error(
+        cli,
+        ["calibrate", "-t", str(example / "template.csv"), "-o", str(few),
+         "--out", str(tmp_path / "c.json")],
+    )
+    assert str(e.value) == want
+    assert want.startswith("calibration failed: ")
+
+
 def test_missing_calibration_has_the_cli_message(cli, tmp_path):
     missing = tmp_path / "calibration.json"
     points = tmp_path / "points.csv"

@@ -49,7 +49,9 @@ impl<'a> Rows<'a> {
     /// The rows, after checking the width against `allowed` (what each
     /// width means, for the message).
     fn rows(&self, allowed: &[usize], meaning: &str) -> Result<std::slice::ChunksExact<'a, f64>> {
-        if !allowed.contains(&self.columns) || self.values.len() % self.columns.max(1) != 0 {
+        if !allowed.contains(&self.columns)
+            || !self.values.len().is_multiple_of(self.columns.max(1))
+        {
             return Err(Error::Input(format!(
                 "{} has {} columns; expected {meaning}",
                 self.name, self.columns
