@@ -145,3 +145,12 @@ def test_too_few_images_fail_with_advice(example):
     with pytest.raises(psdcal.PsdcalError) as e:
         psdcal.calibrate(template, observations=obs)
     assert "; " in str(e.value)
+
+
+def test_save_refuses_to_overwrite_an_input(example, tmp_path):
+    template = tmp_path / "template.csv"
+    template.write_bytes((example / "template.csv").read_bytes())
+    cal = psdcal.calibrate(template, observations=example / "observations.csv")
+    with pytest.raises(psdcal.PsdcalError, match="would overwrite the input"):
+        cal.save(template)
+    assert template.read_bytes() == (example / "template.csv").read_bytes()

@@ -115,6 +115,16 @@ def test_aoa_matches_the_cli(cli, cli_calibration, py_calibration, tmp_path):
     close(sigma, [[float(r["sigma_alpha_x_deg"]), float(r["sigma_alpha_y_deg"])] for r in rows])
     ideal = py_calibration.correct(points)
     close(ideal, [[float(r["x_ideal_mm"]), float(r["y_ideal_mm"])] for r in rows])
+    corrected = tmp_path / "corrected.csv"
+    subprocess.run(
+        cli
+        + ["--quiet", "correct", "--calibration", str(cli_calibration), "--points",
+           str(points_csv), "--out", str(corrected)],
+        check=True,
+    )
+    with corrected.open() as f:
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    close(ideal, [[float(r["x_ideal_mm"]), float(r["y_ideal_mm"])] for r in rows])
 
 
 def test_locate_matches_the_cli(cli, cli_calibration, py_calibration, tmp_path):
