@@ -24,6 +24,26 @@ pub fn advice(error: &(dyn StdError + 'static)) -> &'static str {
     "see 'psdcal --help'"
 }
 
+/// The one line a front end shows for `error` (the command line prints it
+/// after `error: `; the Python package raises it): what happened — a file
+/// error's own message, else the error and its causes joined by `: ` — then
+/// `; ` and the [`advice`].
+pub fn error_text(error: &Error) -> String {
+    let what = match error {
+        Error::Io(e) => e.to_string(),
+        _ => {
+            let mut parts = vec![error.to_string()];
+            let mut current = error.source();
+            while let Some(e) = current {
+                parts.push(e.to_string());
+                current = e.source();
+            }
+            parts.join(": ")
+        }
+    };
+    format!("{}; {}", what.replace('\n', " "), advice(error))
+}
+
 fn advice_of(error: &(dyn StdError + 'static)) -> Option<&'static str> {
     if let Some(e) = error.downcast_ref::<Error>() {
         return match e {

@@ -9,7 +9,8 @@
 
 use std::path::Path;
 
-use psdcal_locate::{angle_of_arrival, Caution, Measurement};
+use nalgebra::Vector2;
+use psdcal_locate::{angle_of_arrival, CalibratedSensor, Caution, LocateError, Measurement};
 use psdcal_model::sensor::is_on_active_area;
 
 use crate::error::Result;
@@ -37,32 +38,57 @@ fn added_columns(amplitudes: bool) -> Vec<String> {
     names.into_iter().map(String::from).collect()
 }
 
+/// One corrected point.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct CorrectedPoint {
+    /// The measured point (from the amplitudes when given), mm.
+    pub measured: Vector2<f64>,
+    /// The ideal point, mm.
+    pub ideal: Vector2<f64>,
+    /// Off the active area (corrected anyway).
+    pub cautions: Vec<Caution>,
+}
+
+/// Corrects one measurement with `sensor`: measured point, the valid
+/// region's check, the PSD map, the distortion correction.
+pub(crate) fn correct_point(
+    sensor: &CalibratedSensor,
+    m: &Measurement,
+) -> Result<CorrectedPoint, LocateError> {
+    let measured = sensor.measured_point(m)?.point;
+    // Past a fold of the correction there is no unique ideal point.
+    sensor.check_valid_region(&measured)?;
+    // A PSD map (docs/model.md §8.3) corrects the point first.
+    let corrected = sensor.map_corrected(&measured)?.point;
+    let aoa = angle_of_arrival(&sensor.model, &corrected)?;
+    let cautions = if is_on_active_area(&sensor.geometry, &measured) {
+        Vec::new()
+    } else {
+        vec![Caution::OffActiveArea {
+            x_mm: measured.x,
+            y_mm: measured.y,
+        }]
+    };
+    Ok(CorrectedPoint {
+        measured,
+        ideal: aoa.ideal,
+        cautions,
+    })
+}
+
 /// Corrects the points of `points` with the calibration at `calibration`,
 /// streaming the answer to `out` (standard output when `None`).
 pub fn correct(calibration: &Path, points: &Path, out: Option<&Path>) -> Result<Corrected> {
     let loaded = LoadedSensor::read(calibration)?;
     let sensor = &loaded.sensor;
     let answer = answer_points(points, out, added_columns, |m| {
-        let measured = sensor.measured_point(m)?.point;
-        // Past a fold of the correction there is no unique ideal point.
-        sensor.check_valid_region(&measured)?;
-        // A PSD map (docs/model.md §8.3) corrects the point first.
-        let corrected = sensor.map_corrected(&measured)?.point;
-        let aoa = angle_of_arrival(&sensor.model, &corrected)?;
+        let c = correct_point(sensor, m)?;
         let mut values = Vec::with_capacity(4);
         if matches!(m, Measurement::Amplitudes(_)) {
-            values.extend([num(measured.x), num(measured.y)]);
+            values.extend([num(c.measured.x), num(c.measured.y)]);
         }
-        values.extend([num(aoa.ideal.x), num(aoa.ideal.y)]);
-        let cautions = if is_on_active_area(&sensor.geometry, &measured) {
-            Vec::new()
-        } else {
-            vec![Caution::OffActiveArea {
-                x_mm: measured.x,
-                y_mm: measured.y,
-            }]
-        };
-        Ok((values, cautions))
+        values.extend([num(c.ideal.x), num(c.ideal.y)]);
+        Ok((values, c.cautions))
     })?;
     Ok(Corrected {
         sensor: loaded,

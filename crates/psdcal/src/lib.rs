@@ -53,6 +53,7 @@
 //! | positions (and angles) against a surveyed truth: the standard metrics | [`evaluate()`] |
 //! | raw recordings → signals.csv (band-pass, lock-in, SNR) | [`demodulate()`] |
 //! | a live stream of samples → angles per window and LED | [`track()`] |
+//! | the same from arrays in memory (front ends such as the Python package) | [`arrays`], [`simulate_data`], [`error_text`] |
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
 //! | simulate a calibrated rig and emitters (rig.json, rig_points.csv, truth.csv) | [`simulate_positioning`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
@@ -65,8 +66,10 @@
 
 mod advice;
 mod aoa;
+pub mod arrays;
 mod calibrate;
 mod calibrate_map;
+mod calibrate_options;
 mod convert;
 mod correct;
 mod dataset;
@@ -100,9 +103,10 @@ mod summary_text;
 mod table;
 mod track;
 
-pub use advice::advice;
+pub use advice::{advice, error_text};
 pub use aoa::{aoa_table, measurement, AoaTable};
 pub use calibrate::{calibrate, Calibrated};
+pub use calibrate_options::{calibrate_settings, CalibrateSettings, CALIBRATE_OPTION_NAMES};
 pub use correct::{correct, Corrected};
 pub use dataset::{source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
 pub use demo::{demo, Demo, DemoParameter};
@@ -119,6 +123,7 @@ pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
 pub use gains::{estimate_gains, gains_summary, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
 pub use map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
+pub use option_text::plane_at_distance;
 pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
 pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
@@ -131,10 +136,10 @@ pub use psdcal_signal::DemodConfig;
 pub use psdcal_sim::{Impairment, Impairments};
 pub use report::{report_content, write_report, ReportFiles, ReportRequest};
 pub use residuals::{ImageResiduals, Residual, ResidualTable};
-pub use sensor::{covariance_warning, sensor_of, LoadedSensor};
+pub use sensor::{covariance_warning, save_calibration, sensor_of, LoadedSensor};
 pub use simulate::{
-    chain_with_record, record_cycles_flag, simulate_files, transient_cycles, SimulateRequest,
-    SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
+    chain_with_record, record_cycles_flag, simulate_data, simulate_files, transient_cycles,
+    SimulateRequest, SimulatedData, SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
 };
 pub use simulate_positioning::{simulate_positioning, PositioningRequest, SimulatedRig};
 pub use simulate_raw::{

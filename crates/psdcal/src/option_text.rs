@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use psdcal_locate::{Plane, MAX_GRID};
 use psdcal_model::{Param, UnknownParam};
 
-use crate::options::{Robust, Uncertainty};
+use crate::options::{Cost, Noise, Preliminary, Robust, Uncertainty};
 
 /// Parameters to estimate and whether the gains are freed too (`--fit`).
 #[derive(Debug, Clone, PartialEq)]
@@ -266,5 +266,72 @@ pub fn parse_threads(text: &str) -> Result<usize, String> {
         _ => Err(format!(
             "expected a number of threads from 1 to 1024, found '{text}'"
         )),
+    }
+}
+
+/// `--cost template|image`.
+pub fn parse_cost(text: &str) -> Result<Cost, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "template" => Ok(Cost::Template),
+        "image" => Ok(Cost::Image),
+        _ => Err(format!("expected template or image, found '{text}'")),
+    }
+}
+
+/// `--noise uniform|channel-snr|channel-floor` (`_` for `-` too).
+pub fn parse_noise(text: &str) -> Result<Noise, String> {
+    match text.trim().to_ascii_lowercase().replace('_', "-").as_str() {
+        "uniform" => Ok(Noise::Uniform),
+        "channel-snr" => Ok(Noise::ChannelSnr),
+        "channel-floor" => Ok(Noise::ChannelFloor),
+        _ => Err(format!(
+            "expected uniform, channel-snr or channel-floor, found '{text}'"
+        )),
+    }
+}
+
+/// `--preliminary auto|straightness|homography|off`.
+pub fn parse_preliminary(text: &str) -> Result<Preliminary, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "auto" => Ok(Preliminary::Auto),
+        "straightness" => Ok(Preliminary::Straightness),
+        "homography" => Ok(Preliminary::Homography),
+        "off" => Ok(Preliminary::Off),
+        _ => Err(format!(
+            "expected auto, straightness, homography or off, found '{text}'"
+        )),
+    }
+}
+
+/// A switch: `true` or `false` (any case).
+pub fn parse_switch(text: &str) -> Result<bool, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "true" => Ok(true),
+        "false" => Ok(false),
+        _ => Err(format!("expected true or false, found '{text}'")),
+    }
+}
+
+/// `--distance S`: the plane `z = S` parallel to the sensor, S a positive
+/// length in mm.
+pub fn plane_at_distance(text: &str) -> Result<Plane, String> {
+    Plane::parallel(positive_mm(text)?).map_err(|e| e.to_string())
+}
+
+/// `--lens 1|2`: the paper's lens.
+pub fn parse_lens(text: &str) -> Result<psdcal_sim::Lens, String> {
+    match text.trim() {
+        "1" => Ok(psdcal_sim::Lens::One),
+        "2" => Ok(psdcal_sim::Lens::Two),
+        _ => Err(format!("expected the paper's lens 1 or 2, found '{text}'")),
+    }
+}
+
+/// `--template scatter14|grid`.
+pub fn parse_template_kind(text: &str) -> Result<psdcal_sim::TemplateKind, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "scatter14" => Ok(psdcal_sim::TemplateKind::Scatter14),
+        "grid" => Ok(psdcal_sim::TemplateKind::Grid),
+        _ => Err(format!("expected scatter14 or grid, found '{text}'")),
     }
 }

@@ -54,3 +54,21 @@ pub fn covariance_warning(loaded: &LoadedSensor) -> Option<String> {
         )
     })
 }
+
+/// Writes `record` as calibration.json at `path` (atomically), as
+/// `psdcal calibrate --out` does; refused (before anything is written)
+/// when `path` is one of the files the calibration was made from (its
+/// provenance's inputs).
+pub fn save_calibration(record: &Calibration, path: &Path) -> Result<()> {
+    let inputs: Vec<PathBuf> = record
+        .provenance
+        .iter()
+        .flat_map(|p| p.inputs.iter().map(|i| PathBuf::from(&i.path)))
+        .collect();
+    let named: Vec<(&str, &Path)> = inputs
+        .iter()
+        .map(|p| ("the data set", p.as_path()))
+        .collect();
+    psdcal_io::refuse_overwrite(&named, &[("the calibration", path)])?;
+    Ok(psdcal_io::write_calibration(path, record)?)
+}

@@ -121,16 +121,29 @@ pub fn simulate_files(request: &SimulateRequest) -> Result<SimulatedFiles> {
     simulate_and_write(request).map(|(files, _)| files)
 }
 
-/// [`simulate_files`], also returning the simulation (for the raw
-/// recording of the same data set).
-pub(crate) fn simulate_and_write(
-    request: &SimulateRequest,
-) -> Result<(SimulatedFiles, Simulation)> {
-    let out = &request.out;
-    std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
-        path: out.clone(),
-        message: format!("cannot create the output folder {}: {e}", out.display()),
-    })?;
+/// A simulated data set in memory: the rows of template.csv,
+/// observations.csv and signals.csv, and truth.json's record.
+#[derive(Debug, Clone)]
+pub struct SimulatedData {
+    /// One line describing the simulation.
+    pub description: String,
+    /// The template's LEDs (named `1 … N`).
+    pub template: Vec<TemplateLed>,
+    /// The measured impact points.
+    pub observations: Vec<ObservationRow>,
+    /// The demodulated electrode amplitudes of the same points.
+    pub signals: Vec<SignalRowOut>,
+    /// The truth: model, gains, poses, settings.
+    pub truth: Truth,
+}
+
+/// Simulates the data set of `request` in memory (`request.out` is not
+/// used): what [`simulate_files`] writes.
+pub fn simulate_data(request: &SimulateRequest) -> Result<SimulatedData> {
+    simulate_in_memory(request).map(|(data, _)| data)
+}
+
+fn simulate_in_memory(request: &SimulateRequest) -> Result<(SimulatedData, Simulation)> {
     let options = SimulationOptions {
         lens: request.lens,
         snr_db: request.snr_db,
@@ -144,12 +157,6 @@ pub(crate) fn simulate_and_write(
     };
     let mut rng = ChaCha8Rng::seed_from_u64(request.seed);
     let sim = simulate(&options, &mut rng)?;
-    let what = describe(request);
-    write_template(
-        out.join("template.csv"),
-        &format!("{what}\nTemplate {} (mm).", request.template.name()),
-        &template_leds(&sim),
-    )?;
     let observations: Vec<ObservationRow> = sim
         .images
         .iter()
@@ -162,11 +169,6 @@ pub(crate) fn simulate_and_write(
             })
         })
         .collect();
-    write_observations(
-        out.join("observations.csv"),
-        &format!("{what}\nImpact points from the demodulated amplitudes (balanced formula)."),
-        &observations,
-    )?;
     let signals: Vec<SignalRowOut> = sim
         .images
         .iter()
@@ -178,16 +180,48 @@ pub(crate) fn simulate_and_write(
             })
         })
         .collect();
+    let data = SimulatedData {
+        description: describe(request),
+        template: template_leds(&sim),
+        observations,
+        signals,
+        truth: truth(&sim, request),
+    };
+    Ok((data, sim))
+}
+
+/// [`simulate_files`], also returning the simulation (for the raw
+/// recording of the same data set).
+pub(crate) fn simulate_and_write(
+    request: &SimulateRequest,
+) -> Result<(SimulatedFiles, Simulation)> {
+    let out = &request.out;
+    std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
+        path: out.clone(),
+        message: format!("cannot create the output folder {}: {e}", out.display()),
+    })?;
+    let (data, sim) = simulate_in_memory(request)?;
+    let what = &data.description;
+    write_template(
+        out.join("template.csv"),
+        &format!("{what}\nTemplate {} (mm).", request.template.name()),
+        &data.template,
+    )?;
+    write_observations(
+        out.join("observations.csv"),
+        &format!("{what}\nImpact points from the demodulated amplitudes (balanced formula)."),
+        &data.observations,
+    )?;
     write_signals(
         out.join("signals.csv"),
         &format!("{what}\nDemodulated electrode amplitudes (V)."),
-        &signals,
+        &data.signals,
     )?;
-    write_truth(out.join("truth.json"), &truth(&sim, request))?;
+    write_truth(out.join("truth.json"), &data.truth)?;
     let files = SimulatedFiles {
-        description: what,
+        description: data.description.clone(),
         images: sim.images.len(),
-        points: observations.len(),
+        points: data.observations.len(),
     };
     Ok((files, sim))
 }
