@@ -58,6 +58,7 @@ mod signals;
 mod summary;
 mod tdms;
 mod tdms_meta;
+mod tdms_write;
 mod template;
 mod truth;
 mod validate;
@@ -101,6 +102,7 @@ pub use schedule::{write_schedule, write_tones, Schedule, ScheduleRow, Tone, Ton
 pub use signals::{SignalRow, Signals};
 pub use summary::{DataSetSummary, ImageSummary, LineSummary, TemplateSummary};
 pub use tdms::{TdmsReader, TDMS_DEFAULT_CHANNELS};
+pub use tdms_write::TdmsFrameWriter;
 pub use template::{Led, LineGroup, Template};
 pub use truth::{
     read_truth, write_truth, SimulationSettings, TrueGains, TruePose, Truth, TRUTH_FORMAT,

@@ -94,6 +94,8 @@ mod study_page;
 mod summary_text;
 mod table;
 mod track;
+mod track_input;
+mod track_rig;
 
 pub use advice::advice;
 pub use aoa::{aoa_table, measurement, AoaTable};
@@ -135,7 +137,7 @@ pub use simulate_scan::{scan_samples, simulate_scan_file, ScanRequest, Simulated
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
 pub use summary_text::summary_text;
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
-pub use track::{track, TrackRequest, TrackSummary};
+pub use track::{track, TrackRequest, TrackSummary, TrackTarget};
 
 pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, Warning};
