@@ -592,7 +592,7 @@ impl TdmsReader {
             return Ok(None);
         }
         let chunks = len / chunk_bytes;
-        if len % chunk_bytes != 0 && lead_in.next_offset != UNFINISHED {
+        if !len.is_multiple_of(chunk_bytes) && lead_in.next_offset != UNFINISHED {
             return Err(self.error(format!(
                 "byte {data_start}: {len} bytes of raw data are not a whole number of chunks of \
                  {chunk_bytes} bytes; expected a valid segment"
@@ -755,7 +755,7 @@ impl Scaling {
                 }
             }
         };
-        if !(n >= 0.0 && n <= 64.0 && n.fract() == 0.0) {
+        if !((0.0..=64.0).contains(&n) && n.fract() == 0.0) {
             return Err(format!("NI_Number_Of_Scales {n}; expected 0 to 64"));
         }
         let n = n as usize;
@@ -788,7 +788,7 @@ impl Scaling {
                 ),
                 "Polynomial" => {
                     let size = number(&key("Polynomial_Coefficients_Size")).unwrap_or(4.0);
-                    if !(size >= 0.0 && size <= 64.0 && size.fract() == 0.0) {
+                    if !((0.0..=64.0).contains(&size) && size.fract() == 0.0) {
                         return Err(format!(
                             "{} {size}; expected 0 to 64",
                             key("Polynomial_Coefficients_Size")
