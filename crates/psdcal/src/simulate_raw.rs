@@ -41,7 +41,7 @@ pub const FDMA_SPACING_HZ: f64 = 50.0;
 /// The raw recording to write besides the data set.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RawRequest {
-    /// raw.csv or raw.npy.
+    /// raw.csv, raw.npy or raw.tdms.
     pub format: RawFormat,
     /// Every LED of an image on at once, each at its own tone.
     pub fdma: bool,

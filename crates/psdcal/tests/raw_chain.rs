@@ -250,6 +250,35 @@ fn track_gives_the_angles_of_demodulate() {
     assert_eq!((summary.windows, summary.malformed), (9, 1));
     let out = String::from_utf8(out).unwrap();
     let rows: Vec<&str> = out.lines().collect();
+    // The same recording as raw.tdms, read with --raw (its rate from
+    // wf_increment): the same rows but the malformed line's.
+    let raw_tdms = RawRequest {
+        format: RawFormat::Tdms,
+        ..raw
+    };
+    simulate_raw_files(&request(d, Some(40.0), 8), &raw_tdms).unwrap();
+    let mut from_file = Vec::new();
+    psdcal::track(
+        &psdcal::TrackRequest {
+            target: psdcal::TrackTarget::Sensor(d.join("cal.json")),
+            rate_hz: None,
+            tones: d.join("tones.csv"),
+            window_s: 0.065,
+            config: DemodConfig::default(),
+            raw: Some(d.join("raw.tdms")),
+            channels: Vec::new(),
+        },
+        &b""[..],
+        &mut from_file,
+    )
+    .unwrap();
+    let from_file = String::from_utf8(from_file).unwrap();
+    let without_malformed: Vec<&str> = rows
+        .iter()
+        .copied()
+        .filter(|r| !r.ends_with("malformed_line"))
+        .collect();
+    assert_eq!(from_file.lines().collect::<Vec<_>>(), without_malformed);
     assert_eq!(rows[0], "t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status");
     assert_eq!(rows[15], "0.065,,,,,malformed_line");
     let sensor = psdcal::LoadedSensor::read(&d.join("cal.json")).unwrap();
