@@ -58,6 +58,7 @@ mod signals;
 mod summary;
 mod tdms;
 mod tdms_meta;
+mod tdms_scaling;
 mod tdms_write;
 mod template;
 mod truth;
