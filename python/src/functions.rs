@@ -309,6 +309,8 @@ pub fn demodulate<'py>(
         tones,
         frequency_hz: frequency,
         out,
+        // A .tdms recording's default channels (docs/formats.md, raw.tdms).
+        channels: Vec::new(),
         config: psdcal::DemodConfig {
             full_scale_v: full_scale,
             ..psdcal::DemodConfig::default()

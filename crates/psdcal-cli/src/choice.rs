@@ -107,6 +107,7 @@ macro_rules! same_variants {
 pub enum RawArg {
     Csv,
     Npy,
+    Tdms,
 }
 
 /// `simulate --impairments` (`none`: a clean card).
@@ -145,7 +146,7 @@ same_variants!(PreliminaryArg => psdcal::Preliminary { Auto, Straightness, Homog
 same_variants!(LensArg => psdcal::Lens { One, Two });
 same_variants!(TemplateArg => psdcal::TemplateKind { Scatter14, Grid });
 same_variants!(GainsMethodArg => psdcal::GainsMethod { EqualCurrent });
-same_variants!(RawArg => psdcal::RawFormat { Csv, Npy });
+same_variants!(RawArg => psdcal::RawFormat { Csv, Npy, Tdms });
 
 /// `export --to`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -48,8 +48,8 @@ pub struct SimulateArgs {
     /// Output folder (created if missing)
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Also write the raw recording a card would make (raw.csv or raw.npy, 20 kHz) and schedule.csv
-    #[arg(long, value_name = "csv|npy", value_parser = choice::<crate::choice::RawArg>)]
+    /// Also write the raw recording a card would make (raw.csv, raw.npy or raw.tdms, 20 kHz) and schedule.csv
+    #[arg(long, value_name = "csv|npy|tdms", value_parser = choice::<crate::choice::RawArg>)]
     pub raw: Option<crate::choice::RawArg>,
     /// With --raw: every LED of an image on at once, each at its own tone (writes tones.csv)
     #[arg(long, requires = "raw")]

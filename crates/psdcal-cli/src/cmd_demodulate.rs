@@ -10,10 +10,10 @@ use crate::cli::Output;
 /// Arguments of `psdcal demodulate`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct DemodulateArgs {
-    /// The raw recording: raw.csv (vx1, vx2, vy1, vy2, optional t_s) or raw.npy (N×4)
+    /// The raw recording: raw.csv (vx1, vx2, vy1, vy2, optional t_s), raw.npy (N×4) or raw.tdms
     #[arg(long, value_name = "FILE")]
     pub raw: PathBuf,
-    /// Sample rate, Hz (needed for raw.npy and for raw.csv without t_s)
+    /// Sample rate, Hz (needed for raw.npy and for raw.csv without t_s; raw.tdms has wf_increment)
     #[arg(long, value_name = "HZ")]
     pub rate: Option<f64>,
     /// Which light is on when: image, t_start_s, t_stop_s and optionally led
@@ -28,6 +28,9 @@ pub struct DemodulateArgs {
     /// The ADC's full scale, V (samples within one 16-bit step of it are saturated)
     #[arg(long, value_name = "V", default_value_t = 10.0)]
     pub full_scale: f64,
+    /// A .tdms file's four channels in the order vx1, vx2, vy1, vy2: group/channel,…
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub channels: Vec<String>,
     /// Where to write signals.csv (atomically)
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
@@ -46,6 +49,7 @@ pub fn run(args: &DemodulateArgs, output: Output) -> anyhow::Result<()> {
             full_scale_v: args.full_scale,
             ..psdcal::DemodConfig::default()
         },
+        channels: args.channels.clone(),
     };
     let done = psdcal::demodulate(&request)?;
     let summary = psdcal::Summary::new(done.summary(&args.out), done.to_json());

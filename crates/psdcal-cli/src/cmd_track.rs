@@ -1,6 +1,6 @@
-//! `psdcal track`: raw samples from standard input → angles of arrival per
-//! window and LED on standard output, flushed each window (the work is
-//! `psdcal::track`).
+//! `psdcal track`: raw samples from standard input (or a recording file) →
+//! angles of arrival (one sensor) or positions (a rig) per window and LED
+//! on standard output, flushed each window (the work is `psdcal::track`).
 
 use std::path::PathBuf;
 
@@ -9,29 +9,49 @@ use clap::Args;
 /// Arguments of `psdcal track`.
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct TrackArgs {
-    /// The sensor's calibration.json
+    /// The sensor's calibration.json (angles of arrival)
+    #[arg(
+        long,
+        value_name = "FILE",
+        required_unless_present = "rig",
+        conflicts_with = "rig"
+    )]
+    pub calibration: Option<PathBuf>,
+    /// A rig.json (positions from every sensor's four channels in one stream)
     #[arg(long, value_name = "FILE")]
-    pub calibration: PathBuf,
-    /// Sample rate of the stream, Hz
+    pub rig: Option<PathBuf>,
+    /// Sample rate of the stream, Hz (a .tdms file carries its own)
     #[arg(long, value_name = "HZ")]
-    pub rate: f64,
+    pub rate: Option<f64>,
     /// The LEDs and their modulation frequencies: led, frequency_hz
     #[arg(long, value_name = "FILE")]
     pub tones: PathBuf,
     /// Window length, s (each window is demodulated on its own)
     #[arg(long, value_name = "S", default_value_t = 0.05)]
     pub window: f64,
+    /// Read a recording (raw.csv, raw.npy, raw.tdms) instead of standard input
+    #[arg(long, value_name = "FILE")]
+    pub raw: Option<PathBuf>,
+    /// A .tdms file's channels, four per sensor: group/channel,… (default: vx1, vx2, vy1, vy2)
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub channels: Vec<String>,
 }
 
-/// Runs `track` (standard input to standard output; a summary on standard
-/// error unless quiet).
+/// Runs `track` (a summary on standard error unless quiet).
 pub fn run(args: &TrackArgs, output: crate::cli::Output) -> anyhow::Result<()> {
+    let target = match (&args.rig, &args.calibration) {
+        (Some(rig), _) => psdcal::TrackTarget::Rig(rig.clone()),
+        (None, Some(c)) => psdcal::TrackTarget::Sensor(c.clone()),
+        (None, None) => anyhow::bail!("give --calibration FILE or --rig FILE"),
+    };
     let request = psdcal::TrackRequest {
-        calibration: args.calibration.clone(),
+        target,
         rate_hz: args.rate,
         tones: args.tones.clone(),
         window_s: args.window,
         config: psdcal::DemodConfig::default(),
+        raw: args.raw.clone(),
+        channels: args.channels.clone(),
     };
     let summary = psdcal::track(&request, std::io::stdin().lock(), std::io::stdout().lock())?;
     if output != crate::cli::Output::Quiet {

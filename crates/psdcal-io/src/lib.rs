@@ -19,7 +19,8 @@
 //! - [`CameraModelFile`] — camera models for OpenCV, mrcal and ROS
 //!   ([`write_camera_model`], written by `psdcal export`).
 //!
-//! - [`RawReader`] — raw recordings (raw.csv, raw.npy) read frame by frame
+//! - [`RawReader`] — raw recordings (raw.csv, raw.npy, raw.tdms) read frame by frame;
+//!   [`TdmsReader`] — any channels of an NI TDMS file, row by row
 //!   in constant memory, with [`Schedule`] (schedule.csv) and [`Tones`]
 //!   (tones.csv), the input of `demodulate`.
 //!
@@ -59,6 +60,10 @@ mod scan;
 mod schedule;
 mod signals;
 mod summary;
+mod tdms;
+mod tdms_meta;
+mod tdms_scaling;
+mod tdms_write;
 mod template;
 mod truth;
 mod validate;
@@ -102,6 +107,8 @@ pub use scan::{write_scan, Scan, ScanPoints, ScanReading, ScanRow, SCAN_DUPLICAT
 pub use schedule::{write_schedule, write_tones, Schedule, ScheduleRow, Tone, Tones};
 pub use signals::{SignalRow, Signals};
 pub use summary::{DataSetSummary, ImageSummary, LineSummary, TemplateSummary};
+pub use tdms::{TdmsReader, TDMS_DEFAULT_CHANNELS};
+pub use tdms_write::TdmsFrameWriter;
 pub use template::{Led, LineGroup, Template};
 pub use truth::{
     read_truth, write_truth, SimulationSettings, TrueGains, TruePose, Truth, TRUTH_FORMAT,

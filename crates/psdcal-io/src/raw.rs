@@ -15,6 +15,11 @@
 //!   is `--rate`. A wrong dtype, shape or order, a truncated array and bytes
 //!   after it are errors naming the file (and the sample row).
 //!
+//! - **raw.tdms**: NI TDMS (`tdms.rs`): the group with channels `vx1`,
+//!   `vx2`, `vy1`, `vy2`, else the first four channels, or four named
+//!   channels; the rate is `1 / wf_increment` or `--rate` (with both, they
+//!   must agree to [`RATE_TOLERANCE`]).
+//!
 //! Every sample must be finite. Row numbers in `.npy` messages are 0-based
 //! sample indices; CSV messages give the physical line.
 
@@ -25,6 +30,7 @@ use std::path::Path;
 use crate::csv_table::{Col, CsvStream};
 use crate::error::{IoError, Location};
 use crate::limits::excerpt;
+use crate::tdms::TdmsReader;
 
 /// A header excerpt for a one-line message (control characters shown as `?`).
 fn shown(text: &str) -> String {
@@ -52,6 +58,8 @@ pub enum RawFormat {
     Csv,
     /// raw.npy.
     Npy,
+    /// raw.tdms.
+    Tdms,
 }
 
 impl RawFormat {
@@ -61,6 +69,7 @@ impl RawFormat {
         match ext.as_str() {
             "csv" => Some(Self::Csv),
             "npy" => Some(Self::Npy),
+            "tdms" => Some(Self::Tdms),
             _ => None,
         }
     }
@@ -78,6 +87,7 @@ pub struct RawReader {
 enum Inner {
     Csv(Box<CsvFrames<Box<dyn BufRead>>>),
     Npy(NpyFrames<Box<dyn Read>>),
+    Tdms(Box<TdmsReader>, Vec<f64>),
 }
 
 impl std::fmt::Debug for RawReader {
@@ -94,12 +104,38 @@ impl RawReader {
     /// Opens `path` (its format by extension) with the sample rate
     /// `rate_hz` when given.
     pub fn open(path: &Path, rate_hz: Option<f64>) -> Result<Self, IoError> {
+        Self::open_channels(path, rate_hz, &[])
+    }
+
+    /// Opens `path` like [`open`](Self::open); a .tdms file's four
+    /// `channels` (`group/channel`, a unique channel name, or a TDMS path)
+    /// in the order vx1, vx2, vy1, vy2, or none for the default
+    /// ([`TdmsReader::from_reader`]). Channels given for another format are
+    /// an error.
+    pub fn open_channels(
+        path: &Path,
+        rate_hz: Option<f64>,
+        channels: &[String],
+    ) -> Result<Self, IoError> {
         let source = path.display().to_string();
         let format = RawFormat::of_path(path).ok_or_else(|| IoError::Structure {
             at: Location::file(&source),
-            message: "unknown raw recording format; expected a file ending in .csv or .npy"
+            message: "unknown raw recording format; expected a file ending in .csv, .npy or .tdms"
                 .to_string(),
         })?;
+        if format != RawFormat::Tdms && !channels.is_empty() {
+            return Err(IoError::Structure {
+                at: Location::file(&source),
+                message: "channels are named only for a .tdms recording; expected vx1, vx2, \
+                          vy1, vy2 columns"
+                    .to_string(),
+            });
+        }
+        if format == RawFormat::Tdms {
+            check_rate(&source, rate_hz)?;
+            let tdms = TdmsReader::open(path, channels, 4)?;
+            return Self::from_tdms(tdms, channels, rate_hz);
+        }
         let file = File::open(path).map_err(|e| IoError::Read {
             file: source.clone(),
             source: e,
@@ -115,16 +151,7 @@ impl RawReader {
         reader: impl BufRead + 'static,
         rate_hz: Option<f64>,
     ) -> Result<Self, IoError> {
-        if let Some(rate) = rate_hz {
-            if !(rate.is_finite() && rate > 0.0) {
-                return Err(IoError::Structure {
-                    at: Location::file(source),
-                    message: format!(
-                        "the sample rate {rate} Hz is not usable; expected a finite, positive --rate"
-                    ),
-                });
-            }
-        }
+        check_rate(source, rate_hz)?;
         let (inner, sample_rate_hz) = match format {
             RawFormat::Csv => {
                 let csv = CsvFrames::new(source, Box::new(reader) as Box<dyn BufRead>, rate_hz)?;
@@ -140,11 +167,68 @@ impl RawReader {
                 let npy = NpyFrames::new(source, Box::new(reader) as Box<dyn Read>)?;
                 (Inner::Npy(npy), rate)
             }
+            RawFormat::Tdms => {
+                return Err(IoError::Structure {
+                    at: Location::file(source),
+                    message: "a .tdms recording needs a seekable file; expected \
+                              RawReader::open or RawReader::from_tdms"
+                        .to_string(),
+                })
+            }
         };
         Ok(Self {
             source: source.to_string(),
             sample_rate_hz,
             inner,
+            frames: 0,
+        })
+    }
+
+    /// A TDMS recording of four selected channels; the rate from the
+    /// channels' `wf_increment` or `rate_hz` (with both, they must agree to
+    /// [`RATE_TOLERANCE`]).
+    pub fn from_tdms(
+        tdms: TdmsReader,
+        channels: &[String],
+        rate_hz: Option<f64>,
+    ) -> Result<Self, IoError> {
+        let source = tdms.source().to_string();
+        let bad = |message: String| IoError::Structure {
+            at: Location::file(&source),
+            message,
+        };
+        let names = tdms.channel_names();
+        if names.len() != 4 {
+            return Err(bad(format!(
+                "{} channels named ({}); expected four: vx1, vx2, vy1, vy2 in that order",
+                names.len(),
+                excerpt(&channels.join(", "))
+            )));
+        }
+        let increment = tdms.increment_s(RATE_TOLERANCE)?;
+        let rate = match (rate_hz, increment) {
+            (Some(rate), Some(dt)) if (rate * dt - 1.0).abs() > RATE_TOLERANCE => {
+                return Err(bad(format!(
+                    "--rate {rate} Hz disagrees with the channels' wf_increment {dt} s ({} Hz); \
+                     expected the same sample rate (or no --rate)",
+                    1.0 / dt
+                )))
+            }
+            (Some(rate), _) => rate,
+            (None, Some(dt)) => 1.0 / dt,
+            (None, None) => {
+                return Err(bad(format!(
+                    "the channels {} carry no wf_increment property; expected the sample rate as \
+                     --rate HZ",
+                    names.join(", ")
+                )))
+            }
+        };
+        check_rate(&source, Some(rate))?;
+        Ok(Self {
+            source,
+            sample_rate_hz: rate,
+            inner: Inner::Tdms(Box::new(tdms), Vec::new()),
             frames: 0,
         })
     }
@@ -169,9 +253,28 @@ impl RawReader {
         let n = match &mut self.inner {
             Inner::Csv(csv) => csv.read(out, max)?,
             Inner::Npy(npy) => npy.read(out, max)?,
+            Inner::Tdms(tdms, values) => {
+                values.clear();
+                let n = tdms.read_rows(values, max)?;
+                out.extend(values.chunks_exact(4).map(|v| [v[0], v[1], v[2], v[3]]));
+                n
+            }
         };
         self.frames += n as u64;
         Ok(n)
+    }
+}
+
+/// Refuses an unusable `--rate`.
+fn check_rate(source: &str, rate_hz: Option<f64>) -> Result<(), IoError> {
+    match rate_hz {
+        Some(rate) if !(rate.is_finite() && rate > 0.0) => Err(IoError::Structure {
+            at: Location::file(source),
+            message: format!(
+                "the sample rate {rate} Hz is not usable; expected a finite, positive --rate"
+            ),
+        }),
+        _ => Ok(()),
     }
 }
 

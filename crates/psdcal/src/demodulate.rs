@@ -42,7 +42,7 @@ const CHUNK: usize = 65_536;
 /// What `demodulate` reads and writes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DemodulateRequest {
-    /// raw.csv or raw.npy.
+    /// raw.csv, raw.npy or raw.tdms.
     pub raw: PathBuf,
     /// `--rate`, Hz (raw.npy needs it; raw.csv may carry `t_s` instead).
     pub rate_hz: Option<f64>,
@@ -56,6 +56,10 @@ pub struct DemodulateRequest {
     pub out: PathBuf,
     /// The demodulation's parameters.
     pub config: DemodConfig,
+    /// A .tdms recording's four channels (vx1, vx2, vy1, vy2 in order:
+    /// `group/channel`, a unique channel name or a TDMS path); empty: the
+    /// default (docs/formats.md).
+    pub channels: Vec<String>,
 }
 
 /// The fate of one (image, LED) of the schedule.
@@ -157,7 +161,7 @@ pub fn demodulate(request: &DemodulateRequest) -> Result<Demodulated> {
         .map_err(|e| Error::Options(e.to_string()))?;
     let schedule = Schedule::read(&request.schedule)?;
     let tones = request.tones.as_ref().map(Tones::read).transpose()?;
-    let mut reader = RawReader::open(&request.raw, request.rate_hz)?;
+    let mut reader = RawReader::open_channels(&request.raw, request.rate_hz, &request.channels)?;
     let fs = reader.sample_rate_hz();
     let mut buffer: Vec<Frame> = Vec::new();
     // Absolute index of buffer[0].

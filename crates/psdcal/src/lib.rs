@@ -102,6 +102,8 @@ mod summary;
 mod summary_text;
 mod table;
 mod track;
+mod track_input;
+mod track_rig;
 
 pub use advice::{advice, error_text};
 pub use aoa::{aoa_table, measurement, AoaTable};
@@ -150,7 +152,7 @@ pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan,
 pub use summary::Summary;
 pub use summary_text::summary_text;
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
-pub use track::{track, TrackRequest, TrackSummary};
+pub use track::{track, TrackRequest, TrackSummary, TrackTarget};
 
 pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, Warning};

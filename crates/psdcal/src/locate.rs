@@ -196,7 +196,7 @@ fn on_plane(
 }
 
 /// The rig of a rig file: every calibration read (each file once).
-fn load_rig(path: &Path, warnings: &mut Vec<String>) -> Result<(RigFile, Rig)> {
+pub(crate) fn load_rig(path: &Path, warnings: &mut Vec<String>) -> Result<(RigFile, Rig)> {
     let file = RigFile::read(path)?;
     let mut loaded: HashMap<&Path, LoadedSensor> = HashMap::new();
     let mut sensors = Vec::with_capacity(file.sensors.len());

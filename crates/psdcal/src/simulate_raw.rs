@@ -41,7 +41,7 @@ pub const FDMA_SPACING_HZ: f64 = 50.0;
 /// The raw recording to write besides the data set.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RawRequest {
-    /// raw.csv or raw.npy.
+    /// raw.csv, raw.npy or raw.tdms.
     pub format: RawFormat,
     /// Every LED of an image on at once, each at its own tone.
     pub fdma: bool,
@@ -114,14 +114,17 @@ pub fn simulate_raw_files(
     let out = &request.out;
     let name = match raw.format {
         RawFormat::Npy => "raw.npy",
+        RawFormat::Tdms => "raw.tdms",
         _ => "raw.csv",
     };
     let samples = plan.samples() as u64;
     let mut written: u64 = 0;
     let mut failure: Option<SimError> = None;
+    let mut tdms = psdcal_io::TdmsFrameWriter::new(RAW_SAMPLE_RATE_HZ);
     write_atomic(out.join(name), |w| {
         match raw.format {
             RawFormat::Npy => w.write_all(&npy_header(samples))?,
+            RawFormat::Tdms => {}
             _ => {
                 writeln!(w, "# {}", files.description)?;
                 writeln!(
@@ -136,6 +139,7 @@ pub fn simulate_raw_files(
             |frames: &[Frame]| -> std::result::Result<(), SinkError> {
                 match raw.format {
                     RawFormat::Npy => write_npy_frames(w, frames)?,
+                    RawFormat::Tdms => tdms.write(w, frames)?,
                     _ => write_csv_frames(w, written, RAW_SAMPLE_RATE_HZ, frames)?,
                 }
                 written += frames.len() as u64;

@@ -1,51 +1,66 @@
-//! `track`: angles of arrival from a live stream of raw samples
-//! (docs/model.md §8.5): CSV rows `vx1,vx2,vy1,vy2` (volts) in, as they
-//! arrive; per window of `round(window fs)` samples and per LED of
-//! tones.csv, one row `t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status` out,
-//! flushed at the end of each window (`daq-reader | psdcal track … |
-//! controller`).
+//! `track`: angles of arrival (one sensor) or positions (a rig) from a
+//! live stream of raw samples (docs/model.md §8.5): rows of
+//! `vx1,vx2,vy1,vy2` (volts) per sensor in, as they arrive (standard input,
+//! or a recording file: `track_input.rs`); per window of `round(window fs)`
+//! samples and per LED of tones.csv, one row out, flushed at the end of each
+//! window (`daq-reader | psdcal track … | controller`):
+//!
+//! - one sensor (`--calibration`): `t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status`;
+//! - a rig (`--rig`, one stream of `4 S` channels, `track_rig.rs`):
+//!   `t_s,led,sensors,x_world_mm,…,status`, the position and its covariance.
 //!
 //! Each window is demodulated on its own, exactly as `demodulate` treats a
 //! record of the same samples (its own filter start, frequency estimate and
 //! noise): the same samples give the same angles. `t_s` is the time of the
 //! window's first sample, counted from the first sample of the stream.
 //!
-//! Input lines: blank lines and `#` comments are skipped; a first line
-//! naming the columns (`vx1`, `vx2`, `vy1`, `vy2` in any order, extra
-//! columns ignored) sets their order, otherwise the first four fields are
-//! `vx1,vx2,vy1,vy2`. A line that is not four finite numbers (or longer
-//! than 1 MiB, or not UTF-8) gives a row with the status `malformed_line`
+//! A line that is not a sample gives a row with the status `malformed_line`
 //! and is not counted as a sample; the stream goes on. Statuses per LED:
 //! `ok`, `dark`, `saturated`, `too_short`, `tone_collision`, or the
-//! location code of an angle that cannot be computed (e.g.
-//! `outside_valid_region`).
+//! location code of an angle or position that cannot be computed (e.g.
+//! `outside_valid_region`, `too_few_sensors`).
 
-use std::io::{BufRead, Read, Write};
+use std::io::{BufRead, Write};
 use std::path::PathBuf;
 
-use psdcal_io::{Tones, MAX_LINE_BYTES};
+use psdcal_io::Tones;
 use psdcal_locate::{LocateOptions, Measurement};
 use psdcal_model::Amplitudes;
 use psdcal_signal::tones::check_separable;
-use psdcal_signal::{demodulate_record, DemodConfig, SignalError};
+use psdcal_signal::{demodulate_record, DemodConfig, RecordEstimate, SignalError};
 
 use crate::error::{Error, Result};
 use crate::sensor::LoadedSensor;
 use crate::table::{deg, num};
+use crate::track_input::{Sample, SampleSource};
+use crate::track_rig::TrackRig;
+
+/// Whose angles or positions `track` computes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TrackTarget {
+    /// One sensor's calibration.json: angles of arrival.
+    Sensor(PathBuf),
+    /// A rig.json: positions in the world frame from every sensor's stream.
+    Rig(PathBuf),
+}
 
 /// What `track` needs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TrackRequest {
-    /// calibration.json.
-    pub calibration: PathBuf,
-    /// Sample rate, Hz.
-    pub rate_hz: f64,
+    /// The sensor or the rig.
+    pub target: TrackTarget,
+    /// Sample rate, Hz (a recording file may carry it instead).
+    pub rate_hz: Option<f64>,
     /// tones.csv: the LEDs and their tones.
     pub tones: PathBuf,
     /// Window length, s.
     pub window_s: f64,
     /// The demodulation's parameters.
     pub config: DemodConfig,
+    /// A recording file to read instead of the input stream.
+    pub raw: Option<PathBuf>,
+    /// A .tdms recording's channels (four per sensor); empty: the default.
+    pub channels: Vec<String>,
 }
 
 /// What `track` saw.
@@ -61,20 +76,44 @@ pub struct TrackSummary {
 
 const HEADER: &str = "t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status";
 
-/// Runs the stream from `input` to `output` until the input ends. See the
-/// module documentation.
+/// The sensor or rig answering each window.
+enum Answerer {
+    Sensor(Box<LoadedSensor>),
+    Rig(Box<TrackRig>),
+}
+
+/// Runs the stream from `input` (or the request's recording file) to
+/// `output` until the input ends. See the module documentation.
 ///
-/// Errors: the calibration or tones file, an unusable rate, window or tone
-/// set (checked before the first sample), reading the input or writing the
-/// output.
+/// Errors: the calibration, rig or tones file, an unusable rate, window or
+/// tone set (checked before the first sample), reading the input or writing
+/// the output.
 pub fn track(
     request: &TrackRequest,
-    mut input: impl BufRead,
+    input: impl BufRead,
     mut output: impl Write,
 ) -> Result<TrackSummary> {
-    let sensor = LoadedSensor::read(&request.calibration)?;
+    let answerer = match &request.target {
+        TrackTarget::Sensor(path) => Answerer::Sensor(Box::new(LoadedSensor::read(path)?)),
+        TrackTarget::Rig(path) => Answerer::Rig(Box::new(TrackRig::load(path)?)),
+    };
+    let sensors: Vec<String> = match &answerer {
+        Answerer::Sensor(_) => vec![String::new()],
+        Answerer::Rig(rig) => rig.ids(),
+    };
     let tones = Tones::read(&request.tones)?;
-    let fs = request.rate_hz;
+    let (mut source, fs) = match &request.raw {
+        Some(path) => SampleSource::file(path, &sensors, &request.channels, request.rate_hz)?,
+        None => {
+            let fs = request.rate_hz.ok_or_else(|| {
+                Error::Options(
+                    "no --rate: the samples on standard input need their rate as --rate HZ"
+                        .to_string(),
+                )
+            })?;
+            (SampleSource::lines(input, sensors.clone()), fs)
+        }
+    };
     if !(fs.is_finite() && fs > 0.0) {
         return Err(Error::Options(format!(
             "--rate {fs}: expected a finite, positive sample rate"
@@ -112,111 +151,107 @@ pub fn track(
             }
         };
     }
-    emit!(writeln!(output, "{HEADER}").and_then(|()| output.flush()));
-    let mut columns: Option<[usize; 4]> = None;
-    let mut first_line = true;
-    let mut frames: Vec<[f64; 4]> = Vec::with_capacity(window);
-    let mut line = Vec::new();
+    let header = match &answerer {
+        Answerer::Sensor(_) => HEADER.to_string(),
+        Answerer::Rig(_) => crate::track_rig::HEADER.to_string(),
+    };
+    emit!(writeln!(output, "{header}").and_then(|()| output.flush()));
+    let empty_fields = header.matches(',').count() - 1;
+    let mut frames: Vec<Vec<[f64; 4]>> = vec![Vec::with_capacity(window); sensors.len()];
     let options = LocateOptions::default();
-    loop {
-        line.clear();
-        let read = (&mut input)
-            .take(MAX_LINE_BYTES as u64 + 1)
-            .read_until(b'\n', &mut line)
-            .map_err(|source| {
-                Error::Io(psdcal_io::IoError::Read {
-                    file: "standard input".to_string(),
-                    source,
-                })
-            })?;
-        if read == 0 {
-            break;
-        }
-        let too_long = line.len() > MAX_LINE_BYTES && line.last() != Some(&b'\n');
-        if too_long {
-            // Skip the rest of the line.
-            let mut rest = Vec::new();
-            let _ = input.read_until(b'\n', &mut rest);
-        }
-        let parsed = if too_long {
-            None
-        } else {
-            match std::str::from_utf8(&line) {
-                Ok(text) => {
-                    let text = text.trim();
-                    if text.is_empty() || text.starts_with('#') {
-                        continue;
-                    }
-                    let fields: Vec<&str> = text.split(',').map(str::trim).collect();
-                    if first_line && fields.iter().any(|f| f.eq_ignore_ascii_case("vx1")) {
-                        first_line = false;
-                        columns = header_columns(&fields);
-                        if columns.is_none() {
-                            return Err(Error::Input(format!(
-                                "standard input: the header '{}' lacks one of vx1, vx2, vy1, vy2",
-                                text.chars().take(60).collect::<String>()
-                            )));
-                        }
-                        continue;
-                    }
-                    first_line = false;
-                    sample(&fields, columns.unwrap_or([0, 1, 2, 3]))
-                }
-                Err(_) => None,
-            }
-        };
-        let Some(frame) = parsed else {
+    while let Some(sample) = source.next()? {
+        let Sample::Values(values) = sample else {
             summary.malformed += 1;
             let t = (summary.samples as f64) / fs;
-            emit!(writeln!(output, "{},,,,,malformed_line", num(t)).and_then(|()| output.flush()));
+            let commas = ",".repeat(empty_fields);
+            emit!(
+                writeln!(output, "{},{commas}malformed_line", num(t)).and_then(|()| output.flush())
+            );
             continue;
         };
-        frames.push(frame);
+        for (s, f) in frames.iter_mut().enumerate() {
+            f.push([
+                values[4 * s],
+                values[4 * s + 1],
+                values[4 * s + 2],
+                values[4 * s + 3],
+            ]);
+        }
         summary.samples += 1;
-        if frames.len() == window {
+        if frames[0].len() == window {
             let t0 = (summary.samples - window as u64) as f64 / fs;
-            let estimate = demodulate_record(&frames, fs, &freqs, &request.config);
-            for (k, tone) in tones.tones.iter().enumerate() {
-                let led = csv_field(&tone.led);
-                let row = match &estimate {
-                    Ok(est) => {
-                        let t = &est.tones[k];
-                        let snr = num(t.min_snr_db());
-                        if t.dark {
-                            format!("{},{led},,,{snr},dark", num(t0))
-                        } else {
-                            let a = t.amplitudes;
-                            let amps = Amplitudes {
-                                vx1: a[0],
-                                vx2: a[1],
-                                vy1: a[2],
-                                vy2: a[3],
-                            };
-                            match sensor.sensor.aoa(&Measurement::Amplitudes(amps), &options) {
-                                Ok(answer) => format!(
-                                    "{},{led},{},{},{snr},ok",
-                                    num(t0),
-                                    deg(answer.aoa.alpha.x),
-                                    deg(answer.aoa.alpha.y)
-                                ),
-                                Err(e) => format!("{},{led},,,{snr},{}", num(t0), e.status()),
-                            }
-                        }
-                    }
-                    Err(e) => format!("{},{led},,,,{}", num(t0), window_status(e)),
-                };
+            let estimates: Vec<_> = frames
+                .iter()
+                .map(|f| demodulate_record(f, fs, &freqs, &request.config))
+                .collect();
+            let rows = match &answerer {
+                Answerer::Sensor(sensor) => {
+                    sensor_rows(sensor, &tones, &estimates[0], t0, &options)
+                }
+                Answerer::Rig(rig) => rig.rows(&tones, &estimates, t0),
+            };
+            for row in rows {
                 emit!(writeln!(output, "{row}"));
             }
             emit!(output.flush());
             summary.windows += 1;
-            frames.clear();
+            frames.iter_mut().for_each(Vec::clear);
         }
     }
     Ok(summary)
 }
 
+/// One sensor's rows of a window: angles per LED.
+fn sensor_rows(
+    sensor: &LoadedSensor,
+    tones: &Tones,
+    estimate: &std::result::Result<RecordEstimate<4>, SignalError>,
+    t0: f64,
+    options: &LocateOptions,
+) -> Vec<String> {
+    let mut rows = Vec::with_capacity(tones.tones.len());
+    for (k, tone) in tones.tones.iter().enumerate() {
+        let led = csv_field(&tone.led);
+        let row = match estimate {
+            Ok(est) => {
+                let t = &est.tones[k];
+                let snr = num(t.min_snr_db());
+                if t.dark {
+                    format!("{},{led},,,{snr},dark", num(t0))
+                } else {
+                    match sensor
+                        .sensor
+                        .aoa(&Measurement::Amplitudes(amplitudes(&t.amplitudes)), options)
+                    {
+                        Ok(answer) => format!(
+                            "{},{led},{},{},{snr},ok",
+                            num(t0),
+                            deg(answer.aoa.alpha.x),
+                            deg(answer.aoa.alpha.y)
+                        ),
+                        Err(e) => format!("{},{led},,,{snr},{}", num(t0), e.status()),
+                    }
+                }
+            }
+            Err(e) => format!("{},{led},,,,{}", num(t0), window_status(e)),
+        };
+        rows.push(row);
+    }
+    rows
+}
+
+/// The four amplitudes as the model's type.
+pub(crate) fn amplitudes(a: &[f64; 4]) -> Amplitudes {
+    Amplitudes {
+        vx1: a[0],
+        vx2: a[1],
+        vy1: a[2],
+        vy2: a[3],
+    }
+}
+
 /// The status of a window that could not be demodulated.
-fn window_status(e: &SignalError) -> &'static str {
+pub(crate) fn window_status(e: &SignalError) -> &'static str {
     match e {
         SignalError::Saturated { .. } => "saturated",
         SignalError::RecordTooShortToDemodulate { .. } => "too_short",
@@ -225,27 +260,8 @@ fn window_status(e: &SignalError) -> &'static str {
     }
 }
 
-/// The positions of vx1, vx2, vy1, vy2 in a header.
-fn header_columns(fields: &[&str]) -> Option<[usize; 4]> {
-    let find = |name: &str| fields.iter().position(|f| f.eq_ignore_ascii_case(name));
-    Some([find("vx1")?, find("vx2")?, find("vy1")?, find("vy2")?])
-}
-
-/// Four finite numbers at `columns`.
-fn sample(fields: &[&str], columns: [usize; 4]) -> Option<[f64; 4]> {
-    let mut frame = [0.0; 4];
-    for (value, &c) in frame.iter_mut().zip(&columns) {
-        *value = fields
-            .get(c)?
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())?;
-    }
-    Some(frame)
-}
-
 /// A CSV field, quoted when it needs to be.
-fn csv_field(s: &str) -> String {
+pub(crate) fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) || s.starts_with('#') {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {

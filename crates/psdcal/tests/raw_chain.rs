@@ -1,7 +1,8 @@
 //! The raw path end to end (docs/model.md §8 "Demodulation"): a simulated
-//! raw recording (raw.csv or raw.npy with schedule.csv, tones.csv) through
-//! `demodulate` gives the amplitudes the internal signal chain gives —
-//! exactly without noise and impairments, the same file from csv and npy —
+//! raw recording (raw.csv, raw.npy or raw.tdms with schedule.csv, tones.csv)
+//! through `demodulate` gives the amplitudes the internal signal chain gives
+//! — exactly without noise and impairments, the same file from csv, npy and
+//! tdms —
 //! and, with noise and every impairment of a card, a calibration of the same
 //! angle-of-arrival quality as the internal chain's at the same SNR
 //! (seeded Monte Carlo).
@@ -33,10 +34,10 @@ fn request(dir: &Path, snr_db: Option<f64>, seed: u64) -> SimulateRequest {
 }
 
 fn demodulated(dir: &Path, format: RawFormat, fdma: bool, out: &str) -> psdcal::Demodulated {
-    let raw = dir.join(if format == RawFormat::Npy {
-        "raw.npy"
-    } else {
-        "raw.csv"
+    let raw = dir.join(match format {
+        RawFormat::Npy => "raw.npy",
+        RawFormat::Tdms => "raw.tdms",
+        _ => "raw.csv",
     });
     demodulate(&DemodulateRequest {
         raw,
@@ -46,6 +47,7 @@ fn demodulated(dir: &Path, format: RawFormat, fdma: bool, out: &str) -> psdcal::
         frequency_hz: psdcal::RAW_F0_HZ,
         out: dir.join(out),
         config: DemodConfig::default(),
+        channels: Vec::new(),
     })
     .unwrap()
 }
@@ -54,7 +56,7 @@ fn demodulated(dir: &Path, format: RawFormat, fdma: bool, out: &str) -> psdcal::
 fn noise_free_raw_recordings_give_the_exact_amplitudes() {
     let dir = tempfile::tempdir().unwrap();
     for fdma in [false, true] {
-        for format in [RawFormat::Csv, RawFormat::Npy] {
+        for format in [RawFormat::Csv, RawFormat::Npy, RawFormat::Tdms] {
             let raw = RawRequest {
                 format,
                 fdma,
@@ -79,8 +81,8 @@ fn noise_free_raw_recordings_give_the_exact_amplitudes() {
                 }
             }
         }
-        // The same signals.csv from raw.csv and raw.npy (after the comment
-        // line naming the source).
+        // The same signals.csv from raw.csv, raw.npy and raw.tdms (after the
+        // comment line naming the source).
         let body = |f: RawFormat| {
             let text =
                 std::fs::read_to_string(dir.path().join(format!("signals_{fdma}_{f:?}.csv")))
@@ -88,6 +90,7 @@ fn noise_free_raw_recordings_give_the_exact_amplitudes() {
             text.lines().skip(1).collect::<Vec<_>>().join("\n")
         };
         assert_eq!(body(RawFormat::Csv), body(RawFormat::Npy));
+        assert_eq!(body(RawFormat::Csv), body(RawFormat::Tdms));
     }
 }
 
@@ -232,11 +235,13 @@ fn track_gives_the_angles_of_demodulate() {
     let mut out = Vec::new();
     let summary = psdcal::track(
         &psdcal::TrackRequest {
-            calibration: d.join("cal.json"),
-            rate_hz: psdcal::RAW_SAMPLE_RATE_HZ,
+            target: psdcal::TrackTarget::Sensor(d.join("cal.json")),
+            rate_hz: Some(psdcal::RAW_SAMPLE_RATE_HZ),
             tones: d.join("tones.csv"),
             window_s: 0.065,
             config: DemodConfig::default(),
+            raw: None,
+            channels: Vec::new(),
         },
         stream.as_bytes(),
         &mut out,
@@ -245,6 +250,35 @@ fn track_gives_the_angles_of_demodulate() {
     assert_eq!((summary.windows, summary.malformed), (9, 1));
     let out = String::from_utf8(out).unwrap();
     let rows: Vec<&str> = out.lines().collect();
+    // The same recording as raw.tdms, read with --raw (its rate from
+    // wf_increment): the same rows but the malformed line's.
+    let raw_tdms = RawRequest {
+        format: RawFormat::Tdms,
+        ..raw
+    };
+    simulate_raw_files(&request(d, Some(40.0), 8), &raw_tdms).unwrap();
+    let mut from_file = Vec::new();
+    psdcal::track(
+        &psdcal::TrackRequest {
+            target: psdcal::TrackTarget::Sensor(d.join("cal.json")),
+            rate_hz: None,
+            tones: d.join("tones.csv"),
+            window_s: 0.065,
+            config: DemodConfig::default(),
+            raw: Some(d.join("raw.tdms")),
+            channels: Vec::new(),
+        },
+        &b""[..],
+        &mut from_file,
+    )
+    .unwrap();
+    let from_file = String::from_utf8(from_file).unwrap();
+    let without_malformed: Vec<&str> = rows
+        .iter()
+        .copied()
+        .filter(|r| !r.ends_with("malformed_line"))
+        .collect();
+    assert_eq!(from_file.lines().collect::<Vec<_>>(), without_malformed);
     assert_eq!(rows[0], "t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status");
     assert_eq!(rows[15], "0.065,,,,,malformed_line");
     let sensor = psdcal::LoadedSensor::read(&d.join("cal.json")).unwrap();

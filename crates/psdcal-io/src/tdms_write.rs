@@ -1,0 +1,105 @@
+//! raw.tdms as psdcal writes it (`simulate --raw tdms`; the layout of
+//! `tdms_meta.rs`): little-endian, contiguous float64 channels `vx1`, `vx2`,
+//! `vy1`, `vy2` in the group `psd`, each with `wf_increment = 1/rate` and
+//! `unit_string = V`. The first block of frames is a segment with the
+//! metadata (a new object list); each later block is a segment of raw data
+//! only when it holds as many frames as the previous one, else a segment
+//! whose incremental metadata gives the channels their new value count.
+
+use crate::raw::Frame;
+
+const TOC_META: u32 = 1 << 1;
+const TOC_NEW_LIST: u32 = 1 << 2;
+const TOC_RAW: u32 = 1 << 3;
+/// tdsTypeDoubleFloat, tdsTypeString.
+const F64: u32 = 10;
+const STRING: u32 = 0x20;
+
+/// Writes frames as TDMS segments, block by block.
+#[derive(Debug, Clone)]
+pub struct TdmsFrameWriter {
+    rate_hz: f64,
+    last_count: Option<usize>,
+}
+
+fn string(out: &mut Vec<u8>, s: &str) {
+    out.extend_from_slice(&(s.len() as u32).to_le_bytes());
+    out.extend_from_slice(s.as_bytes());
+}
+
+impl TdmsFrameWriter {
+    /// A writer of a recording sampled at `rate_hz`.
+    pub fn new(rate_hz: f64) -> Self {
+        Self {
+            rate_hz,
+            last_count: None,
+        }
+    }
+
+    /// Writes `frames` as one segment (nothing for no frames).
+    pub fn write(&mut self, w: &mut impl std::io::Write, frames: &[Frame]) -> std::io::Result<()> {
+        let n = frames.len();
+        if n == 0 {
+            return Ok(());
+        }
+        let mut meta = Vec::new();
+        let toc = match self.last_count {
+            None => {
+                meta.extend_from_slice(&6u32.to_le_bytes());
+                string(&mut meta, "/");
+                meta.extend_from_slice(&u32::MAX.to_le_bytes());
+                meta.extend_from_slice(&0u32.to_le_bytes());
+                string(&mut meta, "/'psd'");
+                meta.extend_from_slice(&u32::MAX.to_le_bytes());
+                meta.extend_from_slice(&0u32.to_le_bytes());
+                for c in crate::tdms::TDMS_DEFAULT_CHANNELS {
+                    string(&mut meta, &format!("/'psd'/'{c}'"));
+                    index(&mut meta, n);
+                    meta.extend_from_slice(&2u32.to_le_bytes());
+                    string(&mut meta, "wf_increment");
+                    meta.extend_from_slice(&F64.to_le_bytes());
+                    meta.extend_from_slice(&(1.0 / self.rate_hz).to_le_bytes());
+                    string(&mut meta, "unit_string");
+                    meta.extend_from_slice(&STRING.to_le_bytes());
+                    string(&mut meta, "V");
+                }
+                TOC_META | TOC_NEW_LIST | TOC_RAW
+            }
+            Some(last) if last == n => TOC_RAW,
+            Some(_) => {
+                meta.extend_from_slice(&4u32.to_le_bytes());
+                for c in crate::tdms::TDMS_DEFAULT_CHANNELS {
+                    string(&mut meta, &format!("/'psd'/'{c}'"));
+                    index(&mut meta, n);
+                    meta.extend_from_slice(&0u32.to_le_bytes());
+                }
+                TOC_META | TOC_RAW
+            }
+        };
+        self.last_count = Some(n);
+        let data = (n * 4 * 8) as u64;
+        w.write_all(b"TDSm")?;
+        w.write_all(&toc.to_le_bytes())?;
+        w.write_all(&4713u32.to_le_bytes())?;
+        w.write_all(&(meta.len() as u64 + data).to_le_bytes())?;
+        w.write_all(&(meta.len() as u64).to_le_bytes())?;
+        w.write_all(&meta)?;
+        let mut buf = Vec::with_capacity(n * 8);
+        for c in 0..4 {
+            buf.clear();
+            for f in frames {
+                buf.extend_from_slice(&f[c].to_le_bytes());
+            }
+            w.write_all(&buf)?;
+        }
+        Ok(())
+    }
+}
+
+/// A raw data index of `n` float64 values.
+fn index(meta: &mut Vec<u8>, n: usize) {
+    meta.extend_from_slice(&20u32.to_le_bytes());
+    meta.extend_from_slice(&F64.to_le_bytes());
+    meta.extend_from_slice(&1u32.to_le_bytes());
+    meta.extend_from_slice(&(n as u64).to_le_bytes());
+}
