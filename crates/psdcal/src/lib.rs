@@ -83,6 +83,7 @@ mod provenance;
 mod psd_map;
 mod report;
 mod report_tables;
+mod report_views;
 mod residuals;
 mod sensor;
 mod simulate;
