@@ -92,6 +92,7 @@ mod simulate_raw;
 mod simulate_scan;
 mod study;
 mod study_page;
+mod study_psd_map;
 mod summary_text;
 mod table;
 mod track;
@@ -134,6 +135,7 @@ pub use simulate_raw::{
 };
 pub use simulate_scan::{scan_samples, simulate_scan_file, ScanRequest, SimulatedScan};
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
+pub use study_psd_map::{pooled, psd_map_seed, SeedErrors};
 pub use summary_text::summary_text;
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
 pub use track::{track, TrackRequest, TrackSummary};
