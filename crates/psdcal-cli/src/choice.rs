@@ -85,6 +85,8 @@ pub enum TableArg {
     Table9,
     Table10,
     Fig9,
+    /// The PSD map's condition (run only when named).
+    Psdmap,
     All,
 }
 

@@ -63,7 +63,7 @@ pub struct SimulateArgs {
 /// Arguments of `psdcal study`.
 #[derive(Debug, Args)]
 pub struct StudyArgs {
-    /// Tables to run: table1 ... table10, fig9, or all
+    /// Tables to run: table1 ... table10, fig9, psdmap (the PSD map's condition), or all
     #[arg(value_name = "TABLE", default_value = "all", value_parser = choice::<TableArg>)]
     pub tables: Vec<TableArg>,
     /// Trials per condition

@@ -280,3 +280,65 @@ fn impossible_rigs_are_usage_errors() {
         stderr(&out)
     );
 }
+
+#[test]
+fn emitters_not_located_are_failures_not_silently_dropped() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = dir.path().join("truth.csv");
+    let est = dir.path().join("est.csv");
+    fs::write(
+        &truth,
+        "emitter,x_mm,y_mm,z_mm\na,0,0,0\nb,100,0,0\nc,0,100,0\nd,0,0,100\ne,50,50,50\n",
+    )
+    .unwrap();
+    // Errors 1, 2, 3, 4 mm along x; e not located.
+    fs::write(
+        &est,
+        "emitter,sensors,x_world_mm,y_world_mm,z_world_mm,status\n\
+         a,l;r,1,0,0,ok\nb,l;r,102,0,0,ok\nc,l;r,3,100,0,ok\nd,l;r,4,0,100,ok\n\
+         e,l,,,,too_few_sensors\n",
+    )
+    .unwrap();
+    let out = psdcal([
+        "--json",
+        "evaluate",
+        "--truth",
+        truth.to_str().unwrap(),
+        "--estimates",
+        est.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("counted as failures"),
+        "{}",
+        stderr(&out)
+    );
+    let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(json["n"], 4);
+    assert_eq!(json["not_located"], 1);
+    assert_eq!(json["attempted"], 5);
+    assert_eq!(json["failures"], 1);
+    close(json["success_rate"].as_f64().unwrap(), 0.8, "success rate");
+    // Over the located only: p75 of 1, 2, 3, 4 is 3.25; with the failure
+    // as +∞ (N = 5): the median is 3, the 75th percentile 4, the 95th
+    // infinite (null), CE95 too.
+    close(json["p75_mm"].as_f64().unwrap(), 3.25, "p75 located");
+    close(
+        json["median_with_failures_mm"].as_f64().unwrap(),
+        3.0,
+        "median",
+    );
+    close(json["p75_with_failures_mm"].as_f64().unwrap(), 4.0, "p75");
+    assert!(json["p95_with_failures_mm"].is_null());
+    assert!(json["ce95_with_failures_mm"].is_null());
+    let out = psdcal([
+        "evaluate",
+        "--truth",
+        truth.to_str().unwrap(),
+        "--estimates",
+        est.to_str().unwrap(),
+    ]);
+    let text = stdout(&out);
+    assert!(text.contains("4 / 5 (80.0 %)"), "{text}");
+    assert!(text.contains("infinite (too many failures)"), "{text}");
+}

@@ -280,3 +280,43 @@ fn longer_records_average_the_noise_down() {
         stderr(&run)
     );
 }
+
+/// `psdcal study psdmap`: the PSD map's condition (EXPERIMENTS.md) from
+/// the command line, its section in study.md and its numbers in study.json
+/// equal to the facade's experiment run here for the same seed.
+#[test]
+fn study_runs_the_psd_map_condition() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("study");
+    let run = psdcal([
+        "-q",
+        "study",
+        "psdmap",
+        "--trials",
+        "1",
+        "--seed",
+        "5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let md = std::fs::read_to_string(out.join("study.md")).unwrap();
+    assert!(md.contains("non-radial non-linearity"), "{md}");
+    assert!(
+        !out.join(".psdmap-work").exists(),
+        "the work folder is removed"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("study.json")).unwrap()).unwrap();
+    let seed = &json["psd_map"]["seeds"][0];
+    let again = ::psdcal::psd_map_seed(&dir.path().join("again"), 5, false).unwrap();
+    assert_eq!(seed["map"].as_f64().unwrap(), again.map);
+    assert_eq!(seed["l1"].as_f64().unwrap(), again.l1);
+    assert_eq!(seed["clean"].as_f64().unwrap(), again.clean);
+    // The condition's claim on this seed: the map beats freeing l1.
+    assert!(again.map < again.l1, "{again:?}");
+}

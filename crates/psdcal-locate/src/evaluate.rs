@@ -22,6 +22,17 @@
 //! Gaussian errors the fraction inside is 0.95 up to sampling
 //! (`±2√(0.95·0.05/n)`). Angles: the error of `(αx, αy)` in radians, its
 //! size `√(Δαx² + Δαy²)`.
+//!
+//! **Failures** (emitters the system did not locate) are not dropped
+//! silently: [`with_failures`] counts them. With `n` located and `k` failed
+//! of `N = n + k` attempted, the success rate (availability) is `n / N`,
+//! and the failure-inclusive percentiles are those of the `N` sizes with
+//! every failure an error of `+∞` (as the EvAAL/IPIN rules score a missing
+//! estimate by a penalty larger than any error): the same definition 7 over
+//! `N` values, `+∞` as soon as the interpolation touches a failure
+//! (`None`: the percentile is not reached). Mean, RMS, bias and the
+//! ellipsoid fraction remain over the located pairs (an infinite error has
+//! no mean), and are reported next to the success rate.
 
 use nalgebra::{SMatrix, SVector, Vector2, Vector3};
 
@@ -113,6 +124,64 @@ pub fn percentile(sorted: &[f64], q: f64) -> Option<f64> {
     let lo = h.floor() as usize;
     let hi = (lo + 1).min(n - 1);
     Some(sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo]))
+}
+
+/// The `q`-quantile (definition 7) of `sorted` (finite, ascending) followed
+/// by `failures` values of `+∞`: `None` when the interpolation reaches a
+/// failure (the percentile is infinite) or there is no value at all.
+pub fn percentile_with_failures(sorted: &[f64], failures: usize, q: f64) -> Option<f64> {
+    let finite = sorted.len();
+    let n = finite + failures;
+    if n == 0 || !(0.0..=1.0).contains(&q) {
+        return None;
+    }
+    let h = (n - 1) as f64 * q;
+    let lo = h.floor() as usize;
+    let hi = (lo + 1).min(n - 1);
+    let frac = h - lo as f64;
+    if lo >= finite || (hi >= finite && frac > 0.0) {
+        return None;
+    }
+    let upper = if hi < finite { sorted[hi] } else { sorted[lo] };
+    Some(sorted[lo] + frac * (upper - sorted[lo]))
+}
+
+/// Statistics that count the emitters not located (module documentation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FailureStats {
+    /// Emitters attempted: located and failed.
+    pub attempted: usize,
+    /// Emitters not located.
+    pub failures: usize,
+    /// Located / attempted (the availability).
+    pub success_rate: f64,
+    /// Median error with failures as `+∞` (`None`: infinite).
+    pub median: Option<f64>,
+    /// 75th percentile (the EvAAL score) with failures as `+∞`.
+    pub p75: Option<f64>,
+    /// 95th percentile with failures as `+∞`.
+    pub p95: Option<f64>,
+}
+
+/// The failure-aware statistics of the located error sizes `sizes` (any
+/// order, finite) and `failures` emitters not located; `None` when nothing
+/// was attempted.
+pub fn with_failures(sizes: &[f64], failures: usize) -> Option<FailureStats> {
+    let attempted = sizes.len() + failures;
+    if attempted == 0 {
+        return None;
+    }
+    let mut sorted = sizes.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let q = |p: f64| percentile_with_failures(&sorted, failures, p);
+    Some(FailureStats {
+        attempted,
+        failures,
+        success_rate: sizes.len() as f64 / attempted as f64,
+        median: q(0.5),
+        p75: q(0.75),
+        p95: q(0.95),
+    })
 }
 
 /// Whether `e` lies inside the 95 % region of `cov` (`eᵀ Σ⁻¹ e ≤ q`),

@@ -74,8 +74,9 @@ pub use camera_fit::{fit_opencv, CameraFit, CameraFitOptions, OpenCvKind};
 pub use caution::{status_of, Caution};
 pub use error::LocateError;
 pub use evaluate::{
-    evaluate_angles, evaluate_positions, percentile, AngleEvaluation, AnglePair, ErrorStats,
-    PositionEvaluation, PositionPair, CHI2_95_2D, CHI2_95_3D,
+    evaluate_angles, evaluate_positions, percentile, percentile_with_failures, with_failures,
+    AngleEvaluation, AnglePair, ErrorStats, FailureStats, PositionEvaluation, PositionPair,
+    CHI2_95_2D, CHI2_95_3D,
 };
 pub use maps::{error_map, ErrorMap, ErrorSource, MapCell, MapOptions, MapValues, MAX_GRID};
 pub use opencv_model::{OpenCv8, OPENCV8_LEN, OPENCV8_NAMES};

@@ -15,7 +15,11 @@
 //! sampling:
 //! rays through a 17 × 17 grid over each sensor's active area, points along
 //! them from 10 mm to 1 km (40 logarithmic steps), projected into the other
-//! sensor. An emitter whose observing sensors include no sharing pair is
+//! sensor. Both directions use each sensor's whole model
+//! ([`CalibratedSensor::chain`]: its PSD map first, when it has one): a
+//! measured point's ray is `chain.ray(m)` and is used only where the sensor
+//! answers (inside its valid region and its map's hull); a point's measured
+//! point is the chain's inverse of its ideal point. An emitter whose observing sensors include no sharing pair is
 //! answered only if the triangulated point lies in front of all of them and
 //! projects onto each of their active areas; otherwise it fails with
 //! [`LocateError::NoSharedView`].
@@ -25,9 +29,8 @@ use std::sync::Mutex;
 
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 use psdcal_model::sensor::is_on_active_area;
-use psdcal_model::{Pose, PsdGeometry};
+use psdcal_model::{Model, Pose, PsdGeometry};
 
-use crate::aoa::angle_of_arrival;
 use crate::caution::Caution;
 use crate::error::{exceeds, LocateError};
 use crate::sensor::{AoaEstimate, CalibratedSensor, LocateOptions, Measurement};
@@ -57,6 +60,8 @@ pub struct RigSensor {
 pub struct Rig {
     sensors: Vec<RigSensor>,
     ids: HashMap<String, usize>,
+    /// Each sensor's whole model ([`CalibratedSensor::chain`]).
+    chains: Vec<Model>,
     /// Pairs `(i, j)`, `i < j`, checked so far, and whether they share a view.
     shared: Mutex<HashMap<(usize, usize), bool>>,
 }
@@ -66,6 +71,7 @@ impl Clone for Rig {
         Self {
             sensors: self.sensors.clone(),
             ids: self.ids.clone(),
+            chains: self.chains.clone(),
             shared: Mutex::new(self.shared_views().clone()),
         }
     }
@@ -114,9 +120,11 @@ impl Rig {
             }
             s.sensor.model.validate()?;
         }
+        let chains = sensors.iter().map(|s| s.sensor.chain()).collect();
         Ok(Self {
             sensors,
             ids,
+            chains,
             shared: Mutex::new(HashMap::new()),
         })
     }
@@ -148,7 +156,8 @@ impl Rig {
         if let Some(&known) = self.shared_views().get(&key) {
             return known;
         }
-        let (a, b) = (&self.sensors[key.0], &self.sensors[key.1]);
+        let a = (&self.sensors[key.0], &self.chains[key.0]);
+        let b = (&self.sensors[key.1], &self.chains[key.1]);
         let shared = sees_into(a, b) || sees_into(b, a);
         self.shared_views().insert(key, shared);
         shared
@@ -255,9 +264,13 @@ impl Rig {
             Err(e) => return Err(e),
         };
         if !any_shared
-            && !sensors
-                .iter()
-                .all(|&k| in_view(&self.sensors[k], &triangulation.position, VIEW_MARGIN))
+            && !sensors.iter().all(|&k| {
+                in_view(
+                    (&self.sensors[k], &self.chains[k]),
+                    &triangulation.position,
+                    VIEW_MARGIN,
+                )
+            })
         {
             return Err(no_view());
         }
@@ -276,10 +289,14 @@ impl Rig {
     }
 }
 
-/// Whether a world point is in front of a sensor and projects onto its
-/// active area enlarged by `margin` (relative).
-fn in_view(sensor: &RigSensor, p_world: &Vector3<f64>, margin: f64) -> bool {
-    let pose = &sensor.world_from_sensor;
+/// A rig sensor with its whole model.
+type Viewer<'a> = (&'a RigSensor, &'a Model);
+
+/// Whether a world point is in front of a sensor and projects, through the
+/// sensor's whole model, onto its active area enlarged by `margin`
+/// (relative).
+fn in_view(sensor: Viewer, p_world: &Vector3<f64>, margin: f64) -> bool {
+    let pose = &sensor.0.world_from_sensor;
     in_view_of(
         sensor,
         &pose.rotation().transpose(),
@@ -290,9 +307,10 @@ fn in_view(sensor: &RigSensor, p_world: &Vector3<f64>, margin: f64) -> bool {
 }
 
 /// [`in_view`] with the sensor's rotation `R` (world from sensor) given as
-/// `Rᵀ` and its origin `t`.
+/// `Rᵀ` and its origin `t`. Without a margin the measured point must also
+/// be one the sensor answers (its valid region, its map's hull).
 fn in_view_of(
-    sensor: &RigSensor,
+    (sensor, chain): Viewer,
     r_transposed: &Matrix3<f64>,
     origin: &Vector3<f64>,
     p_world: &Vector3<f64>,
@@ -302,11 +320,8 @@ fn in_view_of(
     if !exceeds(p.z, 0.0) {
         return false;
     }
-    let model = &sensor.sensor.model;
-    let Ok(ideal) = model.pinhole_project(&p) else {
-        return false;
-    };
-    let Ok(m) = model.distort(&ideal) else {
+    let ideal = chain.ideal_of_ray(&Vector2::new(p.x / p.z, p.y / p.z));
+    let Ok(m) = chain.measured_from_ideal(&ideal) else {
         return false;
     };
     let g = &sensor.sensor.geometry;
@@ -314,15 +329,22 @@ fn in_view_of(
         lx: g.lx * (1.0 + margin),
         ly: g.ly * (1.0 + margin),
     };
-    is_on_active_area(&enlarged, &m)
+    is_on_active_area(&enlarged, &m) && (margin > 0.0 || answers(sensor, chain, &m))
 }
 
-/// Whether some ray of `from`'s active area has a point (10 mm – 1 km away)
-/// in `to`'s view.
-fn sees_into(from: &RigSensor, to: &RigSensor) -> bool {
-    let g = &from.sensor.geometry;
-    let rotation = from.world_from_sensor.rotation();
-    let to_rt = to.world_from_sensor.rotation().transpose();
+/// Whether the sensor answers at measured point `m`: inside its valid
+/// region and every stage's domain (its map's hull).
+fn answers(sensor: &RigSensor, chain: &Model, m: &Vector2<f64>) -> bool {
+    sensor.sensor.check_valid_region(m).is_ok() && chain.in_domain(m)
+}
+
+/// Whether some ray of `from`'s active area (where it answers) has a point
+/// (10 mm – 1 km away) in `to`'s view.
+fn sees_into(from: Viewer, to: Viewer) -> bool {
+    let (sensor, chain) = from;
+    let g = &sensor.sensor.geometry;
+    let rotation = sensor.world_from_sensor.rotation();
+    let to_rt = to.0.world_from_sensor.rotation().transpose();
     let last = (VIEW_GRID - 1) as f64;
     for iy in 0..VIEW_GRID {
         for ix in 0..VIEW_GRID {
@@ -330,14 +352,18 @@ fn sees_into(from: &RigSensor, to: &RigSensor) -> bool {
                 g.lx * (ix as f64 / last - 0.5),
                 g.ly * (iy as f64 / last - 0.5),
             );
-            let Ok(aoa) = angle_of_arrival(&from.sensor.model, &m) else {
+            if !answers(sensor, chain, &m) {
                 continue;
-            };
-            let d = rotation * aoa.direction.into_inner();
+            }
+            let ab = chain.ray(&m);
+            if !(ab.x.is_finite() && ab.y.is_finite()) {
+                continue;
+            }
+            let d = rotation * Vector3::new(ab.x, ab.y, 1.0).normalize();
             for k in 0..VIEW_DISTANCES {
                 let range = 10.0 * 1e5f64.powf(k as f64 / (VIEW_DISTANCES - 1) as f64);
-                let p = from.world_from_sensor.t + d * range;
-                if in_view_of(to, &to_rt, &to.world_from_sensor.t, &p, 0.0) {
+                let p = sensor.world_from_sensor.t + d * range;
+                if in_view_of(to, &to_rt, &to.0.world_from_sensor.t, &p, 0.0) {
                     return true;
                 }
             }

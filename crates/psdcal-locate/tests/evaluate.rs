@@ -258,3 +258,58 @@ fn bad_inputs_are_typed_errors() {
     pairs[0].covariance = None;
     assert_eq!(evaluate_positions(&pairs).unwrap().stats.within_95, None);
 }
+
+/// Definition 7 over the located sizes and `failures` copies of a finite
+/// `penalty`, written independently of the library.
+fn with_penalty(sizes: &[f64], failures: usize, penalty: f64, q: f64) -> f64 {
+    let mut all = sizes.to_vec();
+    all.extend(std::iter::repeat_n(penalty, failures));
+    quantile_1_based(&all, q)
+}
+
+#[test]
+fn failures_count_as_infinite_errors_in_the_percentiles() {
+    // Closed form: sizes 1, 2, 3, 4 and one failure, N = 5: the median is
+    // the 3rd value (3), the 75th percentile the 4th exactly (4), the 95th
+    // interpolates towards the failure (infinite).
+    let s = psdcal_locate::with_failures(&[4.0, 1.0, 3.0, 2.0], 1).unwrap();
+    assert_eq!((s.attempted, s.failures), (5, 1));
+    close(s.success_rate, 0.8, "success rate");
+    assert_eq!((s.median, s.p75, s.p95), (Some(3.0), Some(4.0), None));
+    assert!(psdcal_locate::with_failures(&[], 0).is_none());
+    let all_failed = psdcal_locate::with_failures(&[], 3).unwrap();
+    assert_eq!((all_failed.success_rate, all_failed.median), (0.0, None));
+    // Seeded data against a huge finite penalty: a finite percentile equals
+    // the penalised one; an infinite one is the one the penalty moves.
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut infinite_seen = 0;
+    for _ in 0..200 {
+        let n = rng.random_range(1..40);
+        let k = rng.random_range(0..12);
+        let sizes: Vec<f64> = (0..n).map(|_| rng.random_range(0.0..50.0)).collect();
+        let s = psdcal_locate::with_failures(&sizes, k).unwrap();
+        close(s.success_rate, n as f64 / (n + k) as f64, "success rate");
+        for (q, got) in [(0.5, s.median), (0.75, s.p75), (0.95, s.p95)] {
+            let (a, b) = (
+                with_penalty(&sizes, k, 1e9, q),
+                with_penalty(&sizes, k, 1e12, q),
+            );
+            match got {
+                Some(v) => {
+                    close(v, a, "finite percentile");
+                    close(v, b, "finite percentile");
+                }
+                None => {
+                    infinite_seen += 1;
+                    assert!(b > 1e3 * a.max(1.0) * 0.5 && b > 1e8, "{a} {b}");
+                }
+            }
+        }
+        if k == 0 {
+            let mut sorted = sizes.clone();
+            sorted.sort_by(f64::total_cmp);
+            assert_eq!(s.p75, percentile(&sorted, 0.75));
+        }
+    }
+    assert!(infinite_seen > 20, "{infinite_seen}");
+}

@@ -12,6 +12,7 @@ use crate::error_map::{heat_map_png, heat_map_svg, HeatCell};
 use crate::histogram::{counts_histogram_png, counts_histogram_svg};
 use crate::html::{Block, Page, Table};
 use crate::plot::{Arrow, ArrowSet, Frame, PointSet};
+use crate::poses::{poses_png, poses_svg, PoseOutline};
 use crate::residuals::{residuals_png, residuals_svg};
 use crate::sensitivity::{aoa_sensitivity_svg, line_plot_png, paper_sensitivity_curves};
 
@@ -83,6 +84,15 @@ pub enum PlotData {
         /// Title, labels, ranges.
         frame: Frame,
     },
+    /// The template poses relative to the sensor, an oblique 3-D view.
+    Poses {
+        /// One outline per image, sensor frame.
+        poses: Vec<PoseOutline>,
+        /// Active area, mm.
+        sensor: (f64, f64),
+        /// Title.
+        title: String,
+    },
     /// A heat map over the sensor (Figure 9).
     HeatMap {
         /// Cells.
@@ -143,6 +153,11 @@ impl Plot {
                 frame,
                 label,
             } => heat_map_svg(cells, *step, frame, label),
+            PlotData::Poses {
+                poses,
+                sensor,
+                title,
+            } => poses_svg(poses, *sensor, title),
         }
     }
 
@@ -193,6 +208,11 @@ impl Plot {
                 frame,
                 label,
             } => heat_map_png(cells, *step, frame, label, path),
+            PlotData::Poses {
+                poses,
+                sensor,
+                title,
+            } => poses_png(poses, *sensor, title, path),
         }
     }
 }

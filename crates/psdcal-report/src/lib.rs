@@ -15,6 +15,7 @@
 //! | Monte Carlo histograms | [`histogram_svg`] |
 //! | scatter plots | [`scatter_svg`] |
 //! | bar charts (per-image RMS) | [`bar_chart_svg`] |
+//! | the template poses relative to the sensor, in 3-D | [`poses_svg`] |
 //! | a positioning evaluation (error CDF, error vectors, error against distance) | [`evaluation_page`] |
 //!
 //! Pages ([`Page`]) are one HTML file with inline SVG, an inline style
@@ -35,6 +36,7 @@ pub mod histogram;
 pub mod html;
 pub mod number;
 mod plot;
+pub mod poses;
 pub mod residuals;
 pub mod scatter;
 pub mod sensitivity;
@@ -54,6 +56,7 @@ pub use histogram::{
 pub use html::{correlation_colour, inline_svg, Block, Page, Table};
 pub use number::{num, unit_text, value_with_sigma};
 pub use plot::{count_label, tick_label, Arrow, ArrowSet, Frame, PointSet};
+pub use poses::{poses_png, poses_svg, PoseOutline};
 pub use residuals::{residuals_png, residuals_svg};
 pub use scatter::{scatter_png, scatter_svg};
 pub use sensitivity::{

@@ -5,8 +5,10 @@
 //!
 //! Inputs: truth.csv and the estimates (psdcal-io's `positioning`: the CSV
 //! `psdcal locate` or `psdcal aoa` writes), matched by `emitter`. Estimates
-//! that were not answered (a failure status, empty values) are counted and
-//! left out of the statistics. With a rig file, the page plots the error
+//! that were not answered (a failure status, empty values) are failures:
+//! counted, reported as the success rate, and entered as infinite errors in
+//! the failure-inclusive percentiles (psdcal-locate's `with_failures`); the
+//! mean, RMS and bias are over the located emitters. With a rig file, the page plots the error
 //! against the distance to the nearest sensor; otherwise against the
 //! distance from the frame's origin.
 
@@ -15,8 +17,8 @@ use std::path::{Path, PathBuf};
 use nalgebra::Vector3;
 use psdcal_io::{write_atomic_bytes, PositionEstimates, PositionTruth, RigFile};
 use psdcal_locate::{
-    evaluate_angles, evaluate_positions, AngleEvaluation, AnglePair, ErrorStats,
-    PositionEvaluation, PositionPair,
+    evaluate_angles, evaluate_positions, with_failures, AngleEvaluation, AnglePair, ErrorStats,
+    FailureStats, PositionEvaluation, PositionPair,
 };
 use psdcal_report::{evaluation_page, EvaluationReport, Table};
 use serde_json::{json, Value};
@@ -50,6 +52,14 @@ pub struct Evaluation {
     pub angles: Option<AngleEvaluation>,
     /// Emitters the estimates did not answer, with their status.
     pub not_located: Vec<(String, String)>,
+    /// The position statistics counting the truths without an estimated
+    /// position as failures (with positions).
+    pub position_failures: Option<FailureStats>,
+    /// The same for angles (with angles).
+    pub angle_failures: Option<FailureStats>,
+    /// CE95 with the failures as infinite horizontal errors (`None`:
+    /// infinite), with positions.
+    pub ce95_with_failures: Option<f64>,
     /// The true positions of the compared emitters, mm (positions only).
     pub true_positions: Vec<Vector3<f64>>,
     /// Each compared emitter's distance to the nearest sensor (or the
@@ -78,8 +88,11 @@ pub fn evaluate(request: &EvaluateRequest) -> Result<Evaluation> {
     let mut positions = Vec::new();
     let mut true_positions = Vec::new();
     let mut angles = Vec::new();
+    let (mut missing_positions, mut missing_angles) = (0usize, 0usize);
     for m in &matched {
         let e = m.estimate;
+        missing_positions += usize::from(m.truth.position.is_some() && e.position.is_none());
+        missing_angles += usize::from(m.truth.alpha.is_some() && e.alpha.is_none());
         if e.position.is_none() && e.alpha.is_none() {
             not_located.push((e.emitter.clone(), e.status.clone()));
             continue;
@@ -125,17 +138,35 @@ pub fn evaluate(request: &EvaluateRequest) -> Result<Evaluation> {
             None => t.norm(),
         })
         .collect();
+    let positions = (!positions.is_empty())
+        .then(|| evaluate_positions(&positions))
+        .transpose()?;
+    let angles = (!angles.is_empty())
+        .then(|| evaluate_angles(&angles))
+        .transpose()?;
+    let position_failures = positions.as_ref().and_then(|p| {
+        let d: Vec<f64> = p.errors.iter().map(|e| e.norm()).collect();
+        with_failures(&d, missing_positions)
+    });
+    let ce95_with_failures = positions.as_ref().and_then(|p| {
+        let mut h: Vec<f64> = p.errors.iter().map(|e| e.x.hypot(e.y)).collect();
+        h.sort_by(f64::total_cmp);
+        psdcal_locate::percentile_with_failures(&h, missing_positions, 0.95)
+    });
+    let angle_failures = angles.as_ref().and_then(|a| {
+        let d: Vec<f64> = a.errors.iter().map(|e| e.norm()).collect();
+        with_failures(&d, missing_angles)
+    });
     Ok(Evaluation {
         truth: truth.source.clone(),
         estimates: estimates.source.clone(),
         frame: estimates.frame.clone(),
-        positions: (!positions.is_empty())
-            .then(|| evaluate_positions(&positions))
-            .transpose()?,
-        angles: (!angles.is_empty())
-            .then(|| evaluate_angles(&angles))
-            .transpose()?,
+        positions,
+        angles,
         not_located,
+        position_failures,
+        angle_failures,
+        ce95_with_failures,
         true_positions,
         distances_mm,
         distance_from: distance_from.to_string(),
@@ -168,6 +199,20 @@ fn stats_json(
     m
 }
 
+/// The failure-aware keys (`attempted`, `success_rate`,
+/// `median_with_failures_…`, …; `null`: infinite).
+fn failures_json(f: &FailureStats, unit: &str, scale: f64, m: &mut serde_json::Map<String, Value>) {
+    m.insert("attempted".into(), json!(f.attempted));
+    m.insert("failures".into(), json!(f.failures));
+    m.insert("success_rate".into(), json!(f.success_rate));
+    for (k, v) in [("median", f.median), ("p75", f.p75), ("p95", f.p95)] {
+        m.insert(
+            format!("{k}_with_failures_{unit}"),
+            json!(v.map(|v| v * scale)),
+        );
+    }
+}
+
 impl Evaluation {
     /// Warnings: emitters that were not located.
     pub fn warnings(&self) -> Vec<String> {
@@ -181,7 +226,8 @@ impl Evaluation {
             .map(|(id, status)| format!("{id} ({status})"))
             .collect();
         vec![format!(
-            "{}: {} emitter(s) not located, left out of the statistics: {}{}",
+            "{}: {} emitter(s) not located, counted as failures (success rate and the \
+             percentiles with failures; mean, RMS and bias are over the located ones): {}{}",
             self.estimates,
             self.not_located.len(),
             first.join(", "),
@@ -196,7 +242,11 @@ impl Evaluation {
     /// The metrics as JSON: the position metrics at the top level (`n`,
     /// `mean_mm`, `median_mm`, `rms_mm`, `p75_mm`, `p95_mm`, `max_mm`,
     /// `bias_mm`, `within_95_ellipsoid`, `ce95_mm`, `se95_mm`), the angle
-    /// metrics under `angles` (degrees, `within_95_ellipse`).
+    /// metrics under `angles` (degrees, `within_95_ellipse`); with each,
+    /// the failures: `attempted`, `failures`, `success_rate`,
+    /// `median_with_failures_mm`, `p75_with_failures_mm`,
+    /// `p95_with_failures_mm`, `ce95_with_failures_mm` (`null`: infinite,
+    /// the failures reach the percentile).
     pub fn to_json(&self) -> Value {
         let mut m = serde_json::Map::new();
         m.insert("command".into(), json!("evaluate"));
@@ -208,17 +258,20 @@ impl Evaluation {
             m.extend(stats_json(&p.stats, "mm", 1.0, "within_95_ellipsoid"));
             m.insert("ce95_mm".into(), json!(p.ce95));
             m.insert("se95_mm".into(), json!(p.se95));
+            if let Some(f) = &self.position_failures {
+                failures_json(f, "mm", 1.0, &mut m);
+                m.insert(
+                    "ce95_with_failures_mm".into(),
+                    json!(self.ce95_with_failures),
+                );
+            }
         }
         if let Some(a) = &self.angles {
-            m.insert(
-                "angles".into(),
-                Value::Object(stats_json(
-                    &a.stats,
-                    "deg",
-                    1f64.to_degrees(),
-                    "within_95_ellipse",
-                )),
-            );
+            let mut am = stats_json(&a.stats, "deg", 1f64.to_degrees(), "within_95_ellipse");
+            if let Some(f) = &self.angle_failures {
+                failures_json(f, "deg", 1f64.to_degrees(), &mut am);
+            }
+            m.insert("angles".into(), Value::Object(am));
         }
         Value::Object(m)
     }
@@ -227,9 +280,37 @@ impl Evaluation {
     fn rows(&self) -> Vec<(String, Vec<[String; 2]>)> {
         let mut out = Vec::new();
         let f = |v: f64, unit: &str| format!("{} {unit}", psdcal_report::num(v));
+        let g = |v: Option<f64>, unit: &str, k: f64| {
+            v.map_or("infinite (too many failures)".to_string(), |v| {
+                f(k * v, unit)
+            })
+        };
+        let failures = |fs: &Option<FailureStats>, unit: &str, k: f64| -> Vec<[String; 2]> {
+            let Some(fs) = fs else { return Vec::new() };
+            vec![
+                [
+                    "located / attempted (success rate)".to_string(),
+                    format!(
+                        "{} / {} ({:.1} %)",
+                        fs.attempted - fs.failures,
+                        fs.attempted,
+                        100.0 * fs.success_rate
+                    ),
+                ],
+                ["median, failures as infinite".into(), g(fs.median, unit, k)],
+                [
+                    "75th percentile, failures as infinite".into(),
+                    g(fs.p75, unit, k),
+                ],
+                [
+                    "95th percentile, failures as infinite".into(),
+                    g(fs.p95, unit, k),
+                ],
+            ]
+        };
         let common = |s: &ErrorStats, unit: &str, k: f64, axes: &[&str]| {
             let mut rows = vec![
-                ["emitters compared".to_string(), s.n.to_string()],
+                ["emitters compared (located)".to_string(), s.n.to_string()],
                 ["mean error".into(), f(k * s.mean, unit)],
                 ["median error".into(), f(k * s.median, unit)],
                 ["RMS error".into(), f(k * s.rms, unit)],
@@ -246,6 +327,17 @@ impl Evaluation {
             let mut rows = common(&p.stats, "mm", 1.0, &["x", "y", "z"]);
             rows.insert(6, ["CE95 (horizontal, 95 %)".into(), f(p.ce95, "mm")]);
             rows.insert(7, ["SE95 (3-D, 95 %)".into(), f(p.se95, "mm")]);
+            rows.extend(failures(&self.position_failures, "mm", 1.0));
+            if self
+                .position_failures
+                .as_ref()
+                .is_some_and(|f| f.failures > 0)
+            {
+                rows.push([
+                    "CE95, failures as infinite".into(),
+                    g(self.ce95_with_failures, "mm", 1.0),
+                ]);
+            }
             rows.push([
                 "truths inside the 95 % ellipsoid".into(),
                 p.stats.within_95.map_or("no covariance given".into(), |w| {
@@ -256,6 +348,7 @@ impl Evaluation {
         }
         if let Some(a) = &self.angles {
             let mut rows = common(&a.stats, "°", 1f64.to_degrees(), &["αx", "αy"]);
+            rows.extend(failures(&self.angle_failures, "°", 1f64.to_degrees()));
             rows.push([
                 "truths inside the 95 % ellipse".into(),
                 a.stats.within_95.map_or("no covariance given".into(), |w| {

@@ -151,6 +151,7 @@ pub fn report_content(
         recomputed = Some(residual_rows(&table));
         worst = Some(worst_points(&table, &set.template));
         data_plots(&mut plots, set, &table, lx, ly);
+        plots.extend(crate::report_views::pose_plot(calibration, &set.template));
     }
     let region = &loaded.sensor.valid_region;
     if let (false, Some(coverage)) = (region.whole_active_area(), plots.first_mut()) {
@@ -159,6 +160,7 @@ pub fn report_content(
         }
     }
     model_plots(&mut plots, model, region, lx, ly);
+    plots.extend(crate::report_views::map_plots(&loaded.sensor));
     if !loaded.sensor.covariance.is_empty() {
         let map = error_map(
             model,
@@ -524,7 +526,13 @@ fn arrow_scale<'a>(arrows: impl Iterator<Item = &'a Arrow>, span: f64) -> f64 {
         .map(|a| a.delta.0.hypot(a.delta.1))
         .filter(|l| l.is_finite())
         .fold(0.0, f64::max);
-    if longest > 0.0 {
+    arrow_scale_for(longest, span)
+}
+
+/// A scale that makes an arrow `longest` long 8 % of `span`, one
+/// significant digit.
+pub(crate) fn arrow_scale_for(longest: f64, span: f64) -> f64 {
+    if longest > 0.0 && longest.is_finite() {
         let s = 0.08 * span / longest;
         // One significant digit, so the caption's factor is the exact one.
         let p = 10f64.powf(s.log10().floor());
@@ -532,6 +540,11 @@ fn arrow_scale<'a>(arrows: impl Iterator<Item = &'a Arrow>, span: f64) -> f64 {
     } else {
         1.0
     }
+}
+
+/// The text of an arrow scale.
+pub(crate) fn scale_text(scale: f64) -> String {
+    round_scale(scale)
 }
 
 fn round_scale(scale: f64) -> String {

@@ -19,11 +19,73 @@ use psdcal_study::{run_tables, table_spec, StudyOptions, TableResult, TableSpec,
 use crate::error::{Error, Result};
 use crate::simulate::{chain_with_record, record_cycles_flag};
 use crate::study_page::study_page;
+use crate::study_psd_map::{pooled, psd_map_seed, SeedErrors};
 
-/// Whether `id` names something `study` runs: `table1` … `table10`, `fig9`
-/// or `all`.
+/// The PSD-map condition's section of study.md: the pooled RMS angle
+/// errors (µrad) of the three calibrations, their ratios, and the map's
+/// own error next to the scan's noise.
+fn psd_map_markdown(seeds: &[SeedErrors]) -> String {
+    let mut out = String::new();
+    let (map, l1, clean) = (
+        pooled(seeds, |e| e.map),
+        pooled(seeds, |e| e.l1),
+        pooled(seeds, |e| e.clean),
+    );
+    let _ = writeln!(
+        out,
+        "### The PSD's non-radial non-linearity: lens 2, 40 dB, 12 images, {} seeds\n",
+        seeds.len()
+    );
+    let _ = writeln!(
+        out,
+        "RMS angle error over 9 × 9 held-out directions, pooled over the seeds.\n"
+    );
+    let _ = writeln!(
+        out,
+        "| condition | RMS angle error (µrad) | ratio to no non-linearity |"
+    );
+    let _ = writeln!(out, "|---|---|---|");
+    for (name, v) in [
+        ("map from a 0.25 mm scan, held fixed", map),
+        ("l1 freed instead", l1),
+        ("no non-linearity (same poses and noise)", clean),
+    ] {
+        let _ = writeln!(out, "| {name} | {} | {} |", num(1e6 * v), num(v / clean));
+    }
+    let worst = seeds.iter().map(|e| e.map_error_mm).fold(0.0, f64::max);
+    let noise = seeds
+        .iter()
+        .map(|e| e.scan_noise_mm)
+        .fold(f64::INFINITY, f64::min);
+    let _ = writeln!(
+        out,
+        "\nMap / l1 freed: {}. The map's error against the true field: at most {} µm, the \
+         scan's own noise at least {} µm.\n",
+        num(map / l1),
+        num(1e3 * worst),
+        num(1e3 * noise)
+    );
+    out
+}
+
+/// The PSD-map condition in study.json.
+fn psd_map_json(seeds: &[SeedErrors]) -> serde_json::Value {
+    serde_json::json!({
+        "seeds": seeds,
+        "pooled_map_rad": pooled(seeds, |e| e.map),
+        "pooled_l1_rad": pooled(seeds, |e| e.l1),
+        "pooled_clean_rad": pooled(seeds, |e| e.clean),
+    })
+}
+
+/// The study id of the PSD-map condition (`crate::study_psd_map`): run
+/// only when named (not part of `all`).
+pub const PSD_MAP_STUDY: &str = "psdmap";
+
+/// Whether `id` names something `study` runs: `table1` … `table10`, `fig9`,
+/// `psdmap` or `all`.
 pub fn is_study_id(id: &str) -> bool {
-    id == "all" || id == "fig9" || TABLE_IDS.contains(&id)
+    id == "all" || id == "fig9" || id == PSD_MAP_STUDY || TABLE_IDS.contains(&id)
 }
 
 /// The tables asked for: `all` expands to every table and `fig9`,
@@ -74,6 +136,7 @@ pub struct StudyPlan {
     request: StudyRequest,
     specs: Vec<TableSpec>,
     want_fig9: bool,
+    want_psd_map: bool,
     options: StudyOptions,
 }
 
@@ -107,7 +170,7 @@ pub fn plan_study(request: &StudyRequest) -> Result<StudyPlan> {
     let mut ids: Vec<String> = request
         .tables
         .iter()
-        .filter(|t| *t != "fig9")
+        .filter(|t| *t != "fig9" && *t != PSD_MAP_STUDY)
         .cloned()
         .collect();
     if want_fig9 {
@@ -135,6 +198,7 @@ pub fn plan_study(request: &StudyRequest) -> Result<StudyPlan> {
         request: request.clone(),
         specs,
         want_fig9,
+        want_psd_map: request.tables.iter().any(|t| t == PSD_MAP_STUDY),
         options,
     })
 }
@@ -165,7 +229,12 @@ fn check_output_folder(dir: &Path) -> Result<()> {
 impl StudyPlan {
     /// Trials to run in all.
     pub fn trial_count(&self) -> u64 {
-        psdcal_study::study::trial_count(&self.specs, self.request.trials) as u64
+        (psdcal_study::study::trial_count(&self.specs, self.request.trials)
+            + if self.want_psd_map {
+                self.request.trials
+            } else {
+                0
+            }) as u64
     }
 
     /// Runs the study on the current rayon pool (`tick` after each trial;
@@ -184,23 +253,63 @@ impl StudyPlan {
             Err(psdcal_sim::SimError::Cancelled) => return Err(Error::Interrupted),
             other => other?,
         };
+        let psd_map = if self.want_psd_map {
+            Some(pool.install(|| self.run_psd_map(tick, cancel))?)
+        } else {
+            None
+        };
         let elapsed = started.elapsed().as_secs_f64();
         let maps = if self.want_fig9 {
             figure9(&tables, &PsdGeometry::default())
         } else {
             Vec::new()
         };
-        self.write(&tables, &maps, elapsed)
+        self.write(&tables, &maps, psd_map.as_deref(), elapsed)
+    }
+
+    /// The PSD-map condition: one seed per trial (`seed + k`), its files in
+    /// a work folder under the output folder, removed afterwards.
+    fn run_psd_map(
+        &self,
+        tick: &(dyn Fn() + Sync),
+        cancel: &AtomicBool,
+    ) -> Result<Vec<SeedErrors>> {
+        use rayon::prelude::*;
+        use std::sync::atomic::Ordering;
+        let work = self.request.out.join(".psdmap-work");
+        let result: Result<Vec<SeedErrors>> = (0..self.request.trials)
+            .into_par_iter()
+            .map(|k| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Err(Error::Interrupted);
+                }
+                let dir = work.join(format!("trial{k}"));
+                std::fs::create_dir_all(&dir).map_err(|e| Error::OutputFolder {
+                    path: dir.clone(),
+                    message: format!("cannot create {}: {e}", dir.display()),
+                })?;
+                let e = psd_map_seed(&dir, self.request.seed + k as u64, false);
+                let _ = std::fs::remove_dir_all(&dir);
+                tick();
+                e
+            })
+            .collect();
+        let _ = std::fs::remove_dir_all(&work);
+        result
     }
 
     fn write(
         &self,
         tables: &[TableResult],
         maps: &[Figure9Map],
+        psd_map: Option<&[SeedErrors]>,
         elapsed: f64,
     ) -> Result<StudyOutcome> {
         let r = &self.request;
-        let report = self.markdown(tables, maps, elapsed);
+        let mut report = self.markdown(tables, maps, elapsed);
+        if let Some(seeds) = psd_map {
+            report.push_str(&psd_map_markdown(seeds));
+        }
         write_atomic_bytes(r.out.join("study.md"), report.as_bytes())?;
         write_atomic(r.out.join("study.csv"), |w| {
             writeln!(w, "{CSV_HEADER}")?;
@@ -217,6 +326,7 @@ impl StudyPlan {
                 "lens": m.lens, "condition": m.condition, "offsets": m.offsets,
                 "max_aoa_deg": m.max_aoa_deg, "mean_aoa_deg": m.mean_aoa_deg, "max_position_mm": m.max_position_mm,
             })).collect::<Vec<_>>(),
+            "psd_map": psd_map.map(psd_map_json),
             "elapsed_s": elapsed,
         });
         let text = serde_json::to_string_pretty(&json)

@@ -1,0 +1,133 @@
+//! The calibration report's views beyond the fit (issues 14 and 18): a
+//! calibration that carries a PSD map shows its field, its size and its own
+//! uncertainty (the size's largest value against the map evaluated here
+//! independently through the fitted stage), and every report with data
+//! shows the template poses in 3-D.
+
+use psdcal::{
+    calibrate, psd_map_from_scan, report_content, simulate_files, simulate_scan_file, write_report,
+    CalibrationOptions, DataSet, DataSetFiles, LoadOptions, LoadedSensor, PointSource, PsdGeometry,
+    PsdMapModel, PsdMapRequest, ReportRequest, ScanRequest, SimulateRequest, DEFAULT_RECORD_CYCLES,
+};
+use psdcal_report::PlotData;
+use psdcal_sim::{Lens, TemplateKind};
+
+#[test]
+fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
+    let dir = tempfile::tempdir().unwrap();
+    let scan = dir.path().join("scan.csv");
+    simulate_scan_file(&ScanRequest {
+        step_mm: 0.5,
+        stage_sigma_um: 0.3,
+        snr_db: Some(50.0),
+        nonlinearity: true,
+        geometry: PsdGeometry::default(),
+        seed: 7,
+        out: scan.clone(),
+    })
+    .unwrap();
+    let fitted = psd_map_from_scan(&PsdMapRequest {
+        scan,
+        model: PsdMapModel::Auto,
+        geometry: PsdGeometry::default(),
+        seed: 0,
+        command: String::new(),
+    })
+    .unwrap();
+    let map_path = dir.path().join("psd_map.json");
+    fitted.write(&map_path).unwrap();
+    let data = dir.path().join("data");
+    simulate_files(&SimulateRequest {
+        lens: Lens::Two,
+        snr_db: Some(40.0),
+        imbalance: false,
+        psd_distortion: false,
+        psd_nonlinearity: true,
+        images: 12,
+        template: TemplateKind::Scatter14,
+        record_cycles: DEFAULT_RECORD_CYCLES,
+        seed: 3,
+        out: data.clone(),
+    })
+    .unwrap();
+    let files = DataSetFiles {
+        template: data.join("template.csv"),
+        points: PointSource::Observations(data.join("observations.csv")),
+        gains: None,
+    };
+    let set = DataSet::from_files(&files, &LoadOptions::default()).unwrap();
+    let calibrated = calibrate(
+        &set,
+        &CalibrationOptions {
+            psd_map: Some(map_path),
+            ..CalibrationOptions::default()
+        },
+    )
+    .unwrap();
+    let cal = dir.path().join("calibration.json");
+    calibrated.write(&set, &cal, None).unwrap();
+    let request = ReportRequest {
+        calibration: cal.clone(),
+        data: Some((data.join("template.csv"), data.join("observations.csv"))),
+        out: dir.path().join("report"),
+    };
+    let loaded = LoadedSensor::read(&cal).unwrap();
+    let content = report_content(&request, &loaded, Some(&set)).unwrap();
+    let names: Vec<&str> = content.plots.iter().map(|p| p.name).collect();
+    for name in [
+        "psd_map_field",
+        "psd_map_magnitude",
+        "psd_map_uncertainty",
+        "template_poses",
+    ] {
+        assert!(names.contains(&name), "{name} missing from {names:?}");
+    }
+    // The size map's largest value: the fitted stage evaluated here over
+    // the same 21 × 21 grid inside the scan's hull.
+    let magnitude = content
+        .plots
+        .iter()
+        .find(|p| p.name == "psd_map_magnitude")
+        .unwrap();
+    let PlotData::HeatMap { cells, .. } = &magnitude.data else {
+        panic!("the map's size is a heat map");
+    };
+    let g = PsdGeometry::default();
+    let mut largest: f64 = 0.0;
+    for k in 0..21 * 21 {
+        let m = nalgebra::Vector2::new(
+            g.lx * (-0.5 + (k % 21) as f64 / 20.0),
+            g.ly * (-0.5 + (k / 21) as f64 / 20.0),
+        );
+        if psdcal_model::Stage::contains_input(&fitted.fit.map, &m) {
+            largest = largest.max(1e3 * fitted.fit.map.displacement(&fitted.fit.block, &m).norm());
+        }
+    }
+    let got = cells.iter().map(|c| c.value).fold(0.0, f64::max);
+    assert!(
+        (got - largest).abs() <= 1e-9 * largest,
+        "{got} vs {largest}"
+    );
+    // The simulated non-linearity is about 1 % of the size at the edge:
+    // tens of µm, not nothing.
+    assert!(largest > 20.0, "{largest}");
+    // The poses: one outline per image, each as many corners as the hull
+    // of the template's LEDs, in front of the sensor.
+    let poses = content
+        .plots
+        .iter()
+        .find(|p| p.name == "template_poses")
+        .unwrap();
+    let PlotData::Poses { poses, .. } = &poses.data else {
+        panic!("the poses are a 3-D view");
+    };
+    assert_eq!(poses.len(), 12);
+    for p in poses {
+        assert_eq!(p.leds.len(), set.template.leds.len());
+        assert!(p.leds.iter().all(|l| l[2] > 0.0), "in front of the sensor");
+    }
+    let written = write_report(&request).unwrap();
+    assert!(written.plots.contains(&"psd_map_field"));
+    let html = std::fs::read_to_string(written.html).unwrap();
+    assert!(html.contains("PSD map") && !html.contains("<script"));
+}
