@@ -104,7 +104,7 @@ pub fn distance_range(setup: &PlanSetup, ranges: &PoseRanges) -> Result<(f64, f6
         )),
         Some((lo, hi)) if hi < 0.5 * s0 => bad(format!(
             "no pose at --distance {lo}:{hi} mm keeps the template on the active area: at {hi} mm \
-             its image is about {:.1} mm across on a {:.1} mm sensor; allow distances up to at least {:.0} mm",
+             its image is about {:.1} mm across where the margin leaves {:.1} mm; allow distances up to at least {:.0} mm",
             2.0 * f * radius / hi,
             2.0 * h,
             s0
