@@ -34,6 +34,7 @@
 
 mod atomic;
 mod calibration;
+mod corners;
 mod coverage;
 mod csv_fields;
 mod csv_lines;
@@ -45,6 +46,7 @@ mod limits;
 mod number_text;
 mod observations;
 mod points;
+mod poses;
 mod positioning;
 mod psd_map_file;
 mod raw;
@@ -67,6 +69,7 @@ pub use calibration::{
     PsdMapStageCovariance, PsdMapStageRecord, SensorSize, Software, StdDevs, ValidRegionRecord,
     CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
 };
+pub use corners::{Corner, Corners};
 pub use coverage::{Bounds, Coverage};
 pub use error::{ColumnRef, IoError, Location};
 pub use export::{
@@ -80,6 +83,7 @@ pub use limits::{
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
+pub use poses::{write_poses, PoseRow, Poses};
 pub use positioning::{EstimateRow, MatchedEstimate, PositionEstimates, PositionTruth, TruthRow};
 pub use psd_map_file::{
     read_psd_map, write_psd_map, LoadedPsdMap, MapCandidateRecord, MapCoefficients,

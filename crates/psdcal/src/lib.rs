@@ -73,11 +73,13 @@ mod demodulate;
 mod error;
 mod evaluate;
 mod fit_report;
+mod focal_check;
 mod gains;
 mod locate;
 mod map;
 pub mod option_text;
 mod options;
+mod plan;
 mod point_rows;
 mod provenance;
 mod psd_map;
@@ -107,10 +109,12 @@ pub use demodulate::{
 pub use error::{Error, Result};
 pub use evaluate::{evaluate, EvaluateRequest, Evaluation};
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
+pub use focal_check::{focal_check, FocalCheck, FocalCheckRequest};
 pub use gains::{estimate_gains, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
 pub use map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
 pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
+pub use plan::{plan_poses, PlanRequest, Planned};
 pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
 pub use psd_map::{
@@ -124,8 +128,8 @@ pub use report::{report_content, write_report, ReportFiles, ReportRequest};
 pub use residuals::{ImageResiduals, Residual, ResidualTable};
 pub use sensor::{covariance_warning, sensor_of, LoadedSensor};
 pub use simulate::{
-    chain_with_record, record_cycles_flag, simulate_files, transient_cycles, SimulateRequest,
-    SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
+    chain_with_record, record_cycles_flag, simulate_files, simulate_files_at_poses,
+    transient_cycles, SimulateRequest, SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
 };
 pub use simulate_positioning::{simulate_positioning, PositioningRequest, SimulatedRig};
 pub use simulate_raw::{
