@@ -92,6 +92,12 @@ pub enum Command {
     /// Angles of arrival per window and LED from raw samples on standard input (live)
     #[command(after_help = crate::cmd_track::TRACK_EXAMPLES)]
     Track(crate::cmd_track::TrackArgs),
+    /// Plan template poses that minimise the predicted angle-of-arrival uncertainty (poses.csv)
+    #[command(after_help = crate::cmd_plan::PLAN_EXAMPLES)]
+    Plan(crate::cmd_plan::PlanArgs),
+    /// Check the focal length against a square of known size at a known distance (Eq. 44)
+    #[command(after_help = crate::cmd_focal_check::FOCAL_CHECK_EXAMPLES)]
+    FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -270,6 +276,8 @@ pub enum Job {
     SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
     Demodulate(crate::cmd_demodulate::DemodulateArgs),
     Track(crate::cmd_track::TrackArgs),
+    Plan(crate::cmd_plan::PlanArgs),
+    FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
 }
 
 impl Cli {
@@ -310,6 +318,8 @@ impl Cli {
             Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
             Command::Demodulate(args) => Job::Demodulate(args),
             Command::Track(args) => Job::Track(args),
+            Command::Plan(args) => Job::Plan(args),
+            Command::FocalCheck(args) => Job::FocalCheck(args),
             Command::Calibrate(args) => {
                 let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;

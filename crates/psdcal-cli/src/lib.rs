@@ -18,9 +18,11 @@ mod cmd_correct;
 mod cmd_demo;
 pub mod cmd_demodulate;
 pub mod cmd_evaluate;
+pub mod cmd_focal_check;
 mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
+pub mod cmd_plan;
 pub mod cmd_psd_map;
 mod cmd_report;
 mod cmd_simulate;
@@ -62,6 +64,8 @@ pub fn main() -> ExitCode {
         Job::Demo(args) => cmd_demo::run(args, output),
         Job::Demodulate(args) => cmd_demodulate::run(args, output),
         Job::Track(args) => cmd_track::run(args, output),
+        Job::Plan(args) => cmd_plan::run(args, output),
+        Job::FocalCheck(args) => cmd_focal_check::run(args, output),
         Job::Correct(config) => cmd_correct::run(config, output),
         Job::Aoa(config) => cmd_aoa::run(config, output),
         Job::Locate(config) => cmd_locate::run(config, output),

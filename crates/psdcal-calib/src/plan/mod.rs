@@ -10,7 +10,7 @@
 //! ([`candidates`]) and picks `N` of them by greedy selection and exchange
 //! ([`select`]). [`plan_next`] picks the one pose that most lowers an
 //! existing calibration's AoA σ, its covariance `C₀` standing for its
-//! images as the information `S₀ = M₀ = C₀⁻¹` (exact for an efficient fit).
+//! images as prior information ([`select`]; exact for an efficient fit).
 
 pub mod aoa_metric;
 pub mod candidates;

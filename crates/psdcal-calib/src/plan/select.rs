@@ -2,8 +2,11 @@
 //! selection, then exchange passes.
 //!
 //! The objective of a set `D` of poses is, with `S = S₀ + Σ_{i∈D} S_i`,
-//! `M = M₀ + Σ_{i∈D} M_i` (`S₀ = M₀` a prior's information, zero for a new
-//! plan) and `C = S⁻¹ M S⁻¹`, the mean `tr(C H̄)` or the largest
+//! `M = M₀ + Σ_{i∈D} M_i` (zero `S₀`, `M₀` for a new plan; for a prior
+//! covariance `C₀`, `S₀ = σ_r² C₀⁻¹` and `M₀ = σ_r⁴ C₀⁻¹` with
+//! `σ_r² = Σ tr M_i / Σ tr S_i` the candidates' typical residual variance,
+//! so that `C = C₀` without new poses and `C = (C₀⁻¹ + S_i/σ_r²)⁻¹` for a
+//! pose whose residuals have the variance `σ_r²`) and `C = S⁻¹ M S⁻¹`, the mean `tr(C H̄)` or the largest
 //! `tr(C H_m)` of the squared AoA σ over the grid
 //! ([`crate::plan::aoa_metric`]). Every pose adds a p × p term to `S` and
 //! `M`, so a set is scored from two running sums and one p × p Cholesky
@@ -48,13 +51,14 @@ pub struct Scorer<'a> {
     infos: &'a [PoseInformation],
     metric: &'a AoaMetric,
     objective: Objective,
-    prior: DMatrix<f64>,
+    prior_s: DMatrix<f64>,
+    prior_m: DMatrix<f64>,
     regulariser: DMatrix<f64>,
 }
 
 impl<'a> Scorer<'a> {
     /// A scorer of candidates `infos` on `metric`, with an optional prior
-    /// information `S₀ = M₀`.
+    /// information `C₀⁻¹` (module documentation).
     pub fn new(
         infos: &'a [PoseInformation],
         metric: &'a AoaMetric,
@@ -63,9 +67,12 @@ impl<'a> Scorer<'a> {
     ) -> Self {
         let p = metric.mean.nrows();
         let mut mean = DMatrix::zeros(p, p);
+        let mut noise_trace = 0.0;
         for info in infos {
             mean += &info.schur;
+            noise_trace += info.noise.trace();
         }
+        let sigma2 = noise_trace / mean.trace();
         let scale = 1.0 / infos.len().max(1) as f64;
         // A prior already makes `S` regular: no regulariser then.
         let lambda = if prior.is_some() { 0.0 } else { LAMBDA };
@@ -74,14 +81,17 @@ impl<'a> Scorer<'a> {
             infos,
             metric,
             objective,
-            prior: prior.unwrap_or_else(|| DMatrix::zeros(p, p)),
+            prior_s: prior
+                .as_ref()
+                .map_or_else(|| DMatrix::zeros(p, p), |i| i * sigma2),
+            prior_m: prior.map_or_else(|| DMatrix::zeros(p, p), |i| i * (sigma2 * sigma2)),
             regulariser,
         }
     }
 
     /// The sums `S`, `M` of a set.
     pub fn sums(&self, set: &[usize]) -> (DMatrix<f64>, DMatrix<f64>) {
-        let (mut s, mut m) = (self.prior.clone(), self.prior.clone());
+        let (mut s, mut m) = (self.prior_s.clone(), self.prior_m.clone());
         for &i in set {
             s += &self.infos[i].schur;
             m += &self.infos[i].noise;
