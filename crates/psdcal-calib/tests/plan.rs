@@ -13,7 +13,7 @@ use psdcal_calib::plan::{
 use psdcal_calib::{
     refine, CalibError, CalibrationData, CalibrationProblem, FitState, RefineOptions,
 };
-use psdcal_model::{CostKind, Model, ParameterCovariance, Pose, PsdGeometry, SensorModel};
+use psdcal_model::{CostKind, Model, Pose, PsdGeometry, SensorModel};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -207,12 +207,16 @@ fn plan_keeps_every_led_inside_and_next_lowers_the_sigma() {
         }
     }
     assert_eq!(p, plan(&s, &options).unwrap());
-    let prior =
-        ParameterCovariance::new(s.free.clone(), p.prediction.covariance.matrix().clone()).unwrap();
-    let next = plan_next(&s, &options, &prior).unwrap();
+    let taken: Vec<Pose> = p.poses.iter().map(|c| c.pose).collect();
+    let next = plan_next(&s, &options, &taken).unwrap();
     let (before, _) = next.before.unwrap();
     assert!((before - p.prediction.rms).abs() < 1e-9 * before);
     assert!(next.prediction.rms < before);
+    // The prediction with the next pose is that of all six poses together.
+    let mut all = taken.clone();
+    all.push(next.poses[0].pose);
+    let joint = predict(&s, &all, options.grid).unwrap().rms;
+    assert!((next.prediction.rms - joint).abs() < 1e-9 * joint);
 }
 
 #[test]

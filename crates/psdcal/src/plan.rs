@@ -5,7 +5,8 @@
 //!
 //! The nominal model is the pinhole of `f` (centre at the electrical
 //! centre, no distortion) with `--set` assignments applied, or, for
-//! `--next`, the calibration's model; the point noise is the default signal
+//! `--next`, the calibration's model and poses (every LED of the template
+//! assumed seen in each); the point noise is the default signal
 //! chain's at the SNR (`psdcal simulate`'s chain); the freed parameters are
 //! `--fit` (default `f, cx, cy, k1, k2`) or the calibration's.
 
@@ -153,7 +154,15 @@ pub fn plan_poses(request: &PlanRequest) -> Result<Planned> {
         ..PlanOptions::default()
     };
     let plan = match &loaded {
-        Some(l) => plan::plan_next(&setup, &options, &l.sensor.covariance)?,
+        Some(l) => {
+            let taken: Vec<psdcal_model::Pose> = l
+                .record
+                .images
+                .iter()
+                .map(|i| psdcal_model::Pose::new(i.rvec.into(), i.t_mm.into()))
+                .collect();
+            plan::plan_next(&setup, &options, &taken)?
+        }
         None => plan::plan(&setup, &options)?,
     };
     let rows: Vec<PoseRow> = plan

@@ -8,9 +8,9 @@
 //! propagated to the angle of arrival over a grid of the active area
 //! ([`aoa_metric`]). A plan draws admissible candidate poses from a seed
 //! ([`candidates`]) and picks `N` of them by greedy selection and exchange
-//! ([`select`]). [`plan_next`] picks the one pose that most lowers an
-//! existing calibration's AoA σ, its covariance `C₀` standing for its
-//! images as prior information ([`select`]; exact for an efficient fit).
+//! ([`select`]). [`plan_next`] picks the one pose that most lowers the AoA
+//! σ of a calibration from poses already taken (their `S_i`, `M_i` at the
+//! calibration's model are the starting sums).
 
 pub mod aoa_metric;
 pub mod candidates;
@@ -196,42 +196,36 @@ pub fn plan(setup: &PlanSetup, options: &PlanOptions) -> Result<Plan, CalibError
     })
 }
 
-/// The one pose that most lowers the AoA σ of a calibration whose freed
-/// parameters (`setup.free`, in this order) have the covariance `prior`.
+/// The one pose that most lowers the AoA σ of a calibration from the poses
+/// `taken` (module documentation); `before` is their own prediction.
 pub fn plan_next(
     setup: &PlanSetup,
     options: &PlanOptions,
-    prior: &ParameterCovariance,
+    taken: &[Pose],
 ) -> Result<Plan, CalibError> {
-    let sub = prior
-        .sub(&setup.free)
-        .map_err(|e| CalibError::InvalidInput {
-            reason: format!("the calibration's covariance: {e}"),
-        })?;
-    let c0 = sub.matrix().clone();
-    let info0 = c0.clone().cholesky().map(|c| c.inverse()).ok_or_else(|| CalibError::InvalidInput {
-        reason: "the calibration's covariance is singular; recalibrate with the uncertainty computed".into(),
-    })?;
-    let found = candidates_for(setup, options, 1)?;
     let metric = AoaMetric::new(
         &setup.model,
         &setup.free,
         cell_centres(&setup.geometry, options.grid.max(1)),
     )?;
+    let taken_infos = information_of(setup, taken)?;
+    let p = setup.free.len();
+    let (mut s0, mut m0) = (DMatrix::zeros(p, p), DMatrix::zeros(p, p));
+    for info in &taken_infos {
+        s0 += &info.schur;
+        m0 += &info.noise;
+    }
+    let before = prediction(setup, &metric, &s0, &m0)?;
+    let found = candidates_for(setup, options, 1)?;
     let poses: Vec<Pose> = found.iter().map(|c| c.pose).collect();
     let infos = information_of(setup, &poses)?;
-    let scorer = Scorer::new(&infos, &metric, options.objective, Some(info0));
-    let before_sigma = metric.sigma_map(&c0);
-    let before = (
-        metric.mean_square(&c0).max(0.0).sqrt(),
-        before_sigma.iter().copied().fold(0.0, f64::max),
-    );
+    let scorer = Scorer::new(&infos, &metric, options.objective, Some((s0, m0)));
     let chosen = scorer.select(1);
     let (s, m) = scorer.sums(&chosen);
     Ok(Plan {
         poses: chosen.iter().map(|&i| found[i]).collect(),
         prediction: prediction(setup, &metric, &s, &m)?,
-        before: Some(before),
+        before: Some((before.rms, before.max)),
         candidates: found.len(),
     })
 }

@@ -2,11 +2,8 @@
 //! selection, then exchange passes.
 //!
 //! The objective of a set `D` of poses is, with `S = S₀ + Σ_{i∈D} S_i`,
-//! `M = M₀ + Σ_{i∈D} M_i` (zero `S₀`, `M₀` for a new plan; for a prior
-//! covariance `C₀`, `S₀ = σ_r² C₀⁻¹` and `M₀ = σ_r⁴ C₀⁻¹` with
-//! `σ_r² = Σ tr M_i / Σ tr S_i` the candidates' typical residual variance,
-//! so that `C = C₀` without new poses and `C = (C₀⁻¹ + S_i/σ_r²)⁻¹` for a
-//! pose whose residuals have the variance `σ_r²`) and `C = S⁻¹ M S⁻¹`, the mean `tr(C H̄)` or the largest
+//! `M = M₀ + Σ_{i∈D} M_i` (`S₀`, `M₀` the sums of poses already taken,
+//! zero for a new plan) and `C = S⁻¹ M S⁻¹`, the mean `tr(C H̄)` or the largest
 //! `tr(C H_m)` of the squared AoA σ over the grid
 //! ([`crate::plan::aoa_metric`]). Every pose adds a p × p term to `S` and
 //! `M`, so a set is scored from two running sums and one p × p Cholesky
@@ -57,22 +54,19 @@ pub struct Scorer<'a> {
 }
 
 impl<'a> Scorer<'a> {
-    /// A scorer of candidates `infos` on `metric`, with an optional prior
-    /// information `C₀⁻¹` (module documentation).
+    /// A scorer of candidates `infos` on `metric`, with the sums `(S₀, M₀)`
+    /// of poses already taken, if any.
     pub fn new(
         infos: &'a [PoseInformation],
         metric: &'a AoaMetric,
         objective: Objective,
-        prior: Option<DMatrix<f64>>,
+        prior: Option<(DMatrix<f64>, DMatrix<f64>)>,
     ) -> Self {
         let p = metric.mean.nrows();
         let mut mean = DMatrix::zeros(p, p);
-        let mut noise_trace = 0.0;
         for info in infos {
             mean += &info.schur;
-            noise_trace += info.noise.trace();
         }
-        let sigma2 = noise_trace / mean.trace();
         let scale = 1.0 / infos.len().max(1) as f64;
         // A prior already makes `S` regular: no regulariser then.
         let lambda = if prior.is_some() { 0.0 } else { LAMBDA };
@@ -83,8 +77,8 @@ impl<'a> Scorer<'a> {
             objective,
             prior_s: prior
                 .as_ref()
-                .map_or_else(|| DMatrix::zeros(p, p), |i| i * sigma2),
-            prior_m: prior.map_or_else(|| DMatrix::zeros(p, p), |i| i * (sigma2 * sigma2)),
+                .map_or_else(|| DMatrix::zeros(p, p), |(s, _)| s.clone()),
+            prior_m: prior.map_or_else(|| DMatrix::zeros(p, p), |(_, m)| m),
             regulariser,
         }
     }
