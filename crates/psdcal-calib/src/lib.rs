@@ -29,6 +29,7 @@ pub mod electrical;
 pub mod global;
 pub mod linearity;
 pub mod misplaced;
+pub mod plan;
 pub mod refine;
 pub mod report;
 pub mod weighting;

@@ -92,6 +92,12 @@ pub enum Command {
     /// Two calibrations of one sensor compared in angles over the active area (did it drift?)
     #[command(after_help = include_str!("../help/diff.txt"))]
     Diff(crate::cmd_diff::DiffArgs),
+    /// Plan template poses that minimise the predicted angle-of-arrival uncertainty (poses.csv)
+    #[command(after_help = include_str!("../help/plan.txt"))]
+    Plan(crate::cmd_plan::PlanArgs),
+    /// Check the focal length against a square of known size at a known distance (Eq. 44)
+    #[command(after_help = include_str!("../help/focal_check.txt"))]
+    FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
 }
 
 /// Arguments of `psdcal check`.
@@ -242,6 +248,8 @@ pub enum Job {
     Track(crate::cmd_track::TrackArgs),
     Export(crate::cmd_export::ExportArgs),
     Diff(crate::cmd_diff::DiffArgs),
+    Plan(crate::cmd_plan::PlanArgs),
+    FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
 }
 
 impl Cli {
@@ -282,6 +290,8 @@ impl Cli {
             Command::Track(args) => Job::Track(args),
             Command::Export(args) => Job::Export(args),
             Command::Diff(args) => Job::Diff(args),
+            Command::Plan(args) => Job::Plan(args),
+            Command::FocalCheck(args) => Job::FocalCheck(args),
             Command::Calibrate(args) => {
                 let (files, load) = args.data.into_files(args.gains)?;
                 let FitList(free, fit_gains) = args.fit;

@@ -48,6 +48,9 @@ pub struct SimulateArgs {
     /// Output folder (created if missing)
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Simulate these template poses (poses.csv, e.g. from psdcal plan) instead of drawn ones
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["raw", "images"])]
+    pub poses: Option<PathBuf>,
     /// Also write the raw recording a card would make (raw.csv, raw.npy or raw.tdms, 20 kHz) and schedule.csv
     #[arg(long, value_name = "csv|npy|tdms", value_parser = choice::<crate::choice::RawArg>)]
     pub raw: Option<crate::choice::RawArg>,

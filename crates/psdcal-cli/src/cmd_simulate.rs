@@ -20,9 +20,13 @@ pub fn run(args: &SimulateArgs, output: Output) -> anyhow::Result<()> {
         seed: args.seed,
         out: args.out.clone(),
     };
-    let (written, files) = match args.raw {
-        None => (psdcal::simulate_files(&request)?, Vec::new()),
-        Some(format) => psdcal::simulate_raw_files(
+    let (written, files) = match (args.raw, &args.poses) {
+        (None, Some(poses)) => (
+            psdcal::simulate_files_at_poses(&request, poses)?,
+            Vec::new(),
+        ),
+        (None, None) => (psdcal::simulate_files(&request)?, Vec::new()),
+        (Some(format), _) => psdcal::simulate_raw_files(
             &request,
             &psdcal::RawRequest {
                 format: format.into(),

@@ -18,9 +18,11 @@ pub mod cmd_demodulate;
 pub mod cmd_diff;
 pub mod cmd_evaluate;
 pub mod cmd_export;
+pub mod cmd_focal_check;
 pub mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
+pub mod cmd_plan;
 pub mod cmd_psd_map;
 pub mod cmd_report;
 mod cmd_simulate;
@@ -66,6 +68,8 @@ pub fn main() -> ExitCode {
         Job::Demo(args) => cmd_demo::run(args, output),
         Job::Demodulate(args) => cmd_demodulate::run(args, output),
         Job::Track(args) => cmd_track::run(args, output),
+        Job::Plan(args) => cmd_plan::run(args, output),
+        Job::FocalCheck(args) => cmd_focal_check::run(args, output),
         Job::Correct(config) => cmd_correct::run(config, output),
         Job::Aoa(config) => cmd_aoa::run(config, output),
         Job::Locate(config) => cmd_locate::run(config, output),

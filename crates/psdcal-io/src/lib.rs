@@ -39,6 +39,7 @@
 mod atomic;
 mod calibration;
 mod camera_model_file;
+mod corners;
 mod coverage;
 mod csv_fields;
 mod csv_lines;
@@ -50,6 +51,7 @@ mod limits;
 mod number_text;
 mod observations;
 mod points;
+mod poses;
 mod positioning;
 mod psd_map_file;
 mod raw;
@@ -77,6 +79,7 @@ pub use calibration::{
     CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
 };
 pub use camera_model_file::{float_text, write_camera_model, CameraFormat, CameraModelFile};
+pub use corners::{Corner, Corners};
 pub use coverage::{Bounds, Coverage};
 pub use error::{ColumnRef, IoError, Location};
 pub use export::{
@@ -90,6 +93,7 @@ pub use limits::{
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
+pub use poses::{write_poses, PoseRow, Poses};
 pub use positioning::{EstimateRow, MatchedEstimate, PositionEstimates, PositionTruth, TruthRow};
 pub use psd_map_file::{
     read_psd_map, write_psd_map, LoadedPsdMap, MapCandidateRecord, MapCoefficients,

@@ -27,4 +27,4 @@ pub use raw::{Impairment, Impairments, RawPlan, RawRecord};
 pub use scan::{simulate_scan, ScanOptions, ScanSample};
 pub use scenario::{Lens, TemplateKind};
 pub use signal::{ChainConfig, SignalChain};
-pub use simulate::{simulate, Simulation, SimulationOptions};
+pub use simulate::{simulate, simulate_at, Simulation, SimulationOptions};

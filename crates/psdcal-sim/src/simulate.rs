@@ -123,6 +123,55 @@ pub struct Simulation {
 /// Simulates a data set (module documentation); every random draw comes from
 /// `rng`: poses, then gains (drawn even without imbalance), then noise.
 pub fn simulate(options: &SimulationOptions, rng: &mut ChaCha8Rng) -> Result<Simulation, SimError> {
+    check_options(options)?;
+    let truth = true_model(options);
+    let template = options.template.template();
+    let poses =
+        draw_poses(&truth, &options.geometry, &template, options.images, rng).ok_or_else(|| {
+            SimError::Options(
+                "no template pose keeps every LED on the active area for this lens and sensor"
+                    .into(),
+            )
+        })?;
+    simulate_with(options, truth, template, poses, rng)
+}
+
+/// Simulates a data set at the given `sensor_from_template` poses (one
+/// image each, `options.images` ignored) instead of drawn ones; every
+/// random draw comes from `rng`: gains (drawn even without imbalance), then
+/// noise. Refuses fewer than 3 poses and a pose that puts an LED off the
+/// active area, naming the image (`1, 2, …`) and the LED (`#1, …`).
+pub fn simulate_at(
+    options: &SimulationOptions,
+    poses: &[Pose],
+    rng: &mut ChaCha8Rng,
+) -> Result<Simulation, SimError> {
+    let options = SimulationOptions {
+        images: poses.len(),
+        ..options.clone()
+    };
+    check_options(&options)?;
+    let truth = true_model(&options);
+    let template = options.template.template();
+    let (hx, hy) = (0.5 * options.geometry.lx, 0.5 * options.geometry.ly);
+    for (i, pose) in poses.iter().enumerate() {
+        for (led, xy) in template.leds.iter().enumerate() {
+            let inside = truth
+                .project(pose, xy)
+                .is_ok_and(|m| m.x.abs() < hx && m.y.abs() < hy);
+            if !inside {
+                return Err(SimError::Options(format!(
+                    "pose {} puts LED #{} of the template off the active area; move or turn that pose",
+                    i + 1,
+                    led + 1
+                )));
+            }
+        }
+    }
+    simulate_with(&options, truth, template, poses.to_vec(), rng)
+}
+
+fn check_options(options: &SimulationOptions) -> Result<(), SimError> {
     if options.images < 3 {
         return Err(SimError::Options(format!(
             "{} image(s) requested; a calibration needs at least 3",
@@ -134,18 +183,24 @@ pub fn simulate(options: &SimulationOptions, rng: &mut ChaCha8Rng) -> Result<Sim
             "the photocurrent must be positive".into(),
         ));
     }
+    Ok(())
+}
+
+fn true_model(options: &SimulationOptions) -> SensorModel {
     let mut truth = options.lens.model();
     if options.psd_distortion {
         truth.distortion.l1 = SensorModel::PAPER_L1;
     }
-    let template = options.template.template();
-    let poses =
-        draw_poses(&truth, &options.geometry, &template, options.images, rng).ok_or_else(|| {
-            SimError::Options(
-                "no template pose keeps every LED on the active area for this lens and sensor"
-                    .into(),
-            )
-        })?;
+    truth
+}
+
+fn simulate_with(
+    options: &SimulationOptions,
+    truth: SensorModel,
+    template: Template,
+    poses: Vec<Pose>,
+    rng: &mut ChaCha8Rng,
+) -> Result<Simulation, SimError> {
     // The imbalance is drawn whether or not it is used, so that the noise
     // that follows is the same with and without it (common random numbers:
     // a seed's balanced and unbalanced data differ by the gains alone).

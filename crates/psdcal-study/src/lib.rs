@@ -16,6 +16,7 @@
 mod data;
 pub mod fig9;
 pub mod paper;
+pub mod planned;
 pub mod render;
 pub mod study;
 

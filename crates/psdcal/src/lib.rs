@@ -80,11 +80,13 @@ mod error;
 mod evaluate;
 mod export;
 mod fit_report;
+mod focal_check;
 mod gains;
 mod locate;
 mod map;
 pub mod option_text;
 mod options;
+mod plan;
 mod point_rows;
 mod provenance;
 mod psd_map;
@@ -124,11 +126,13 @@ pub use export::{
     export, ExportRequest, ExportTarget, Exported, DEFAULT_MAX_ERROR_DEG, DEFAULT_PIXEL_UM,
 };
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
+pub use focal_check::{focal_check, FocalCheck, FocalCheckRequest};
 pub use gains::{estimate_gains, gains_summary, GainsMethod};
 pub use locate::{locate_table, LocateTable, LocateTarget};
 pub use map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
 pub use option_text::plane_at_distance;
 pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
+pub use plan::{plan_poses, PlanRequest, Planned};
 pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
 pub use psd_map::{
@@ -142,8 +146,9 @@ pub use report::{report_content, write_report, ReportFiles, ReportRequest};
 pub use residuals::{ImageResiduals, Residual, ResidualTable};
 pub use sensor::{covariance_warning, save_calibration, sensor_of, LoadedSensor};
 pub use simulate::{
-    chain_with_record, record_cycles_flag, simulate_data, simulate_files, transient_cycles,
-    SimulateRequest, SimulatedData, SimulatedFiles, DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
+    chain_with_record, record_cycles_flag, simulate_data, simulate_files, simulate_files_at_poses,
+    transient_cycles, SimulateRequest, SimulatedData, SimulatedFiles, DEFAULT_RECORD_CYCLES,
+    MAX_RECORD_CYCLES,
 };
 pub use simulate_positioning::{simulate_positioning, PositioningRequest, SimulatedRig};
 pub use simulate_raw::{

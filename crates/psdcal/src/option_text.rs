@@ -335,3 +335,31 @@ pub fn parse_template_kind(text: &str) -> Result<psdcal_sim::TemplateKind, Strin
         _ => Err(format!("expected scatter14 or grid, found '{text}'")),
     }
 }
+
+/// `--sensor LXxLY` (also `--size WxH`): two positive lengths in mm joined
+/// by `x`, or one for a square.
+pub fn parse_sides_mm(text: &str) -> Result<(f64, f64), String> {
+    let (a, b) = text.split_once(['x', 'X']).unwrap_or((text, text));
+    let side = |t: &str| {
+        positive_mm(t).map_err(|_| {
+            format!("expected sides in mm such as 9x9 (or one side for a square), found '{text}'")
+        })
+    };
+    Ok((side(a)?, side(b)?))
+}
+
+/// `--distance MIN:MAX`: a range of positive distances in mm.
+pub fn parse_range_mm(text: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("expected MIN:MAX in mm such as 700:1500, found '{text}'");
+    let (a, b) = text.split_once(':').ok_or_else(bad)?;
+    let (lo, hi) = (
+        positive_mm(a).map_err(|_| bad())?,
+        positive_mm(b).map_err(|_| bad())?,
+    );
+    if hi < lo {
+        return Err(format!(
+            "--distance {text}: the minimum is above the maximum; give MIN:MAX"
+        ));
+    }
+    Ok((lo, hi))
+}

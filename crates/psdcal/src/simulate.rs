@@ -1,15 +1,17 @@
 //! One simulated data set written as psdcal's input files plus truth.json
 //! (template.csv, observations.csv, signals.csv, truth.json).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use psdcal_io::{
     write_observations, write_signals, write_template, write_truth, IntrinsicsRecord,
     ObservationRow, SensorSize, SignalRowOut, SimulationSettings, TemplateLed, TrueGains, TruePose,
     Truth, TRUTH_FORMAT, TRUTH_VERSION,
 };
+use psdcal_model::Pose;
 use psdcal_sim::{
-    simulate, ChainConfig, Lens, SignalChain, Simulation, SimulationOptions, TemplateKind,
+    simulate, simulate_at, ChainConfig, Lens, SignalChain, Simulation, SimulationOptions,
+    TemplateKind,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -140,10 +142,13 @@ pub struct SimulatedData {
 /// Simulates the data set of `request` in memory (`request.out` is not
 /// used): what [`simulate_files`] writes.
 pub fn simulate_data(request: &SimulateRequest) -> Result<SimulatedData> {
-    simulate_in_memory(request).map(|(data, _)| data)
+    simulate_in_memory(request, None).map(|(data, _)| data)
 }
 
-fn simulate_in_memory(request: &SimulateRequest) -> Result<(SimulatedData, Simulation)> {
+fn simulate_in_memory(
+    request: &SimulateRequest,
+    poses: Option<&[Pose]>,
+) -> Result<(SimulatedData, Simulation)> {
     let options = SimulationOptions {
         lens: request.lens,
         snr_db: request.snr_db,
@@ -156,7 +161,10 @@ fn simulate_in_memory(request: &SimulateRequest) -> Result<(SimulatedData, Simul
         ..SimulationOptions::default()
     };
     let mut rng = ChaCha8Rng::seed_from_u64(request.seed);
-    let sim = simulate(&options, &mut rng)?;
+    let sim = match poses {
+        Some(poses) => simulate_at(&options, poses, &mut rng)?,
+        None => simulate(&options, &mut rng)?,
+    };
     let observations: Vec<ObservationRow> = sim
         .images
         .iter()
@@ -195,12 +203,36 @@ fn simulate_in_memory(request: &SimulateRequest) -> Result<(SimulatedData, Simul
 pub(crate) fn simulate_and_write(
     request: &SimulateRequest,
 ) -> Result<(SimulatedFiles, Simulation)> {
+    simulate_and_write_at(request, None)
+}
+
+/// Simulates the data set at the poses of a poses.csv (`psdcal simulate
+/// --poses`, docs/formats.md) instead of drawn ones, and writes it;
+/// `request.images` is replaced by the number of poses.
+pub fn simulate_files_at_poses(request: &SimulateRequest, poses: &Path) -> Result<SimulatedFiles> {
+    let file = psdcal_io::Poses::read(poses)?;
+    let poses: Vec<Pose> = file
+        .rows
+        .iter()
+        .map(|r| Pose::new(r.rvec.into(), r.t_mm.into()))
+        .collect();
+    let request = SimulateRequest {
+        images: poses.len(),
+        ..request.clone()
+    };
+    simulate_and_write_at(&request, Some(&poses)).map(|(files, _)| files)
+}
+
+fn simulate_and_write_at(
+    request: &SimulateRequest,
+    poses: Option<&[Pose]>,
+) -> Result<(SimulatedFiles, Simulation)> {
     let out = &request.out;
     std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
         path: out.clone(),
         message: format!("cannot create the output folder {}: {e}", out.display()),
     })?;
-    let (data, sim) = simulate_in_memory(request)?;
+    let (data, sim) = simulate_in_memory(request, poses)?;
     let what = &data.description;
     write_template(
         out.join("template.csv"),

@@ -1,0 +1,195 @@
+//! `psdcal plan` → `simulate --poses` → `calibrate` → `plan --next` and
+//! `focal-check`, end to end, with the refusals.
+
+mod common;
+
+use common::{psdcal, stderr, stdout};
+use nalgebra::Vector2;
+use psdcal_model::SensorModel;
+
+fn json(output: &std::process::Output) -> serde_json::Value {
+    assert!(output.status.success(), "{}", stderr(output));
+    serde_json::from_str(&stdout(output)).expect("JSON on stdout")
+}
+
+#[test]
+fn plan_simulate_calibrate_next_and_focal_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name).display().to_string();
+    assert!(
+        psdcal(["simulate", "--snr", "40", "-q", "--out", &d("sim")])
+            .status
+            .success()
+    );
+    let template = d("sim/template.csv");
+    let planned = json(&psdcal([
+        "plan",
+        "--json",
+        "--f",
+        "8",
+        "--set",
+        "k1=1e-2",
+        "--set",
+        "k2=3e-5",
+        "--set",
+        "cx=0.5",
+        "--set",
+        "cy=-0.7",
+        "--margin",
+        "0.3",
+        "--template",
+        &template,
+        "--snr",
+        "40",
+        "--images",
+        "9",
+        "--out",
+        &d("poses.csv"),
+        "--report",
+        &d("rep"),
+    ]));
+    assert_eq!(planned["poses"].as_array().unwrap().len(), 9);
+    let rms = planned["aoa_sigma_deg"]["rms"].as_f64().unwrap();
+    assert!(rms > 0.0 && rms <= planned["aoa_sigma_deg"]["max"].as_f64().unwrap());
+    assert!(dir.path().join("rep/plan_sigma.svg").exists());
+    // The planned poses simulate (every LED on the area) and calibrate.
+    let sim = json(&psdcal([
+        "simulate",
+        "--json",
+        "--snr",
+        "40",
+        "--poses",
+        &d("poses.csv"),
+        "--out",
+        &d("sim2"),
+    ]));
+    assert_eq!(sim["images"], 9);
+    assert!(psdcal([
+        "calibrate",
+        "-q",
+        "--template",
+        &d("sim2/template.csv"),
+        "--observations",
+        &d("sim2/observations.csv"),
+        "--out",
+        &d("cal.json"),
+    ])
+    .status
+    .success());
+    let next = json(&psdcal([
+        "plan",
+        "--json",
+        "--next",
+        "--calibration",
+        &d("cal.json"),
+        "--template",
+        &template,
+        "--snr",
+        "40",
+        "--out",
+        &d("next.csv"),
+    ]));
+    assert_eq!(next["poses"].as_array().unwrap().len(), 1);
+    let before = next["before_aoa_sigma_deg"]["rms"].as_f64().unwrap();
+    assert!(next["aoa_sigma_deg"]["rms"].as_f64().unwrap() < before);
+
+    // A 300 mm square at 350 mm imaged through the true lens 2: the check
+    // recovers the true f (8 mm) within the calibration's error.
+    let truth = SensorModel::paper_lens2();
+    let (s, half) = (350.0, 150.0);
+    let mut corners = String::from("corner,x_mm,y_mm,sigma_mm\n");
+    for (k, (x, y)) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .iter()
+        .enumerate()
+    {
+        let ideal = Vector2::new(
+            truth.intrinsics.cx + truth.intrinsics.f * x * half / s,
+            truth.intrinsics.cy + truth.intrinsics.f * y * half / s,
+        );
+        let m = truth.distort(&ideal).unwrap();
+        corners += &format!("c{},{},{},0.0005\n", k + 1, m.x, m.y);
+    }
+    std::fs::write(dir.path().join("corners.csv"), corners).unwrap();
+    let check = json(&psdcal([
+        "focal-check",
+        "--json",
+        "--calibration",
+        &d("cal.json"),
+        "--points",
+        &d("corners.csv"),
+        "--distance",
+        "350",
+        "--size",
+        "300",
+    ]));
+    let f = check["f_check_mm"].as_f64().unwrap();
+    let sigma = check["sigma_check_mm"].as_f64().unwrap();
+    let sigma_cal = check["sigma_f_calibration_mm"].as_f64().unwrap();
+    assert!(sigma > 0.0 && sigma_cal > 0.0);
+    assert!(
+        (f - 8.0).abs() < 5.0 * (sigma + sigma_cal) + 0.02,
+        "f check {f}"
+    );
+    // Each side by hand: |Δideal| · S / side, from the calibration's own f.
+    assert_eq!(check["f_sides_mm"].as_array().unwrap().len(), 4);
+
+    // Refusals with what to change.
+    let three = "corner,x_mm,y_mm\na,0,0\nb,1,0\nc,1,1\n";
+    std::fs::write(dir.path().join("three.csv"), three).unwrap();
+    let out = psdcal([
+        "focal-check",
+        "--calibration",
+        &d("cal.json"),
+        "--points",
+        &d("three.csv"),
+        "--distance",
+        "350",
+        "--size",
+        "300",
+    ]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("four corners"), "{}", stderr(&out));
+    let out = psdcal([
+        "plan",
+        "--f",
+        "8",
+        "--template",
+        &template,
+        "--snr",
+        "40",
+        "--distance",
+        "10:20",
+        "--out",
+        &d("p.csv"),
+    ]);
+    assert!(!out.status.success() && stderr(&out).contains("allow distances up to"));
+    let out = psdcal([
+        "plan",
+        "--f",
+        "8",
+        "--template",
+        &template,
+        "--snr",
+        "40",
+        "--tilt-max",
+        "95",
+        "--out",
+        &d("p.csv"),
+    ]);
+    assert!(!out.status.success() && stderr(&out).contains("--tilt-max"));
+    let out = psdcal([
+        "plan",
+        "--f",
+        "8",
+        "--template",
+        &template,
+        "--snr",
+        "40",
+        "--out",
+        &template,
+    ]);
+    assert!(
+        !out.status.success(),
+        "the template must not be overwritten"
+    );
+}
