@@ -31,6 +31,7 @@ pub mod linearity;
 pub mod misplaced;
 pub mod refine;
 pub mod report;
+pub mod surveyed;
 pub mod weighting;
 
 pub use bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
@@ -53,3 +54,4 @@ pub use calibrate::{
     calibrate, CalibrateOptions, CalibrationResult, CalibrationSummary, ParameterSummary,
     Uncertainty,
 };
+pub use surveyed::{calibrate_surveyed, SurveyedCalibration, SurveyedData, SurveyedOptions};
