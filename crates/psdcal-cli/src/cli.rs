@@ -47,6 +47,9 @@ pub enum Command {
     /// Calibrate a sensor from images of an LED template (adapted Zhang method + Levenberg-Marquardt)
     #[command(after_help = CALIBRATE_EXAMPLES)]
     Calibrate(CalibrateArgs),
+    /// Calibrate a mounted sensor in situ from emitters at surveyed 3-D positions (its pose in the room too)
+    #[command(after_help = crate::cmd_calibrate_in_situ::CALIBRATE_IN_SITU_EXAMPLES)]
+    CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
     /// Simulate a calibration data set through the whole signal chain
     #[command(after_help = crate::cli_sim::SIMULATE_EXAMPLES)]
     Simulate(crate::cli_sim::SimulateArgs),
@@ -270,6 +273,7 @@ pub enum Job {
     SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
     Demodulate(crate::cmd_demodulate::DemodulateArgs),
     Track(crate::cmd_track::TrackArgs),
+    CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
 }
 
 impl Cli {
@@ -310,6 +314,7 @@ impl Cli {
             Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
             Command::Demodulate(args) => Job::Demodulate(args),
             Command::Track(args) => Job::Track(args),
+            Command::CalibrateInSitu(args) => Job::CalibrateInSitu(args),
             Command::Calibrate(args) => {
                 let points = point_source(args.observations, args.signals)?;
                 let FitList(free, fit_gains) = args.fit;

@@ -91,6 +91,17 @@ fn files(job: &Job) -> (Vec<Named<'_>>, Vec<Named<'_>>) {
             inputs.extend(d.tones.iter().map(|p| ("--tones", p.as_path())));
             (inputs, vec![("--out", d.out.as_path())])
         }
+        Job::CalibrateInSitu(a) => {
+            let mut outputs = vec![("--out", a.out.as_path())];
+            outputs.extend(a.poses_out.iter().map(|p| ("--poses-out", p.as_path())));
+            (
+                vec![
+                    ("--template", a.template.as_path()),
+                    ("--observations", a.observations.as_path()),
+                ],
+                outputs,
+            )
+        }
         _ => (Vec::new(), Vec::new()),
     }
 }

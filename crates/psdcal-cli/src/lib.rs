@@ -13,6 +13,7 @@ pub mod cli_report;
 pub mod cli_sim;
 mod cmd_aoa;
 mod cmd_calibrate;
+pub mod cmd_calibrate_in_situ;
 mod cmd_check;
 mod cmd_correct;
 mod cmd_demo;
@@ -62,6 +63,7 @@ pub fn main() -> ExitCode {
         Job::Demo(args) => cmd_demo::run(args, output),
         Job::Demodulate(args) => cmd_demodulate::run(args, output),
         Job::Track(args) => cmd_track::run(args, output),
+        Job::CalibrateInSitu(args) => cmd_calibrate_in_situ::run(args, output),
         Job::Correct(config) => cmd_correct::run(config, output),
         Job::Aoa(config) => cmd_aoa::run(config, output),
         Job::Locate(config) => cmd_locate::run(config, output),
