@@ -41,6 +41,12 @@ use psdcal_solver::solver::{self, Problem, SolverOptions, SolverReport};
 use crate::data::ImageObservations;
 use crate::CalibError;
 
+/// One point's residual, `∂r/∂pose` and `∂r/∂P`.
+type PointLinearization = (Vector2<f64>, SMatrix<f64, 2, 6>, SMatrix<f64, 2, 3>);
+
+/// `J`, the residuals, and per observation its point and `∂r/∂P`.
+pub type DenseJacobians = (DMatrix<f64>, DVector<f64>, Vec<(usize, SMatrix<f64, 2, 3>)>);
+
 /// Fewest points per image for the 3 × 4 DLT (11 unknowns, 2 rows a point).
 pub const MIN_SURVEYED_POINTS: usize = 6;
 
@@ -293,7 +299,7 @@ impl<'a> SurveyedProblem<'a> {
         i: usize,
         k: usize,
         a: &mut [f64],
-    ) -> Result<(Vector2<f64>, SMatrix<f64, 2, 6>, SMatrix<f64, 2, 3>), CalibError> {
+    ) -> Result<PointLinearization, CalibError> {
         let obs = &self.data.images[i].points[k];
         let pose = &state.poses[i];
         let mut jac = state.model.jacobian_buffer();
@@ -700,7 +706,7 @@ pub fn dense_jacobians(
     data: &SurveyedData,
     state: &SurveyedState,
     free: &[Param],
-) -> Result<(DMatrix<f64>, DVector<f64>, Vec<(usize, SMatrix<f64, 2, 3>)>), CalibError> {
+) -> Result<DenseJacobians, CalibError> {
     let problem = SurveyedProblem::new(data, &state.model, free)?;
     let p = free.len();
     let n_images = data.images.len();

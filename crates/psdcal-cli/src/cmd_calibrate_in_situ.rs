@@ -62,7 +62,7 @@ pub fn run(args: &InSituArgs, output: Output) -> anyhow::Result<()> {
     match output {
         Output::Quiet => {}
         Output::Json => println!("{}", serde_json::to_string_pretty(&result.json())?),
-        Output::Text => print!("{}wrote {}\n", result.text(), args.out.display()),
+        Output::Text => println!("{}wrote {}", result.text(), args.out.display()),
     }
     Ok(())
 }
