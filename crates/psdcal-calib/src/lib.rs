@@ -32,6 +32,7 @@ pub mod misplaced;
 pub mod plan;
 pub mod refine;
 pub mod report;
+pub mod surveyed;
 pub mod weighting;
 
 pub use bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
@@ -54,3 +55,4 @@ pub use calibrate::{
     calibrate, CalibrateOptions, CalibrationResult, CalibrationSummary, ParameterSummary,
     Uncertainty,
 };
+pub use surveyed::{calibrate_surveyed, SurveyedCalibration, SurveyedData, SurveyedOptions};

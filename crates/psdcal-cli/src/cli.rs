@@ -41,6 +41,9 @@ pub enum Command {
     /// Calibrate a sensor from images of an LED template (adapted Zhang method + Levenberg-Marquardt)
     #[command(after_help = include_str!("../help/calibrate.txt"))]
     Calibrate(CalibrateArgs),
+    /// Calibrate a mounted sensor in situ from emitters at surveyed 3-D positions (its pose in the room too)
+    #[command(after_help = include_str!("../help/calibrate_in_situ.txt"))]
+    CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
     /// Simulate a calibration data set through the whole signal chain
     #[command(after_help = include_str!("../help/simulate.txt"))]
     Simulate(crate::cli_sim::SimulateArgs),
@@ -250,6 +253,7 @@ pub enum Job {
     Diff(crate::cmd_diff::DiffArgs),
     Plan(crate::cmd_plan::PlanArgs),
     FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
+    CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
 }
 
 impl Cli {
@@ -292,6 +296,7 @@ impl Cli {
             Command::Diff(args) => Job::Diff(args),
             Command::Plan(args) => Job::Plan(args),
             Command::FocalCheck(args) => Job::FocalCheck(args),
+            Command::CalibrateInSitu(args) => Job::CalibrateInSitu(args),
             Command::Calibrate(args) => {
                 let (files, load) = args.data.into_files(args.gains)?;
                 let FitList(free, fit_gains) = args.fit;

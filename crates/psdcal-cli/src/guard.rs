@@ -3,8 +3,8 @@
 //!
 //! Read off the command's definition, so that every command is covered:
 //! each option whose value is a `FILE` (or a positional `NAME.json`) names
-//! an input, but `--out` and
-//! `--residuals`, which name outputs; `report`'s page (`--out DIR`'s
+//! an input, but `--out`, `--residuals` and `--…-out` (`--poses-out`),
+//! which name outputs; `report`'s page (`--out DIR`'s
 //! report.html) is an output too, and the calibrations a `--rig` file lists
 //! are inputs. Folders (`simulate`, `study`, `--report DIR`) are not
 //! checked: nothing is read from them.
@@ -44,7 +44,7 @@ pub fn check(matches: &ArgMatches) -> Result<(), psdcal::IoError> {
             .any(|n| n == "FILE" || n.ends_with(".json"));
         for path in values.map(PathBuf::from) {
             match (id, file) {
-                ("out" | "residuals", true) => outputs.push((option.clone(), path)),
+                (id, true) if is_output(id) => outputs.push((option.clone(), path)),
                 ("out", false) if name == "report" => {
                     outputs.push((option.clone(), path.join("report.html")));
                 }
@@ -84,4 +84,9 @@ fn borrowed(list: &[(String, PathBuf)]) -> Vec<(&str, &Path)> {
     list.iter()
         .map(|(o, p)| (o.as_str(), p.as_path()))
         .collect()
+}
+
+/// Whether the option `id` names an output file.
+fn is_output(id: &str) -> bool {
+    id == "out" || id == "residuals" || id.ends_with("_out")
 }

@@ -11,6 +11,7 @@ pub mod cli_locate;
 pub mod cli_sim;
 mod cmd_aoa;
 mod cmd_calibrate;
+pub mod cmd_calibrate_in_situ;
 mod cmd_check;
 mod cmd_correct;
 mod cmd_demo;
@@ -70,6 +71,7 @@ pub fn main() -> ExitCode {
         Job::Track(args) => cmd_track::run(args, output),
         Job::Plan(args) => cmd_plan::run(args, output),
         Job::FocalCheck(args) => cmd_focal_check::run(args, output),
+        Job::CalibrateInSitu(args) => cmd_calibrate_in_situ::run(args, output),
         Job::Correct(config) => cmd_correct::run(config, output),
         Job::Aoa(config) => cmd_aoa::run(config, output),
         Job::Locate(config) => cmd_locate::run(config, output),

@@ -5,6 +5,10 @@
 //! | `led` | LED identifier (text; an integer is just text), unique |
 //! | `X_mm`, `Y_mm` | LED position on the template plane, mm |
 //! | `lines` (optional) | `;`-separated labels of the collinear groups the LED belongs to, e.g. `r1;c3` |
+//! | `Z_mm` (optional) | the third coordinate of LEDs or emitters surveyed in 3-D (a non-coplanar template, e.g. IR emitters fixed in a room, in the room's frame), mm |
+//!
+//! Without `Z_mm` every LED has `z_mm = None` and the template is planar
+//! (`Z = 0`); with it every row needs a finite number.
 //!
 //! Reading enforces: a unique, non-empty `led`; finite coordinates; at least
 //! [`Template::MIN_LEDS`] LEDs. A line group with fewer than
@@ -30,6 +34,9 @@ pub struct Led {
     pub x_mm: f64,
     /// Position on the template plane, mm.
     pub y_mm: f64,
+    /// Third coordinate of a surveyed (non-coplanar) template, mm; `None`
+    /// when the file has no `Z_mm` column.
+    pub z_mm: Option<f64>,
     /// Labels of the collinear groups the LED belongs to, in file order,
     /// without repeats.
     pub lines: Vec<String>,
@@ -81,6 +88,7 @@ impl Template {
         let x_col = table.column("X_mm")?;
         let y_col = table.column("Y_mm")?;
         let lines_col = table.find_column("lines")?;
+        let z_col = table.find_column("Z_mm")?;
         table.require_rows()?;
         let mut leds: Vec<Led> = Vec::with_capacity(table.rows.len());
         let mut first_line: HashMap<String, usize> = HashMap::new();
@@ -88,6 +96,7 @@ impl Template {
             let id = table.identifier(row, &led_col, "an LED identifier")?;
             let x_mm = table.number(row, &x_col)?;
             let y_mm = table.number(row, &y_col)?;
+            let z_mm = z_col.as_ref().map(|c| table.number(row, c)).transpose()?;
             let mut lines: Vec<String> = Vec::new();
             if let Some(col) = &lines_col {
                 for label in table.text(row, col).split(';').map(str::trim) {
@@ -108,6 +117,7 @@ impl Template {
                 id,
                 x_mm,
                 y_mm,
+                z_mm,
                 lines,
                 line_no: row.line,
             });
@@ -127,6 +137,12 @@ impl Template {
             source: table.source,
             leds,
         })
+    }
+
+    /// Whether the template has a `Z_mm` column with a non-zero value (a
+    /// non-coplanar template, for the 3-D calibration).
+    pub fn is_three_d(&self) -> bool {
+        self.leds.iter().any(|l| l.z_mm.is_some_and(|z| z != 0.0))
     }
 
     /// The index of the LED with identifier `id`.
@@ -197,6 +213,7 @@ led,X_mm,Y_mm,lines
                 id: "1".into(),
                 x_mm: 0.0,
                 y_mm: 0.0,
+                z_mm: None,
                 lines: vec!["r1".into(), "c1".into()],
                 line_no: 3,
             }
@@ -272,6 +289,26 @@ led,X_mm,Y_mm,lines
             "template.csv:6: LED '2' appears twice (first on line 3)"
         );
         assert_eq!(e.line(), Some(6));
+    }
+
+    #[test]
+    fn z_column_makes_a_surveyed_template() {
+        let planar = Template::from_str("t.csv", VALID).unwrap();
+        assert!(planar.leds.iter().all(|l| l.z_mm.is_none()));
+        assert!(!planar.is_three_d());
+        let text = "led,X_mm,Y_mm,Z_mm\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,1,1,0\n";
+        let flat = Template::from_str("t.csv", text).unwrap();
+        assert_eq!(flat.leds[2].z_mm, Some(0.0));
+        assert!(!flat.is_three_d());
+        let text = "led,X_mm,Y_mm,Z_mm\n1,0,0,0\n2,1,0,2.5\n3,0,1,-1e3\n4,1,1,0\n";
+        let t = Template::from_str("t.csv", text).unwrap();
+        assert_eq!(t.leds[1].z_mm, Some(2.5));
+        assert_eq!(t.leds[2].z_mm, Some(-1000.0));
+        assert!(t.is_three_d());
+        let text = "led,X_mm,Y_mm,Z_mm\n1,0,0,0\n2,1,0,\n3,0,1,0\n4,1,1,0\n";
+        let e = Template::from_str("t.csv", text).unwrap_err();
+        assert_eq!(e.line(), Some(3));
+        assert!(e.to_string().contains("Z_mm"), "{e}");
     }
 
     #[test]

@@ -51,7 +51,7 @@ pub use error::ModelError;
 pub use fit::{CostKind, MIN_IMAGES, MIN_POINTS_PER_IMAGE};
 pub use hull::ConvexHull;
 pub use model::{ChainJacobian, Model};
-pub use model_projection::PoseJacobians;
+pub use model_projection::{PointJacobians, PoseJacobians};
 pub use params::{Distortion, Intrinsics, Param, SensorModel, UnknownParam, N_PARAMS};
 pub use pose::{Pose, RotationJacobian, N_POSE};
 pub use projection::{BackProjectionJacobians, ProjectionJacobians};

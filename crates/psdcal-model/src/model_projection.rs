@@ -123,6 +123,63 @@ impl Model {
     }
 }
 
+/// Jacobians of a 3-D point projected through the chain with a pose (a
+/// surveyed, non-coplanar template, docs/model.md §8.4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointJacobians {
+    /// With respect to the pose `(rvec, t)` (2×6).
+    pub wrt_pose: SMatrix<f64, 2, N_POSE>,
+    /// With respect to the point `(X, Y, Z)` in the template (room) frame (2×3).
+    pub wrt_point: Matrix2x3<f64>,
+}
+
+impl Model {
+    /// The measured point of a 3-D template point `(X, Y, Z)` (a surveyed
+    /// emitter) in pose `sensor_from_template`.
+    pub fn project_point(
+        &self,
+        sensor_from_template: &Pose,
+        point: &Vector3<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
+        let ab = normalised(&sensor_from_template.transform(point))?;
+        self.measured_from_ideal(&self.ideal_of_ray(&ab))
+    }
+
+    /// [`Self::project_point`] with its Jacobians: `jac.wrt_params` becomes
+    /// `∂m/∂θ` (2×P); the pose and point Jacobians as in
+    /// [`Self::project_with_jacobians`], with the point's third column.
+    pub fn project_point_with_jacobians(
+        &self,
+        sensor_from_template: &Pose,
+        rotation: &RotationJacobian,
+        point: &Vector3<f64>,
+        jac: &mut ChainJacobian,
+    ) -> Result<(Vector2<f64>, PointJacobians), ModelError> {
+        let (p_c, dpc_dpose, rot) =
+            sensor_from_template.transform_with_jacobians_using(rotation, point);
+        let ab = normalised(&p_c)?;
+        let measured = self.measured_from_ideal(&self.ideal_of_ray(&ab))?;
+        self.ray_with_jacobians(&measured, jac);
+        let r_m = jac.wrt_point;
+        let inv = r_m.try_inverse().ok_or(ModelError::SingularDistortion {
+            x: measured.x,
+            y: measured.y,
+            det: r_m.determinant(),
+        })?;
+        left_multiply(&(-inv), &mut jac.wrt_params);
+        let inv_z = 1.0 / p_c.z;
+        let dn_dpc = Matrix2x3::new(inv_z, 0.0, -ab.x * inv_z, 0.0, inv_z, -ab.y * inv_z);
+        let m = inv * dn_dpc;
+        Ok((
+            measured,
+            PointJacobians {
+                wrt_pose: m * dpc_dpose,
+                wrt_point: m * rot,
+            },
+        ))
+    }
+}
+
 /// `(Xc/Zc, Yc/Zc)` of a point in front of the sensor.
 fn normalised(p_c: &Vector3<f64>) -> Result<Vector2<f64>, ModelError> {
     if p_c.z.is_nan() || p_c.z <= MIN_DEPTH_MM {

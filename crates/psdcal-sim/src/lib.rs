@@ -4,7 +4,7 @@
 //! LEDs, noise at a given SNR, Butterworth band-pass, demodulation, amplifier
 //! gain imbalance (P43), PSD distortion), seeded scenarios, and whole
 //! simulated data sets with their truth; a room of sensors and emitters
-//! for positioning ([`room`]); raw recordings as a card records them
+//! for positioning ([`room`]); in-situ calibration scenes ([`insitu`]); raw recordings as a card records them
 //! (`raw`: sampled channels with a card's impairments). The Monte Carlo studies that
 //! calibrate them live in psdcal-study.
 #![warn(missing_docs)]
@@ -13,6 +13,7 @@
 /// `psdcal_sim::butterworth` keeps its paths).
 pub use psdcal_signal::butterworth;
 mod error;
+pub mod insitu;
 pub mod nonlinearity;
 pub mod raw;
 pub mod room;
@@ -22,6 +23,7 @@ pub mod signal;
 pub mod simulate;
 
 pub use error::SimError;
+pub use insitu::{InSituOptions, InSituScene};
 pub use nonlinearity::PsdNonlinearity;
 pub use raw::{Impairment, Impairments, RawPlan, RawRecord};
 pub use scan::{simulate_scan, ScanOptions, ScanSample};

@@ -10,11 +10,13 @@
 //! - [`paper`]: the paper's Tables 1–10 as printed;
 //! - [`render`]: study tables as Markdown and CSV beside the paper's numbers;
 //! - [`fig9`]: Figure 9's error maps from the study's parameter errors;
+//! - [`insitu`]: in-situ calibration trials from surveyed emitters;
 //! - [`SimulationData`]: a simulated data set as the calibration's input.
 #![warn(missing_docs)]
 
 mod data;
 pub mod fig9;
+pub mod insitu;
 pub mod paper;
 pub mod planned;
 pub mod render;

@@ -122,6 +122,9 @@ pub fn template_from_rows(rows: &Rows) -> Result<Template> {
             id,
             x_mm: rows.finite(i, r, x0, "X_mm")?,
             y_mm: rows.finite(i, r, x0 + 1, "Y_mm")?,
+            // A template from an array is planar (surveyed 3-D points come
+            // from template.csv's Z_mm).
+            z_mm: None,
             lines: Vec::new(),
             line_no: i + 1,
         });

@@ -39,6 +39,13 @@ pub struct Calibrated {
 /// Calibrates `set` with `options`. The record's provenance lists the data
 /// set's input files; its command is empty until [`Calibrated::set_command`].
 pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrated> {
+    if set.template.is_three_d() {
+        return Err(Error::Input(format!(
+            "{} has LEDs off the plane Z = 0 (its Z_mm column): calibrate fits a planar \
+             template; for surveyed 3-D points use psdcal calibrate-in-situ",
+            set.template.source
+        )));
+    }
     options
         .check(set.signals.is_some(), set.known_gains.is_some())
         .map_err(Error::Options)?;

@@ -82,6 +82,7 @@ mod export;
 mod fit_report;
 mod focal_check;
 mod gains;
+mod in_situ;
 mod locate;
 mod map;
 pub mod option_text;
@@ -128,6 +129,7 @@ pub use export::{
 pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
 pub use focal_check::{focal_check, FocalCheck, FocalCheckRequest};
 pub use gains::{estimate_gains, gains_summary, GainsMethod};
+pub use in_situ::{calibrate_in_situ, position_with_jacobian, InSitu, SensorPose};
 pub use locate::{locate_table, LocateTable, LocateTarget};
 pub use map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
 pub use option_text::plane_at_distance;

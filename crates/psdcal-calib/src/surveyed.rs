@@ -1,0 +1,871 @@
+//! Calibration from surveyed, non-coplanar points (docs/model.md §8.4): IR
+//! emitters fixed in a room (or LEDs of a 3-D template) whose positions
+//! `P_j = (X, Y, Z)` were surveyed in one frame, seen in one or several
+//! images (sensor orientations).
+//!
+//! *Start*: per image, the normalised DLT of the 3 × 4 projection matrix
+//! `λ (x, y, 1)ᵀ = P (X, Y, Z, 1)ᵀ` (points and image points translated to
+//! their centroid and scaled to mean distances √3 and √2; the null vector of
+//! the 2n × 12 system by SVD, which needs n ≥ 6 points off any one plane),
+//! split by RQ decomposition `P = K [R | t]`, `K` upper triangular with a
+//! positive diagonal, `det R = +1`; one focal length `f = (K₁₁ + K₂₂)/2`,
+//! `(cx, cy) = (K₁₃, K₂₃)/K₃₃`. The intrinsics start at the median over the
+//! images, the distortion at zero.
+//!
+//! *Refinement*: the image-plane error of the model's chain (the same
+//! [`Model`] and the same solver as [`crate::refine`]),
+//! `r_ij = project(θ, pose_i, P_j) − m_ij` (mm on the sensor), over the
+//! freed model parameters and one `sensor_from_template` pose per image.
+//!
+//! *Uncertainty with survey noise*: the points are known to σ_s per
+//! coordinate (independent), the measured points to σ_m. With `J` the
+//! Jacobian of the residuals with respect to `x = (θ, poses)`, `J_P` that
+//! with respect to the surveyed points and `S = JᵀJ`, the linearised
+//! estimate moves by `δx = −S⁻¹ Jᵀ (J_P δP − ε)`, so
+//!
+//! ```text
+//! Cov(x) = σ_m² S⁻¹ + σ_s² S⁻¹ G Gᵀ S⁻¹,   G = Jᵀ J_P
+//! ```
+//!
+//! (an emitter seen in several images moves all its residuals together:
+//! `G`'s columns sum over them). σ_m² is estimated from the cost without
+//! the survey's share: `E[cost] = σ_m² (2n − p) + σ_s² T`,
+//! `T = tr(J_Pᵀ J_P) − tr(Gᵀ S⁻¹ G)`, so
+//! `σ_m² = max(0, cost − σ_s² T) / (2n − p)`.
+
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x4, SMatrix, Vector2, Vector3};
+use psdcal_model::{Model, Param, ParameterCovariance, Pose, PsdGeometry, SensorModel};
+use psdcal_solver::normal_equations::{ResidualTerm, Step};
+use psdcal_solver::solver::{self, Problem, SolverOptions, SolverReport};
+
+use crate::data::ImageObservations;
+use crate::CalibError;
+
+/// One point's residual, `∂r/∂pose` and `∂r/∂P`.
+type PointLinearization = (Vector2<f64>, SMatrix<f64, 2, 6>, SMatrix<f64, 2, 3>);
+
+/// `J`, the residuals, and per observation its point and `∂r/∂P`.
+pub type DenseJacobians = (DMatrix<f64>, DVector<f64>, Vec<(usize, SMatrix<f64, 2, 3>)>);
+
+/// Fewest points per image for the 3 × 4 DLT (11 unknowns, 2 rows a point).
+pub const MIN_SURVEYED_POINTS: usize = 6;
+
+/// Smallest ratio of the point cloud's third to first principal spread
+/// (its flatness) accepted by the DLT start in a single image.
+pub const MIN_DEPTH_RATIO: f64 = 0.02;
+
+/// The input: surveyed points and the images that see them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurveyedData {
+    /// Surveyed positions `(X, Y, Z)`, mm (one frame: the room's).
+    pub points: Vec<Vector3<f64>>,
+    /// Names of the points (for messages), as in the files.
+    pub names: Vec<String>,
+    /// Per image (sensor orientation), the measured points (`led` indexes
+    /// `points`).
+    pub images: Vec<ImageObservations>,
+    /// The PSD's active area.
+    pub geometry: PsdGeometry,
+}
+
+/// Options of [`calibrate_surveyed`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurveyedOptions {
+    /// The freed standard parameters (`f, cx, cy, k1, k2` by default, as
+    /// [`crate::RefineOptions`]).
+    pub free: Vec<Param>,
+    /// The survey's standard deviation per coordinate, mm (0: exact points).
+    pub survey_sigma_mm: f64,
+    /// The model's values of the parameters that are not freed.
+    pub base: SensorModel,
+    /// Iteration budget of the refinement.
+    pub max_iterations: usize,
+}
+
+impl Default for SurveyedOptions {
+    fn default() -> Self {
+        Self {
+            free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2],
+            survey_sigma_mm: 0.0,
+            base: SensorModel::pinhole(8.0, 0.0, 0.0),
+            max_iterations: 500,
+        }
+    }
+}
+
+/// A finished calibration from surveyed points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurveyedCalibration {
+    /// The estimated model.
+    pub model: Model,
+    /// Per image, `sensor_from_template` (the template frame is the survey's:
+    /// for an in-situ calibration, `sensor_from_room`).
+    pub poses: Vec<Pose>,
+    /// The freed model parameters' covariance (survey noise included).
+    pub covariance: ParameterCovariance,
+    /// Per image, the 6 × 6 covariance of the pose `(rvec, t)`.
+    pub pose_covariances: Vec<SMatrix<f64, 6, 6>>,
+    /// The measured point's variance per coordinate estimated from the
+    /// residuals (mm²), the survey's share removed.
+    pub point_variance: f64,
+    /// Cost `Σ ‖r‖²`, mm² on the sensor.
+    pub cost: f64,
+    /// RMS image-plane error, mm.
+    pub rms_image_mm: f64,
+    /// Per image, its RMS image-plane error, mm.
+    pub rms_per_image_mm: Vec<f64>,
+    /// Points used.
+    pub points: usize,
+    /// Degrees of freedom `2n − p`.
+    pub dof: usize,
+    /// The DLT start's `(f, cx, cy)` (`None` for a refinement from a given start).
+    pub start: Option<[f64; 3]>,
+    /// The solver's report.
+    pub report: SolverReport,
+    /// What the user should know (residuals smaller than the survey σ
+    /// predicts, a poorly determined parameter).
+    pub warnings: Vec<String>,
+}
+
+/// The whole calibration: checks, DLT start, refinement, covariance.
+pub fn calibrate_surveyed(
+    data: &SurveyedData,
+    options: &SurveyedOptions,
+) -> Result<SurveyedCalibration, CalibError> {
+    check(data, options)?;
+    let (start_model, poses) = dlt_start(data, options, 0.0)?;
+    let start = [
+        start_model.intrinsics.f,
+        start_model.intrinsics.cx,
+        start_model.intrinsics.cy,
+    ];
+    let mut refined = refine_from_start(data, &start_model, &poses, options)?;
+    if options.free.contains(&Param::K1) {
+        let k1 = preliminary_k1(data);
+        if k1 != 0.0 {
+            if let Ok((m, p)) = dlt_start(data, options, k1) {
+                if let Ok(r) = refine_from_start(data, &m, &p, options) {
+                    if r.report.termination.converged() && r.cost < refined.cost {
+                        refined = r;
+                    }
+                }
+            }
+        }
+    }
+    let mut result = finish(data, options, refined)?;
+    result.start = Some(start);
+    Ok(result)
+}
+
+/// The refinement from the DLT start: the model freed at once, and staged
+/// (the pinhole's `f, cx, cy` and the poses first, distortion held at zero,
+/// then everything freed); the converged candidate with the lower cost
+/// wins (a start far from a strong distortion can end in a local minimum
+/// that the staged route avoids, and the other way round); both from the
+/// DLT's principal point and from the sensor's centre.
+fn refine_from_start(
+    data: &SurveyedData,
+    start: &SensorModel,
+    poses: &[Pose],
+    options: &SurveyedOptions,
+) -> Result<RefinedSurveyed, CalibError> {
+    let mut best = refine_both_ways(data, start, poses, options);
+    // Strong distortion pulls the DLT's principal point away: the sensor's
+    // centre competes as a start.
+    let frees_centre = options.free.contains(&Param::Cx) || options.free.contains(&Param::Cy);
+    if frees_centre {
+        let mut centred = *start;
+        centred.intrinsics.cx = 0.0;
+        centred.intrinsics.cy = 0.0;
+        let other = refine_both_ways(data, &centred, poses, options);
+        best = match (best, other) {
+            (Ok(a), Ok(b)) if b.cost < a.cost => Ok(b),
+            (Err(_), Ok(b)) => Ok(b),
+            (a, _) => a,
+        };
+    }
+    best
+}
+
+fn refine_both_ways(
+    data: &SurveyedData,
+    start: &SensorModel,
+    poses: &[Pose],
+    options: &SurveyedOptions,
+) -> Result<RefinedSurveyed, CalibError> {
+    let direct = refine_surveyed(data, Model::standard(start), poses, options);
+    let pinhole: Vec<Param> = options
+        .free
+        .iter()
+        .copied()
+        .filter(|p| matches!(p, Param::F | Param::Cx | Param::Cy))
+        .collect();
+    let staged = (pinhole.len() < options.free.len()).then(|| {
+        let first = SurveyedOptions {
+            free: pinhole,
+            ..options.clone()
+        };
+        refine_surveyed(data, Model::standard(start), poses, &first)
+            .and_then(|r| refine_surveyed(data, r.state.model, &r.state.poses, options))
+    });
+    let usable = |r: &RefinedSurveyed| r.report.termination.converged() && r.cost.is_finite();
+    match (direct, staged) {
+        (Ok(a), Some(Ok(b))) if usable(&b) && (!usable(&a) || b.cost < a.cost) => Ok(b),
+        (Ok(a), _) => Ok(a),
+        (Err(_), Some(Ok(b))) => Ok(b),
+        (Err(e), _) => Err(e),
+    }
+}
+
+/// A refinement's answer.
+#[derive(Debug, Clone)]
+pub struct RefinedSurveyed {
+    /// The state at the end.
+    pub state: SurveyedState,
+    /// Its cost.
+    pub cost: f64,
+    /// The solver's report.
+    pub report: SolverReport,
+}
+
+/// Refines `start` and `poses` (any start: the DLT's, or the truth for a
+/// comparison) over the freed parameters of `options`.
+pub fn refine_surveyed(
+    data: &SurveyedData,
+    start: Model,
+    poses: &[Pose],
+    options: &SurveyedOptions,
+) -> Result<RefinedSurveyed, CalibError> {
+    let problem = SurveyedProblem::new(data, &start, &options.free)?;
+    let points = data.images.iter().map(|i| i.points.len()).sum::<usize>() as f64;
+    let settings = SolverOptions {
+        max_iterations: options.max_iterations,
+        cost_tolerance: 1e-12,
+        step_tolerance: 1e-12,
+        initial_lambda: 1e-3,
+        exact_cost: 1e-20 * points,
+        step_floor: 1e-26 * points,
+        robust: None,
+    };
+    let state = SurveyedState {
+        model: start,
+        poses: poses.to_vec(),
+    };
+    let solution = solver::solve(&problem, state, &settings)?;
+    Ok(RefinedSurveyed {
+        state: solution.state,
+        cost: solution.cost,
+        report: solution.report,
+    })
+}
+
+/// The model's parameters and one pose per image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurveyedState {
+    /// The model.
+    pub model: Model,
+    /// One `sensor_from_template` per image.
+    pub poses: Vec<Pose>,
+}
+
+/// The image-plane cost of surveyed points as a solver [`Problem`].
+#[derive(Debug, Clone)]
+pub struct SurveyedProblem<'a> {
+    data: &'a SurveyedData,
+    columns: Vec<usize>,
+}
+
+impl<'a> SurveyedProblem<'a> {
+    /// The problem with the standard parameters `free` freed.
+    pub fn new(data: &'a SurveyedData, model: &Model, free: &[Param]) -> Result<Self, CalibError> {
+        let columns = free
+            .iter()
+            .map(|p| {
+                model
+                    .index(p.name())
+                    .ok_or_else(|| CalibError::InvalidInput {
+                        reason: format!("the model has no parameter '{}'", p.name()),
+                    })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self { data, columns })
+    }
+
+    /// Residual, `∂r/∂θ_free` (2 × p, column-major into `a`), `∂r/∂pose`
+    /// and `∂r/∂P` of observation `k` of image `i`.
+    fn linearize(
+        &self,
+        state: &SurveyedState,
+        i: usize,
+        k: usize,
+        a: &mut [f64],
+    ) -> Result<PointLinearization, CalibError> {
+        let obs = &self.data.images[i].points[k];
+        let pose = &state.poses[i];
+        let mut jac = state.model.jacobian_buffer();
+        let (m, j) = state
+            .model
+            .project_point_with_jacobians(
+                pose,
+                &pose.rotation_jacobian(),
+                &self.data.points[obs.led],
+                &mut jac,
+            )
+            .map_err(|e| self.point_error(i, obs.led, e))?;
+        for (slot, c) in self.columns.iter().enumerate() {
+            a[2 * slot] = jac.wrt_params[2 * c];
+            a[2 * slot + 1] = jac.wrt_params[2 * c + 1];
+        }
+        Ok((m - obs.measured, j.wrt_pose, j.wrt_point))
+    }
+
+    fn point_error(&self, i: usize, led: usize, e: psdcal_model::ModelError) -> CalibError {
+        CalibError::Numerical {
+            stage: "surveyed refinement",
+            reason: format!(
+                "image '{}', point '{}': {e}",
+                self.data.images[i].id,
+                self.data.names.get(led).map_or("?", String::as_str)
+            ),
+        }
+    }
+}
+
+impl Problem for SurveyedProblem<'_> {
+    type State = SurveyedState;
+    type Error = CalibError;
+
+    fn global_len(&self) -> usize {
+        self.columns.len()
+    }
+
+    fn block_count(&self) -> usize {
+        self.data.images.len()
+    }
+
+    fn evaluate(
+        &self,
+        state: &SurveyedState,
+        jacobians: bool,
+        visit: &mut dyn FnMut(&ResidualTerm<'_>),
+    ) -> Result<(), CalibError> {
+        let mut a = vec![0.0; 2 * self.columns.len()];
+        for (i, image) in self.data.images.iter().enumerate() {
+            for (k, obs) in image.points.iter().enumerate() {
+                if jacobians {
+                    let (r, b, _) = self.linearize(state, i, k, &mut a)?;
+                    visit(&ResidualTerm {
+                        r: r.as_slice(),
+                        a: &a,
+                        block: Some((i, b.as_slice())),
+                    });
+                } else {
+                    let m = state
+                        .model
+                        .project_point(&state.poses[i], &self.data.points[obs.led])
+                        .map_err(|e| self.point_error(i, obs.led, e))?;
+                    let r = m - obs.measured;
+                    visit(&ResidualTerm {
+                        r: r.as_slice(),
+                        a: &[],
+                        block: None,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn apply_step(&self, state: &SurveyedState, step: &Step) -> Option<SurveyedState> {
+        let model = state.model.stepped(&self.columns, step.da.as_slice());
+        model.validate().ok()?;
+        let poses = state
+            .poses
+            .iter()
+            .zip(&step.db)
+            .map(|(pose, d)| {
+                let a = pose.to_array();
+                Pose::from_array(&std::array::from_fn(|k| a[k] + d[k]))
+            })
+            .collect();
+        Some(SurveyedState { model, poses })
+    }
+}
+
+/// The input's checks, each failure with what to change.
+fn check(data: &SurveyedData, options: &SurveyedOptions) -> Result<(), CalibError> {
+    if !(options.survey_sigma_mm.is_finite() && options.survey_sigma_mm >= 0.0) {
+        return Err(CalibError::InvalidInput {
+            reason: format!(
+                "the survey's σ must be finite and ≥ 0 mm (got {})",
+                options.survey_sigma_mm
+            ),
+        });
+    }
+    if data.images.is_empty() {
+        return Err(CalibError::TooFewImages {
+            usable: 0,
+            needed: 1,
+        });
+    }
+    if data
+        .points
+        .iter()
+        .any(|p| !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()))
+    {
+        return Err(CalibError::InvalidInput {
+            reason: "a surveyed point has a non-finite coordinate".into(),
+        });
+    }
+    for image in &data.images {
+        let n = image.points.len();
+        if n < MIN_SURVEYED_POINTS {
+            return Err(CalibError::Degenerate {
+                reason: format!(
+                    "image '{}' sees {n} surveyed point(s); the 3-D start needs at least {} \
+                     (not all on one plane) in every image: add emitters in its field of view \
+                     or drop the image",
+                    image.id, MIN_SURVEYED_POINTS
+                ),
+            });
+        }
+        if let Some(o) = image.points.iter().find(|o| o.led >= data.points.len()) {
+            return Err(CalibError::UnknownLed {
+                led: o.led,
+                template_len: data.points.len(),
+            });
+        }
+        let cloud: Vec<Vector3<f64>> = image.points.iter().map(|o| data.points[o.led]).collect();
+        let ratio = flatness(&cloud);
+        if ratio < MIN_DEPTH_RATIO {
+            return Err(CalibError::Degenerate {
+                reason: format!(
+                    "the surveyed points image '{}' sees are (nearly) coplanar (their spread off \
+                     their best plane is {:.2} % of their extent; at least {:.0} % needed): one \
+                     image cannot calibrate from a plane — place emitters at different depths \
+                     (walls, floor, ceiling, stands), or calibrate with a planar template in \
+                     several poses (psdcal calibrate)",
+                    image.id,
+                    100.0 * ratio,
+                    100.0 * MIN_DEPTH_RATIO
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The cloud's third principal spread over its first (0: coplanar).
+pub fn flatness(points: &[Vector3<f64>]) -> f64 {
+    let n = points.len().max(1) as f64;
+    let mean = points.iter().fold(Vector3::zeros(), |s, p| s + p) / n;
+    let scatter = points.iter().fold(Matrix3::zeros(), |s, p| {
+        s + (p - mean) * (p - mean).transpose()
+    });
+    let mut ev: Vec<f64> = scatter.symmetric_eigenvalues().iter().copied().collect();
+    ev.sort_by(f64::total_cmp);
+    if ev[2] <= 0.0 {
+        return 0.0;
+    }
+    (ev[0].max(0.0) / ev[2]).sqrt()
+}
+
+/// The normalised DLT of one image's 3 × 4 projection matrix (module
+/// documentation); `None` when the system has no clear null vector.
+pub fn dlt_projection(points: &[Vector3<f64>], image: &[Vector2<f64>]) -> Option<Matrix3x4<f64>> {
+    let n = points.len();
+    if n < MIN_SURVEYED_POINTS || image.len() != n {
+        return None;
+    }
+    let (t3, s3) = normalisation3(points);
+    let (t2, s2) = normalisation2(image);
+    // At least 12 rows; padded with zero rows so the SVD is of a tall matrix
+    // and keeps every right singular vector.
+    let rows = (2 * n).max(12);
+    let mut a = DMatrix::<f64>::zeros(rows, 12);
+    for (k, (p, q)) in points.iter().zip(image).enumerate() {
+        let p = (p - t3) * s3;
+        let q = (q - t2) * s2;
+        let ph = [p.x, p.y, p.z, 1.0];
+        for c in 0..4 {
+            a[(2 * k, c)] = ph[c];
+            a[(2 * k, 8 + c)] = -q.x * ph[c];
+            a[(2 * k + 1, 4 + c)] = ph[c];
+            a[(2 * k + 1, 8 + c)] = -q.y * ph[c];
+        }
+    }
+    let svd = a.svd(false, true);
+    let v_t = svd.v_t?;
+    let (imin, _) = svd
+        .singular_values
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))?;
+    let h = v_t.row(imin);
+    let pn = Matrix3x4::from_fn(|r, c| h[4 * r + c]);
+    // Undo the normalisations: P = T2⁻¹ P̃ T3.
+    let t2_inv = Matrix3::new(1.0 / s2, 0.0, t2.x, 0.0, 1.0 / s2, t2.y, 0.0, 0.0, 1.0);
+    let mut t3m = nalgebra::Matrix4::<f64>::identity() * s3;
+    t3m[(3, 3)] = 1.0;
+    for r in 0..3 {
+        t3m[(r, 3)] = -s3 * t3[r];
+    }
+    let p = t2_inv * pn * t3m;
+    p.iter().all(|v| v.is_finite()).then_some(p)
+}
+
+fn normalisation3(points: &[Vector3<f64>]) -> (Vector3<f64>, f64) {
+    let n = points.len() as f64;
+    let c = points.iter().fold(Vector3::zeros(), |s, p| s + p) / n;
+    let d = points.iter().map(|p| (p - c).norm()).sum::<f64>() / n;
+    (c, 3f64.sqrt() / d.max(f64::MIN_POSITIVE))
+}
+
+fn normalisation2(points: &[Vector2<f64>]) -> (Vector2<f64>, f64) {
+    let n = points.len() as f64;
+    let c = points.iter().fold(Vector2::zeros(), |s, p| s + p) / n;
+    let d = points.iter().map(|p| (p - c).norm()).sum::<f64>() / n;
+    (c, 2f64.sqrt() / d.max(f64::MIN_POSITIVE))
+}
+
+/// `P = K [R | t]` with `K` upper triangular (positive diagonal, `K₃₃ = 1`)
+/// and `R` a rotation, by RQ decomposition; `P`'s sign is chosen so that
+/// `det P₁:₃ > 0`.
+pub fn decompose_projection(p: &Matrix3x4<f64>) -> Option<(Matrix3<f64>, Pose)> {
+    let mut m: Matrix3<f64> = p.fixed_view::<3, 3>(0, 0).into_owned();
+    let mut p4: Vector3<f64> = p.column(3).into_owned();
+    if m.determinant() < 0.0 {
+        m = -m;
+        p4 = -p4;
+    }
+    // RQ through QR of the row-reversed transpose: with E the exchange
+    // matrix, (E M)ᵀ = Q̃ R̃ gives M = (E R̃ᵀ E)(E Q̃ᵀ).
+    let e = Matrix3::new(0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0);
+    let qr = (e * m).transpose().qr();
+    let (q, r) = (qr.q(), qr.r());
+    let mut k = e * r.transpose() * e;
+    let mut rot = e * q.transpose();
+    for i in 0..3 {
+        if k[(i, i)] < 0.0 {
+            k.set_column(i, &(-k.column(i)));
+            rot.set_row(i, &(-rot.row(i)));
+        }
+    }
+    if rot.determinant() < 0.0 || k[(2, 2)] <= 0.0 {
+        return None;
+    }
+    let t = k.try_inverse()? * p4;
+    let k = k / k[(2, 2)];
+    k.iter()
+        .chain(t.iter())
+        .all(|v| v.is_finite())
+        .then(|| (k, Pose::from_rotation(&rot, t)))
+}
+
+/// The start of every image (module documentation): the intrinsics' median
+/// over the images, each image's pose from its own DLT.
+/// The preliminary radial correction of the 3-D start: the `k1` (about
+/// the sensor's centre) whose corrected points the per-image DLTs explain
+/// best — the sum over images of the DLT's reprojection error relative to
+/// the spread of the corrected points (scale-free) — over a grid of
+/// `k1 r_c² ∈ [−0.4, 0.8]` in steps of 0.05 (`r_c` the distance from the
+/// centre to the active area's corner).
+pub fn preliminary_k1(data: &SurveyedData) -> f64 {
+    let rc2 = 0.25 * (data.geometry.lx.powi(2) + data.geometry.ly.powi(2));
+    let mut best = (f64::INFINITY, 0.0);
+    for step in -8..=16 {
+        let k1 = 0.05 * f64::from(step) / rc2;
+        let mut model = SensorModel::pinhole(1.0, 0.0, 0.0);
+        model.distortion.k1 = k1;
+        let model = Model::standard(&model);
+        let mut score = 0.0;
+        for image in &data.images {
+            let pts: Vec<Vector3<f64>> = image.points.iter().map(|o| data.points[o.led]).collect();
+            let ideal: Vec<Vector2<f64>> = image
+                .points
+                .iter()
+                .map(|o| model.ideal(&o.measured))
+                .collect();
+            score += match dlt_projection(&pts, &ideal) {
+                Some(p) => relative_reprojection(&p, &pts, &ideal),
+                None => f64::INFINITY,
+            };
+        }
+        if score < best.0 {
+            best = (score, k1);
+        }
+    }
+    best.1
+}
+
+/// Σ ‖proj(P X) − q‖² over Σ ‖q − q̄‖².
+fn relative_reprojection(p: &Matrix3x4<f64>, pts: &[Vector3<f64>], q: &[Vector2<f64>]) -> f64 {
+    let n = q.len() as f64;
+    let mean = q.iter().fold(Vector2::zeros(), |s, v| s + v) / n;
+    let spread: f64 = q.iter().map(|v| (v - mean).norm_squared()).sum();
+    let err: f64 = pts
+        .iter()
+        .zip(q)
+        .map(|(x, q)| {
+            let h = p * x.push(1.0);
+            if h.z.abs() < f64::MIN_POSITIVE {
+                return f64::INFINITY;
+            }
+            (Vector2::new(h.x / h.z, h.y / h.z) - q).norm_squared()
+        })
+        .sum();
+    err / spread.max(f64::MIN_POSITIVE)
+}
+
+fn dlt_start(
+    data: &SurveyedData,
+    options: &SurveyedOptions,
+    k1: f64,
+) -> Result<(SensorModel, Vec<Pose>), CalibError> {
+    let mut radial = SensorModel::pinhole(1.0, 0.0, 0.0);
+    radial.distortion.k1 = k1;
+    let radial = Model::standard(&radial);
+    let mut fs = Vec::new();
+    let mut cxs = Vec::new();
+    let mut cys = Vec::new();
+    let mut poses = Vec::new();
+    for image in &data.images {
+        let pts: Vec<Vector3<f64>> = image.points.iter().map(|o| data.points[o.led]).collect();
+        let ms: Vec<Vector2<f64>> = image
+            .points
+            .iter()
+            .map(|o| radial.ideal(&o.measured))
+            .collect();
+        let (k, pose) = dlt_projection(&pts, &ms)
+            .and_then(|p| decompose_projection(&p))
+            .ok_or_else(|| CalibError::Degenerate {
+                reason: format!(
+                    "the 3-D start failed on image '{}' (its points and measurements admit no \
+                     camera): check that the points' identifiers match the survey and that \
+                     they span depth",
+                    image.id
+                ),
+            })?;
+        fs.push(0.5 * (k[(0, 0)] + k[(1, 1)]));
+        cxs.push(k[(0, 2)]);
+        cys.push(k[(1, 2)]);
+        poses.push(pose);
+    }
+    let mut model = options.base;
+    let free = |p: Param| options.free.contains(&p);
+    if free(Param::F) {
+        model.intrinsics.f = median(&mut fs);
+    }
+    if free(Param::Cx) {
+        model.intrinsics.cx = median(&mut cxs);
+    }
+    if free(Param::Cy) {
+        model.intrinsics.cy = median(&mut cys);
+    }
+    if !(model.intrinsics.f.is_finite() && model.intrinsics.f > 0.0) {
+        return Err(CalibError::Degenerate {
+            reason: format!(
+                "the 3-D start gives focal length {} mm: the points may be mislabelled or too \
+                 close to one plane",
+                model.intrinsics.f
+            ),
+        });
+    }
+    for p in [
+        Param::K1,
+        Param::K2,
+        Param::K3,
+        Param::P1,
+        Param::P2,
+        Param::L1,
+        Param::L2,
+    ] {
+        if free(p) {
+            model.set(p, 0.0);
+        }
+    }
+    if free(Param::K1) {
+        model.distortion.k1 = k1;
+    }
+    Ok((model, poses))
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The dense Jacobians at a state: `J` (2n × (p + 6 images)), the
+/// residuals, and per observation its point index and `∂r/∂P` (2 × 3).
+pub fn dense_jacobians(
+    data: &SurveyedData,
+    state: &SurveyedState,
+    free: &[Param],
+) -> Result<DenseJacobians, CalibError> {
+    let problem = SurveyedProblem::new(data, &state.model, free)?;
+    let p = free.len();
+    let n_images = data.images.len();
+    let rows: usize = data.images.iter().map(|i| 2 * i.points.len()).sum();
+    let cols = p + 6 * n_images;
+    let mut j = DMatrix::zeros(rows, cols);
+    let mut r = DVector::zeros(rows);
+    let mut jp = Vec::with_capacity(rows / 2);
+    let mut a = vec![0.0; 2 * p];
+    let mut row = 0;
+    for (i, image) in data.images.iter().enumerate() {
+        for k in 0..image.points.len() {
+            let (res, b, dp) = problem.linearize(state, i, k, &mut a)?;
+            for d in 0..2 {
+                r[row + d] = res[d];
+                for c in 0..p {
+                    j[(row + d, c)] = a[2 * c + d];
+                }
+                for c in 0..6 {
+                    j[(row + d, p + 6 * i + c)] = b[(d, c)];
+                }
+            }
+            jp.push((image.points[k].led, dp));
+            row += 2;
+        }
+    }
+    Ok((j, r, jp))
+}
+
+/// The covariance of `x = (θ_free, poses)` with the survey noise
+/// (module documentation) and σ_m².
+pub fn survey_covariance(
+    j: &DMatrix<f64>,
+    cost: f64,
+    jp: &[(usize, SMatrix<f64, 2, 3>)],
+    n_points: usize,
+    survey_sigma_mm: f64,
+) -> Option<(DMatrix<f64>, f64, f64)> {
+    let (rows, cols) = j.shape();
+    let dof = rows.checked_sub(cols).filter(|d| *d > 0)?;
+    let s = j.transpose() * j;
+    let s_inv = s.clone().cholesky()?.inverse();
+    // G = Jᵀ J_P, one 3-column block per surveyed point.
+    let mut g = DMatrix::<f64>::zeros(cols, 3 * n_points);
+    let mut trace_jp = 0.0;
+    for (obs, (point, dp)) in jp.iter().enumerate() {
+        let jrows = j.rows(2 * obs, 2);
+        let contribution = jrows.transpose() * dp;
+        let mut block = g.columns_mut(3 * point, 3);
+        block += contribution;
+        trace_jp += dp.norm_squared();
+    }
+    let sg = &s_inv * &g;
+    let trace_h = (g.transpose() * &sg).trace();
+    let sigma_s2 = survey_sigma_mm * survey_sigma_mm;
+    let share = sigma_s2 * (trace_jp - trace_h);
+    let sigma_m2 = (cost - share).max(0.0) / dof as f64;
+    let cov = &s_inv * sigma_m2 + (&sg * sg.transpose()) * sigma_s2;
+    Some((cov, sigma_m2, share))
+}
+
+/// Covariance, statistics and warnings of a refinement.
+fn finish(
+    data: &SurveyedData,
+    options: &SurveyedOptions,
+    refined: RefinedSurveyed,
+) -> Result<SurveyedCalibration, CalibError> {
+    if !refined.report.termination.converged() {
+        return Err(CalibError::NotConverged {
+            reason: format!(
+                "{} iterations without meeting a stopping criterion (cost {:.6e}); add \
+                 emitters spread over the field of view and in depth",
+                refined.report.iterations, refined.cost
+            ),
+        });
+    }
+    let state = &refined.state;
+    let (j, r, jp) = dense_jacobians(data, state, &options.free)?;
+    let (cov, sigma_m2, share) = survey_covariance(
+        &j,
+        refined.cost,
+        &jp,
+        data.points.len(),
+        options.survey_sigma_mm,
+    )
+    .ok_or_else(|| CalibError::Degenerate {
+        reason: format!(
+            "the parameters are not determined by these points ({} residuals for {} unknowns, \
+             or a singular geometry): add emitters spread over the field of view and in depth, \
+             or orientations",
+            j.nrows(),
+            j.ncols()
+        ),
+    })?;
+    let p = options.free.len();
+    let names: Vec<String> = options.free.iter().map(|q| q.name().to_string()).collect();
+    let rows: Vec<Vec<f64>> = (0..p)
+        .map(|a| (0..p).map(|b| cov[(a, b)]).collect())
+        .collect();
+    let covariance =
+        ParameterCovariance::from_named(&names, &rows).map_err(|e| CalibError::Numerical {
+            stage: "surveyed covariance",
+            reason: e.to_string(),
+        })?;
+    let pose_covariances = (0..data.images.len())
+        .map(|i| cov.fixed_view::<6, 6>(p + 6 * i, p + 6 * i).into_owned())
+        .collect();
+    let mut warnings = Vec::new();
+    if options.survey_sigma_mm > 0.0 && refined.cost < share {
+        warnings.push(format!(
+            "the residuals ({:.3e} mm²) are smaller than a survey σ of {} mm predicts ({:.3e} \
+             mm²): the survey is better than stated, and the reported uncertainty errs on the \
+             large side",
+            refined.cost, options.survey_sigma_mm, share
+        ));
+    }
+    if let Some(sd) = covariance.std("f") {
+        let f = state.model.get("f").unwrap_or(f64::NAN);
+        if sd > 0.2 * f {
+            return Err(CalibError::Degenerate {
+                reason: format!(
+                    "the focal length is not determined (f = {f:.4} ± {sd:.4} mm): add \
+                     emitters at different depths and across the whole field of view"
+                ),
+            });
+        }
+    }
+    let mut rms_per_image = Vec::new();
+    let mut offset = 0;
+    for image in &data.images {
+        let len = 2 * image.points.len();
+        let ss = r.rows(offset, len).norm_squared();
+        rms_per_image.push((ss / image.points.len() as f64).sqrt());
+        offset += len;
+    }
+    let points = r.len() / 2;
+    Ok(SurveyedCalibration {
+        model: state.model.clone(),
+        poses: state.poses.clone(),
+        covariance,
+        pose_covariances,
+        point_variance: sigma_m2,
+        cost: refined.cost,
+        rms_image_mm: (r.norm_squared() / points as f64).sqrt(),
+        rms_per_image_mm: rms_per_image,
+        points,
+        dof: j.nrows() - j.ncols(),
+        start: None,
+        report: refined.report,
+        warnings,
+    })
+}
+
+/// [`finish`] for a refinement from any start (the comparison with a fit
+/// started from the truth).
+pub fn finish_refined(
+    data: &SurveyedData,
+    options: &SurveyedOptions,
+    refined: RefinedSurveyed,
+) -> Result<SurveyedCalibration, CalibError> {
+    finish(data, options, refined)
+}
