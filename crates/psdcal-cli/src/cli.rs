@@ -253,7 +253,7 @@ pub enum Job {
     Diff(crate::cmd_diff::DiffArgs),
     Plan(crate::cmd_plan::PlanArgs),
     FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
-    CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
+    CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituConfig),
 }
 
 impl Cli {
@@ -296,7 +296,16 @@ impl Cli {
             Command::Diff(args) => Job::Diff(args),
             Command::Plan(args) => Job::Plan(args),
             Command::FocalCheck(args) => Job::FocalCheck(args),
-            Command::CalibrateInSitu(args) => Job::CalibrateInSitu(args),
+            Command::CalibrateInSitu(args) => {
+                let (files, load) = args.data.into_files(None)?;
+                Job::CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituConfig {
+                    files,
+                    load,
+                    survey_sigma: args.survey_sigma,
+                    out: args.out,
+                    poses_out: args.poses_out,
+                })
+            }
             Command::Calibrate(args) => {
                 let (files, load) = args.data.into_files(args.gains)?;
                 let FitList(free, fit_gains) = args.fit;

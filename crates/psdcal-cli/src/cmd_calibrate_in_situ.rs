@@ -7,20 +7,17 @@ use std::path::PathBuf;
 
 use clap::Args;
 use psdcal::option_text::non_negative_mm;
-use psdcal::{DataSet, DataSetFiles, LoadOptions, PointSource};
-use psdcal_model::PsdGeometry;
+use psdcal::{DataSet, DataSetFiles, LoadOptions};
 
 use crate::cli::Output;
 
 /// Arguments of `psdcal calibrate-in-situ`.
-#[derive(Debug, Clone, PartialEq, Args)]
+#[derive(Debug, Args)]
 pub struct InSituArgs {
-    /// Surveyed emitters: led, X_mm, Y_mm, Z_mm (room frame, mm)
-    #[arg(long, short = 't', value_name = "FILE")]
-    pub template: PathBuf,
-    /// Measured points: image (one per sensor orientation), led, x_mm, y_mm
-    #[arg(long, short = 'o', value_name = "FILE")]
-    pub observations: PathBuf,
+    /// The surveyed emitters (template.csv with Z_mm, room frame) and the
+    /// measured points, one image per sensor orientation
+    #[command(flatten)]
+    pub data: crate::cli::DataSetArgs,
     /// The survey's standard deviation per coordinate, mm
     #[arg(long, value_name = "MM", default_value_t = 0.0, value_parser = non_negative_mm, allow_negative_numbers = true)]
     pub survey_sigma: f64,
@@ -30,33 +27,26 @@ pub struct InSituArgs {
     /// Also write the sensor's poses in the room as rig.json sensor entries
     #[arg(long, value_name = "FILE")]
     pub poses_out: Option<PathBuf>,
-    /// Active-area side along x, mm
-    #[arg(long, default_value_t = 9.0)]
-    pub lx: f64,
-    /// Active-area side along y, mm
-    #[arg(long, default_value_t = 9.0)]
-    pub ly: f64,
+}
+
+/// Validated configuration of `psdcal calibrate-in-situ`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InSituConfig {
+    pub files: DataSetFiles,
+    pub load: LoadOptions,
+    pub survey_sigma: f64,
+    pub out: PathBuf,
+    pub poses_out: Option<PathBuf>,
 }
 
 /// Runs `calibrate-in-situ`.
-pub fn run(args: &InSituArgs, output: Output) -> anyhow::Result<()> {
-    let files = DataSetFiles {
-        template: args.template.clone(),
-        points: PointSource::Observations(args.observations.clone()),
-        gains: None,
-    };
-    let load = LoadOptions {
-        geometry: PsdGeometry {
-            lx: args.lx,
-            ly: args.ly,
-        },
-        strict: false,
-    };
-    let set = DataSet::from_files(&files, &load)?;
-    let mut result = psdcal::calibrate_in_situ(&set, args.survey_sigma)?;
+pub fn run(config: &InSituConfig, output: Output) -> anyhow::Result<()> {
+    let set = DataSet::from_files(&config.files, &config.load)?;
+    crate::report::print_warnings(set.warnings());
+    let mut result = psdcal::calibrate_in_situ(&set, config.survey_sigma)?;
     let argv: Vec<String> = std::env::args().collect();
     result.set_command(&argv.join(" "));
-    result.write(&args.out, args.poses_out.as_deref())?;
+    result.write(&config.out, config.poses_out.as_deref())?;
     let summary = psdcal::Summary::new(result.text(), result.json());
-    crate::report::emit(output, &summary.wrote([args.out.as_path()]))
+    crate::report::emit(output, &summary.wrote([config.out.as_path()]))
 }
