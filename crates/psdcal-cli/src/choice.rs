@@ -154,19 +154,12 @@ same_variants!(RawArg => psdcal::RawFormat { Csv, Npy, Tdms });
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ExportTo {
     /// OpenCV FileStorage YAML (the rational model)
-    Opencv,
+    #[value(name = "opencv")]
+    OpenCv,
     /// mrcal .cameramodel (LENSMODEL_OPENCV8)
     Mrcal,
     /// ROS camera_info YAML (plumb_bob or rational_polynomial)
     Ros,
 }
 
-impl From<ExportTo> for psdcal::ExportTarget {
-    fn from(to: ExportTo) -> Self {
-        match to {
-            ExportTo::Opencv => psdcal::ExportTarget::OpenCv,
-            ExportTo::Mrcal => psdcal::ExportTarget::Mrcal,
-            ExportTo::Ros => psdcal::ExportTarget::Ros,
-        }
-    }
-}
+same_variants!(ExportTo => psdcal::ExportTarget { OpenCv, Mrcal, Ros });

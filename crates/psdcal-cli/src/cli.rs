@@ -37,7 +37,7 @@ pub struct Cli {
 pub enum Command {
     /// Validate a calibration data set and summarise images, points and sensor coverage
     #[command(after_help = include_str!("../help/check.txt"))]
-    Check(CheckArgs),
+    Check(DataSetArgs),
     /// Calibrate a sensor from images of an LED template (adapted Zhang method + Levenberg-Marquardt)
     #[command(after_help = include_str!("../help/calibrate.txt"))]
     Calibrate(CalibrateArgs),
@@ -103,15 +103,9 @@ pub enum Command {
     FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
 }
 
-/// Arguments of `psdcal check`.
-#[derive(Debug, Args)]
-pub struct CheckArgs {
-    #[command(flatten)]
-    pub data: DataSetArgs,
-}
-
-/// A calibration data set's files and options (`check`, `calibrate`).
-#[derive(Debug, Args)]
+/// A calibration data set's files and options (`check`, `calibrate`,
+/// `calibrate-in-situ`).
+#[derive(Debug, Clone, PartialEq, Args)]
 #[command(group(ArgGroup::new("input").required(true).args(["observations", "signals"])))]
 pub struct DataSetArgs {
     /// Template: led, X_mm, Y_mm[, lines]
@@ -253,7 +247,7 @@ pub enum Job {
     Diff(crate::cmd_diff::DiffArgs),
     Plan(crate::cmd_plan::PlanArgs),
     FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
-    CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituConfig),
+    CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
 }
 
 impl Cli {
@@ -269,7 +263,7 @@ impl Cli {
         };
         let job = match self.command {
             Command::Check(args) => {
-                let (files, load) = args.data.into_files(None)?;
+                let (files, load) = args.into_files(None)?;
                 Job::Check(files, load)
             }
             Command::Gains(args) => Job::Gains(args),
@@ -296,16 +290,7 @@ impl Cli {
             Command::Diff(args) => Job::Diff(args),
             Command::Plan(args) => Job::Plan(args),
             Command::FocalCheck(args) => Job::FocalCheck(args),
-            Command::CalibrateInSitu(args) => {
-                let (files, load) = args.data.into_files(None)?;
-                Job::CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituConfig {
-                    files,
-                    load,
-                    survey_sigma: args.survey_sigma,
-                    out: args.out,
-                    poses_out: args.poses_out,
-                })
-            }
+            Command::CalibrateInSitu(args) => Job::CalibrateInSitu(args),
             Command::Calibrate(args) => {
                 let (files, load) = args.data.into_files(args.gains)?;
                 let FitList(free, fit_gains) = args.fit;
@@ -351,7 +336,7 @@ impl DataSetArgs {
     /// The files (with `gains`) and load options; the points come from
     /// exactly one of `--observations` and `--signals` (clap's group makes
     /// one required; this refuses both).
-    fn into_files(
+    pub(crate) fn into_files(
         self,
         gains: Option<PathBuf>,
     ) -> Result<(DataSetFiles, LoadOptions), clap::Error> {

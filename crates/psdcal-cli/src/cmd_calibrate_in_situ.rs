@@ -7,12 +7,12 @@ use std::path::PathBuf;
 
 use clap::Args;
 use psdcal::option_text::non_negative_mm;
-use psdcal::{DataSet, DataSetFiles, LoadOptions};
+use psdcal::DataSet;
 
 use crate::cli::Output;
 
 /// Arguments of `psdcal calibrate-in-situ`.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 pub struct InSituArgs {
     /// The surveyed emitters (template.csv with Z_mm, room frame) and the
     /// measured points, one image per sensor orientation
@@ -29,19 +29,10 @@ pub struct InSituArgs {
     pub poses_out: Option<PathBuf>,
 }
 
-/// Validated configuration of `psdcal calibrate-in-situ`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct InSituConfig {
-    pub files: DataSetFiles,
-    pub load: LoadOptions,
-    pub survey_sigma: f64,
-    pub out: PathBuf,
-    pub poses_out: Option<PathBuf>,
-}
-
 /// Runs `calibrate-in-situ`.
-pub fn run(config: &InSituConfig, output: Output) -> anyhow::Result<()> {
-    let set = DataSet::from_files(&config.files, &config.load)?;
+pub fn run(config: &InSituArgs, output: Output) -> anyhow::Result<()> {
+    let (files, load) = config.data.clone().into_files(None)?;
+    let set = DataSet::from_files(&files, &load)?;
     crate::report::print_warnings(set.warnings());
     let mut result = psdcal::calibrate_in_situ(&set, config.survey_sigma)?;
     let argv: Vec<String> = std::env::args().collect();
