@@ -383,10 +383,7 @@ impl Problem for SurveyedProblem<'_> {
             .poses
             .iter()
             .zip(&step.db)
-            .map(|(pose, d)| {
-                let a = pose.to_array();
-                Pose::from_array(&std::array::from_fn(|k| a[k] + d[k]))
-            })
+            .map(|(pose, d)| pose.stepped(d.as_slice()))
             .collect();
         Some(SurveyedState { model, poses })
     }

@@ -124,6 +124,13 @@ impl Pose {
         }
     }
 
+    /// The pose whose parameters `(rvec, t)` are this one's plus `delta`
+    /// (a solver's step on the pose block, in [`Self::to_array`]'s order).
+    pub fn stepped(&self, delta: &[f64]) -> Self {
+        let a = self.to_array();
+        Self::from_array(&std::array::from_fn(|k| a[k] + delta[k]))
+    }
+
     /// The rotation matrix `R(rvec)`.
     pub fn rotation(&self) -> Matrix3<f64> {
         let [a, b, _, _] = rodrigues_coefficients(self.rvec.norm());
@@ -206,6 +213,18 @@ mod tests {
 
     /// Where the two evaluations meet they must agree to the accuracy of the
     /// closed form there (its cancellation costs about ε/θ² ≈ 3e-14 in `c`, `d`).
+    #[test]
+    fn a_step_adds_to_rvec_then_t() {
+        let pose = Pose::new(
+            Vector3::new(0.1, -0.2, 0.3),
+            Vector3::new(10.0, 20.0, 500.0),
+        );
+        let d = [1e-3, 2e-3, -3e-3, 0.5, -0.25, 2.0];
+        let stepped = pose.stepped(&d);
+        assert_eq!(stepped.rvec, Vector3::new(0.101, -0.198, 0.297));
+        assert_eq!(stepped.t, Vector3::new(10.5, 19.75, 502.0));
+    }
+
     #[test]
     fn series_and_closed_form_agree_at_the_switch() {
         for theta in [0.08, 0.1, 0.12] {
