@@ -41,17 +41,15 @@ impl Figure for Coverage<'_> {
             .map_err(draw_err)?;
         for (k, set) in self.images.iter().enumerate() {
             let c = color(k);
-            let series = chart
+            chart
                 .draw_series(set.points.iter().map(|&p| Circle::new(p, 3, c.filled())))
                 .map_err(draw_err)?;
-            if labelled {
-                series.label(set.label.as_str()).legend(move |(x, y)| {
-                    Rectangle::new([(x, y - 4), (x + 10, y + 4)], c.filled())
-                });
-            }
         }
         if labelled {
-            legend(&mut chart)?;
+            let entries: Vec<_> = (self.images.iter().enumerate())
+                .map(|(k, set)| (set.label.as_str(), color(k)))
+                .collect();
+            legend(root, &chart, &entries)?;
         }
         Ok(())
     }

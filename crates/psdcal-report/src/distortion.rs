@@ -79,9 +79,7 @@ impl Figure for Spiral<'_> {
                 self.measured.iter().copied(),
                 red.stroke_width(1),
             ))
-            .map_err(draw_err)?
-            .label("measured")
-            .legend(move |(x, y)| Rectangle::new([(x, y - 4), (x + 10, y + 4)], red.filled()));
+            .map_err(draw_err)?;
         chart
             .draw_series(
                 self.measured
@@ -94,10 +92,8 @@ impl Figure for Spiral<'_> {
                 self.corrected.iter().copied(),
                 blue.stroke_width(2),
             ))
-            .map_err(draw_err)?
-            .label("corrected")
-            .legend(move |(x, y)| Rectangle::new([(x, y - 4), (x + 10, y + 4)], blue.filled()));
-        legend(&mut chart)?;
+            .map_err(draw_err)?;
+        legend(root, &chart, &[("measured", red), ("corrected", blue)])?;
         Ok(())
     }
 }

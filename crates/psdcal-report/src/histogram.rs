@@ -95,10 +95,8 @@ impl Figure for Histogram<'_> {
                     vec![(t, 0.0), (t, 1.1 * top)],
                     red.stroke_width(2),
                 )))
-                .map_err(draw_err)?
-                .label("truth")
-                .legend(move |(x, y)| Rectangle::new([(x, y - 1), (x + 10, y + 1)], red.filled()));
-            crate::plot::legend(&mut chart)?;
+                .map_err(draw_err)?;
+            crate::plot::legend(root, &chart, &[("truth", red)])?;
         }
         Ok(())
     }

@@ -327,24 +327,31 @@ pub(crate) fn build_chart<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
-/// The legend, outside the data: in the column right of the plotting area
-/// that [`chart_legend`] leaves free.
-pub(crate) fn legend<'a, DB: DrawingBackend + 'a>(
-    chart: &mut ChartContext<
-        'a,
-        DB,
-        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
-    >,
+/// The legend of a chart, in the column [`chart_legend`] keeps right of its
+/// plotting area, drawn on the figure's `root` area: each entry a colour
+/// swatch and its label. (A plotters series legend placed there would have
+/// its swatches clipped to the plotting area.)
+pub(crate) fn legend<DB: DrawingBackend, X: Ranged, Y: Ranged>(
+    root: &DrawingArea<DB, Shift>,
+    chart: &ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    entries: &[(&str, RGBColor)],
 ) -> Result<(), ReportError> {
-    let width = chart.plotting_area().dim_in_pixel().0 as i32;
-    chart
-        .configure_series_labels()
-        .label_font((FAMILY, 14))
-        .background_style(WHITE.mix(0.0))
-        .border_style(WHITE.mix(0.0))
-        .position(SeriesLabelPosition::Coordinate(width + 8, 0))
-        .draw()
-        .map_err(draw_err)
+    let area = chart.plotting_area();
+    let (x0, y0) = area.get_base_pixel();
+    let (r0, s0) = root.get_base_pixel();
+    let x = x0 - r0 + area.dim_in_pixel().0 as i32 + 12;
+    for (k, (label, c)) in entries.iter().enumerate() {
+        let y = y0 - s0 + 10 + 20 * k as i32;
+        root.draw(&Rectangle::new([(x, y - 5), (x + 12, y + 5)], c.filled()))
+            .map_err(draw_err)?;
+        root.draw(&Text::new(
+            label.to_string(),
+            (x + 18, y - 8),
+            (FAMILY, 14).into_font().color(&BLACK),
+        ))
+        .map_err(draw_err)?;
+    }
+    Ok(())
 }
 
 /// A data point.

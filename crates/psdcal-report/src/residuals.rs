@@ -62,17 +62,15 @@ impl Figure for Arrows<'_> {
             chart
                 .draw_series(ends.iter().map(|&(a, b)| arrow_parts(a, b, head, style).0))
                 .map_err(draw_err)?;
-            let series = chart
+            chart
                 .draw_series(ends.iter().map(|&(a, b)| arrow_parts(a, b, head, style).1))
                 .map_err(draw_err)?;
-            if labelled {
-                series.label(set.label.as_str()).legend(move |(x, y)| {
-                    Rectangle::new([(x, y - 4), (x + 10, y + 4)], c.filled())
-                });
-            }
         }
         if labelled {
-            legend(&mut chart)?;
+            let entries: Vec<_> = (self.sets.iter().enumerate())
+                .map(|(k, set)| (set.label.as_str(), color(k)))
+                .collect();
+            legend(root, &chart, &entries)?;
         }
         Ok(())
     }

@@ -32,17 +32,15 @@ impl Figure for Scatter<'_> {
         };
         for (k, set) in self.sets.iter().enumerate() {
             let c = color(k);
-            let series = chart
+            chart
                 .draw_series(set.points.iter().map(|&p| Circle::new(p, 3, c.filled())))
                 .map_err(draw_err)?;
-            if labelled {
-                series.label(set.label.as_str()).legend(move |(x, y)| {
-                    Rectangle::new([(x, y - 4), (x + 10, y + 4)], c.filled())
-                });
-            }
         }
         if labelled {
-            legend(&mut chart)?;
+            let entries: Vec<_> = (self.sets.iter().enumerate())
+                .map(|(k, set)| (set.label.as_str(), color(k)))
+                .collect();
+            legend(root, &chart, &entries)?;
         }
         Ok(())
     }

@@ -38,12 +38,13 @@ impl Figure for Lines<'_> {
                     curve.points.iter().copied(),
                     c.stroke_width(2),
                 ))
-                .map_err(draw_err)?
-                .label(curve.label.as_str())
-                .legend(move |(x, y)| Rectangle::new([(x, y - 4), (x + 10, y + 4)], c.filled()));
+                .map_err(draw_err)?;
         }
         if labelled {
-            legend(&mut chart)?;
+            let entries: Vec<_> = (self.curves.iter().enumerate())
+                .map(|(k, curve)| (curve.label.as_str(), color(k)))
+                .collect();
+            legend(root, &chart, &entries)?;
         }
         Ok(())
     }

@@ -172,3 +172,32 @@ fn png_variants_write_files() {
     histogram_png(&[1.0, 2.0, 2.5], Some(2.0), 5, "h", "x", &path).unwrap();
     assert!(std::fs::metadata(&path).unwrap().len() > 1000);
 }
+
+/// Every labelled set gets a colour swatch beside its label, right of the
+/// plotting area (the points are circles, so a filled rectangle of a set's
+/// colour can only be its swatch). Plotters' own series legend placed there
+/// had its swatches clipped away.
+#[test]
+fn legend_swatches_are_drawn_beside_the_data() {
+    let frame = Frame::sensor("Coverage", 9.0, 9.0);
+    let sets = vec![
+        PointSet {
+            label: "first".into(),
+            points: vec![(0.0, 0.0), (1.0, 1.0)],
+        },
+        PointSet {
+            label: "second".into(),
+            points: vec![(-1.0, 2.0)],
+        },
+    ];
+    let svg = coverage_svg(&sets, 9.0, 9.0, &frame).unwrap();
+    // The palette's first two colours.
+    for fill in ["#1F77B4", "#FF7F0E"] {
+        let swatches = svg
+            .lines()
+            .filter(|l| l.contains("<rect") && l.to_uppercase().contains(fill))
+            .count();
+        assert_eq!(swatches, 1, "{fill}: {swatches} swatches");
+    }
+    assert!(svg.contains("first") && svg.contains("second"));
+}
