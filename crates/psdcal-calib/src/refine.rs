@@ -143,6 +143,23 @@ pub struct FitState {
     pub poses: Vec<Pose>,
 }
 
+impl FitState {
+    /// The state a solver's `step` leads to: the model's freed `columns`
+    /// and each pose moved by their parts of it; `None` when the stepped
+    /// model is not valid (the solver then rejects the step).
+    pub fn stepped(&self, columns: &[usize], step: &Step) -> Option<FitState> {
+        let model = self.model.stepped(columns, step.da.as_slice());
+        model.validate().ok()?;
+        let poses = self
+            .poses
+            .iter()
+            .zip(&step.db)
+            .map(|(pose, d)| pose.stepped(d.as_slice()))
+            .collect();
+        Some(FitState { model, poses })
+    }
+}
+
 /// The calibration cost of a data set as a [`Problem`]: the model's freed
 /// columns are the global block, each image's pose a block of six.
 #[derive(Debug, Clone)]
@@ -407,15 +424,7 @@ impl Problem for CalibrationProblem<'_> {
     }
 
     fn apply_step(&self, state: &FitState, step: &Step) -> Option<FitState> {
-        let model = state.model.stepped(&self.columns, step.da.as_slice());
-        model.validate().ok()?;
-        let poses = state
-            .poses
-            .iter()
-            .zip(&step.db)
-            .map(|(pose, d)| pose.stepped(d.as_slice()))
-            .collect();
-        Some(FitState { model, poses })
+        state.stepped(&self.columns, step)
     }
 }
 

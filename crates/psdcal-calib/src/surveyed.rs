@@ -259,14 +259,8 @@ pub fn refine_surveyed(
     })
 }
 
-/// The model's parameters and one pose per image.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SurveyedState {
-    /// The model.
-    pub model: Model,
-    /// One `sensor_from_template` per image.
-    pub poses: Vec<Pose>,
-}
+/// The model's parameters and one pose per image: the planar fit's state.
+pub type SurveyedState = crate::refine::FitState;
 
 /// The image-plane cost of surveyed points as a solver [`Problem`].
 #[derive(Debug, Clone)]
@@ -377,15 +371,7 @@ impl Problem for SurveyedProblem<'_> {
     }
 
     fn apply_step(&self, state: &SurveyedState, step: &Step) -> Option<SurveyedState> {
-        let model = state.model.stepped(&self.columns, step.da.as_slice());
-        model.validate().ok()?;
-        let poses = state
-            .poses
-            .iter()
-            .zip(&step.db)
-            .map(|(pose, d)| pose.stepped(d.as_slice()))
-            .collect();
-        Some(SurveyedState { model, poses })
+        state.stepped(&self.columns, step)
     }
 }
 
