@@ -11,17 +11,14 @@
 
 use std::path::{Path, PathBuf};
 
-use clap::{ArgMatches, CommandFactory};
-
-use crate::cli::Cli;
+use clap::{ArgMatches, Command};
 
 /// Refuses a command whose output is one of its inputs (or two outputs that
-/// are one file).
-pub fn check(matches: &ArgMatches) -> Result<(), psdcal::IoError> {
+/// are one file); `command` is the definition `matches` were parsed with.
+pub fn check(command: &Command, matches: &ArgMatches) -> Result<(), psdcal::IoError> {
     let Some((name, given)) = matches.subcommand() else {
         return Ok(());
     };
-    let command = Cli::command();
     let Some(definition) = command.find_subcommand(name) else {
         return Ok(());
     };

@@ -42,7 +42,8 @@ use crate::cli::{Cli, Job};
 
 /// Parses the arguments, runs the job and prints; the process's exit code.
 pub fn main() -> ExitCode {
-    let matches = Cli::command().get_matches();
+    let mut command = Cli::command();
+    let matches = command.get_matches_mut();
     let cli = match Cli::from_arg_matches(&matches) {
         Ok(cli) => cli,
         Err(usage) => usage.exit(),
@@ -54,7 +55,7 @@ pub fn main() -> ExitCode {
         Ok(parsed) => parsed,
         Err(usage) => usage.exit(),
     };
-    if let Err(clash) = guard::check(&matches) {
+    if let Err(clash) = guard::check(&command, &matches) {
         eprintln!("error: {clash}");
         return ExitCode::from(2);
     }
