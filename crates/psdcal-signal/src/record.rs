@@ -424,6 +424,8 @@ pub fn demodulate_record<const C: usize>(
     let mut stream = StreamFilter::<C>::new(filter);
     let mut scratch_frames = [[0.0; C]; CHUNK];
     let mut window = Vec::with_capacity(window_len);
+    // Σ y² over the window per channel, in sample order.
+    let mut yy = [0.0; C];
     for (i, chunk) in frames.chunks(CHUNK).enumerate() {
         check_samples(chunk, i * CHUNK, config.full_scale_v)?;
         // The part of the chunk before the window, then the rest.
@@ -434,6 +436,11 @@ pub fn demodulate_record<const C: usize>(
         let kept = window.len();
         window.extend_from_slice(&chunk[split..]);
         stream.process_frames(&mut window[kept..]);
+        for frame in &window[kept..] {
+            for c in 0..C {
+                yy[c] += frame[c] * frame[c];
+            }
+        }
     }
 
     let mut ratio = 1.0;
@@ -497,13 +504,6 @@ pub fn demodulate_record<const C: usize>(
     let dof = (window_len - 2 * tones_hz.len()) as f64;
     let nu = stream.filter().noise_gain();
     let mut noise_sigma = [0.0; C];
-    // Σ y² per channel, in sample order.
-    let mut yy = [0.0; C];
-    for frame in &window {
-        for c in 0..C {
-            yy[c] += frame[c] * frame[c];
-        }
-    }
     for (c, sigma) in noise_sigma.iter_mut().enumerate() {
         let fitted: f64 = (0..theta.nrows())
             .map(|i| theta[(i, c)] * detection.b[(i, c)])

@@ -84,6 +84,26 @@ impl<const C: usize> StreamFilter<C> {
     /// every section on each frame in turn with the state in registers, as
     /// [`StreamFilter::process_channel`]; the same operations either way.
     pub fn process_frames(&mut self, frames: &mut [[f64; C]]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above).
+            return unsafe { self.process_frames_avx2(frames) };
+        }
+        self.process_frames_plain(frames)
+    }
+
+    /// [`StreamFilter::process_frames`] compiled for AVX2 (four channels in
+    /// one register; no fused multiply-add, so the same operations and the
+    /// same results).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn process_frames_avx2(&mut self, frames: &mut [[f64; C]]) {
+        self.process_frames_plain(frames)
+    }
+
+    /// The body of [`StreamFilter::process_frames`].
+    #[inline(always)]
+    fn process_frames_plain(&mut self, frames: &mut [[f64; C]]) {
         match self.filter.sections().len() {
             1 => self.frames_fixed::<1>(frames),
             2 => self.frames_fixed::<2>(frames),
