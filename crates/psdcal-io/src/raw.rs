@@ -538,38 +538,50 @@ impl<R: Read> NpyFrames<R> {
                 ),
             });
         }
-        for (i, chunk) in self.buf.chunks_exact(row_bytes).enumerate() {
-            let mut frame = [0.0; 4];
-            for (c, value) in frame.iter_mut().enumerate() {
-                let b = &chunk[c * self.dtype.bytes..(c + 1) * self.dtype.bytes];
-                *value = decode(b, self.dtype);
-                if !value.is_finite() {
-                    return Err(IoError::Structure {
-                        at: Location::file(&self.source),
-                        message: format!(
-                            "sample row {} (0-based), channel {}: not a finite number; expected \
-                             finite volts",
-                            self.next_row + i as u64,
-                            CHANNELS[c]
-                        ),
-                    });
-                }
-            }
-            out.push(frame);
+        let first = out.len();
+        out.reserve(n);
+        // One decoding loop per dtype (the dtype checked once per chunk).
+        match (self.dtype.bytes, self.dtype.big_endian) {
+            (4, false) => decode_rows::<4>(&self.buf, out, |b| f32::from_le_bytes(b) as f64),
+            (4, true) => decode_rows::<4>(&self.buf, out, |b| f32::from_be_bytes(b) as f64),
+            (8, false) => decode_rows::<8>(&self.buf, out, f64::from_le_bytes),
+            _ => decode_rows::<8>(&self.buf, out, f64::from_be_bytes),
+        }
+        let bad = out[first..]
+            .iter()
+            .position(|frame| !frame.iter().fold(true, |ok, v| ok & v.is_finite()));
+        if let Some(i) = bad {
+            let c = out[first + i]
+                .iter()
+                .position(|v| !v.is_finite())
+                .unwrap_or(0);
+            out.truncate(first);
+            return Err(IoError::Structure {
+                at: Location::file(&self.source),
+                message: format!(
+                    "sample row {} (0-based), channel {}: not a finite number; expected \
+                     finite volts",
+                    self.next_row + i as u64,
+                    CHANNELS[c]
+                ),
+            });
         }
         self.next_row += n as u64;
         Ok(n)
     }
 }
 
-fn decode(b: &[u8], dtype: NpyType) -> f64 {
-    match (b.len(), dtype.big_endian) {
-        (4, false) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-        (4, true) => f32::from_be_bytes([b[0], b[1], b[2], b[3]]) as f64,
-        (8, false) => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
-        (8, true) => f64::from_be_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
-        _ => f64::NAN,
-    }
+/// Appends the frames of `bytes` (rows of four `B`-byte values) decoded by
+/// `value`.
+fn decode_rows<const B: usize>(bytes: &[u8], out: &mut Vec<Frame>, value: impl Fn([u8; B]) -> f64) {
+    out.extend(bytes.chunks_exact(4 * B).map(|row| {
+        let at = |c: usize| {
+            let mut b = [0u8; B];
+            b.copy_from_slice(&row[c * B..(c + 1) * B]);
+            value(b)
+        };
+        [at(0), at(1), at(2), at(3)]
+    }));
 }
 
 /// Reads exactly `buf.len()` bytes; a short file is `UnexpectedEof`.

@@ -9,7 +9,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use psdcal_signal::butterworth::BandPass;
 use psdcal_signal::lockin::window_sums;
-use psdcal_signal::tones::fill_reference;
+use psdcal_signal::tones::{fill_reference, project_frames};
 use psdcal_signal::{demodulate_record, DemodConfig, StreamFilter};
 
 const FS: f64 = 20_000.0;
@@ -64,6 +64,9 @@ fn bench(c: &mut Criterion) {
             stream.process_frames(&mut buf);
             black_box(buf[N - 1])
         })
+    });
+    group.bench_function("I/Q projection, 4 channels (channel-samples)", |b| {
+        b.iter(|| project_frames(1000.0, FS, 0, black_box(&frames4)))
     });
     group.bench_function("demodulate record, 4 channels (channel-samples)", |b| {
         b.iter(|| demodulate_record(black_box(&frames4), FS, &[1000.0], &config).unwrap())

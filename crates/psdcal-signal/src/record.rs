@@ -40,6 +40,13 @@
 //!    (at most [`MAX_FREQUENCY_PASSES`] passes); the amplitudes are then detected
 //!    at `f_k (1 + ρ)`. An offset beyond [`MAX_CLOCK_OFFSET`] is not trusted
 //!    (aliasing of the phase steps) and the nominal frequencies are kept.
+//!    Each pass is one sweep over the window (the sub-windows' sums, and
+//!    those of the few samples after the last, add up to the whole
+//!    window's); when a pass's step would turn the highest tone by under
+//!    [`SETTLED_TURNS`] cycles (exact clocks: the first pass) the step is
+//!    not taken and the pass's sums at its own frequencies are the fit's
+//!    (no further sweep; the effect of so small a step on an amplitude is
+//!    ~1e-17).
 //! 6. **Noise**: the residual of the fit, `RSS = Σ y² − θᵀ Σ y φ`, over
 //!    `M − 2K` degrees of freedom is the variance of the filtered noise,
 //!    `σ² ν` for white input noise of variance `σ²` (`ν` the filter's
@@ -72,7 +79,7 @@ use serde::{Deserialize, Serialize};
 use crate::butterworth::BandPass;
 use crate::error::SignalError;
 use crate::stream::StreamFilter;
-use crate::tones::{check_separable, fill_reference};
+use crate::tones::{check_separable, project_frames};
 
 /// Fewest cycles of the lowest tone in the detection window.
 pub const MIN_WINDOW_CYCLES: f64 = 4.0;
@@ -83,6 +90,11 @@ pub const MAX_SNR_DB: f64 = 200.0;
 
 /// Largest relative clock offset `|ρ|` the frequency estimate trusts.
 pub const MAX_CLOCK_OFFSET: f64 = 1e-3;
+
+/// A pass whose step would turn the highest tone by fewer cycles than this
+/// over the window ends the estimate without the step: its frequencies and
+/// whole-window sums are the fit's (module documentation, step 5).
+pub const SETTLED_TURNS: f64 = 1e-9;
 
 /// Most passes of the frequency estimate (each shrinks the offset left by
 /// about three orders of magnitude; it stops when a pass moves the highest
@@ -226,29 +238,22 @@ impl Detection {
 }
 
 /// The sums of the joint fit of `freqs` over `frames` (sample `first` of the
-/// record at `frames[0]`).
+/// record at `frames[0]`): the Gram matrix in closed form, `Σ y φ` in one
+/// pass per tone ([`project_frames`]).
 fn detect<const C: usize>(
     frames: &[[f64; C]],
     first: usize,
     sample_rate_hz: f64,
     freqs: &[f64],
-    scratch: &mut Vec<f64>,
 ) -> Detection {
-    let m = frames.len();
     let p = 2 * freqs.len();
-    scratch.clear();
-    scratch.resize(p * m, 0.0);
-    for (k, &f) in freqs.iter().enumerate() {
-        let (c, s) = scratch[2 * k * m..(2 * k + 2) * m].split_at_mut(m);
-        fill_reference(f, sample_rate_hz, first, c, s);
-    }
-    let basis = |i: usize| &scratch[i * m..(i + 1) * m];
-    let gram = closed_form_gram(freqs, sample_rate_hz, first, m);
+    let gram = closed_form_gram(freqs, sample_rate_hz, first, frames.len());
     let mut b = DMatrix::zeros(p, C);
-    for i in 0..p {
-        let acc = frame_dot(frames, basis(i));
+    for (k, &f) in freqs.iter().enumerate() {
+        let [yc, ys] = project_frames(f, sample_rate_hz, first, frames);
         for c in 0..C {
-            b[(i, c)] = acc[c];
+            b[(2 * k, c)] = yc[c];
+            b[(2 * k + 1, c)] = ys[c];
         }
     }
     Detection { gram, b }
@@ -303,46 +308,28 @@ fn closed_form_gram(freqs: &[f64], sample_rate_hz: f64, first: usize, m: usize) 
     gram
 }
 
-/// `Σ_n frame[n][c] r[n]` per channel, in four interleaved partial sums.
-fn frame_dot<const C: usize>(frames: &[[f64; C]], r: &[f64]) -> [f64; C] {
-    let mut acc = [[0.0; C]; 4];
-    let (cf, cr) = (frames.chunks_exact(4), r.chunks_exact(4));
-    let mut out = [0.0; C];
-    for (frame, &v) in cf.remainder().iter().zip(cr.remainder()) {
-        for c in 0..C {
-            out[c] += frame[c] * v;
-        }
-    }
-    for (f4, r4) in cf.zip(cr) {
-        for lane in 0..4 {
-            for c in 0..C {
-                acc[lane][c] += f4[lane][c] * r4[lane];
-            }
-        }
-    }
-    for c in 0..C {
-        out[c] += (acc[0][c] + acc[1][c]) + (acc[2][c] + acc[3][c]);
-    }
-    out
-}
-
-/// The relative clock offset `Δρ` seen by `J` sub-windows at `freqs`, or
-/// `None` when nothing can be said (no signal, singular sub-fits).
+/// The relative clock offset `Δρ` seen by `J` sub-windows at `freqs`, with
+/// the whole window's `Σ y φ` at `freqs` from the same pass (the sums of the
+/// `J` sub-windows and of the `M − J⌊M/J⌋` samples after them); `None` when
+/// nothing can be said (no signal, singular sub-fits).
 fn clock_offset<const C: usize>(
     window: &[[f64; C]],
     first: usize,
     sample_rate_hz: f64,
     freqs: &[f64],
     subwindows: usize,
-    scratch: &mut Vec<f64>,
-) -> Option<f64> {
+) -> Option<(f64, DMatrix<f64>)> {
     let d = window.len() / subwindows;
     let mut previous: Option<DMatrix<f64>> = None;
     // Σ_c Σ_j z_{j+1} z̄_j per tone, as (re, im).
     let mut products = vec![(0.0, 0.0); freqs.len()];
+    let rest = subwindows * d;
+    let mut whole = detect(&window[rest..], first + rest, sample_rate_hz, freqs).b;
     for j in 0..subwindows {
         let part = &window[j * d..(j + 1) * d];
-        let (theta, _) = detect(part, first + j * d, sample_rate_hz, freqs, scratch).solve()?;
+        let detection = detect(part, first + j * d, sample_rate_hz, freqs);
+        whole += &detection.b;
+        let (theta, _) = detection.solve()?;
         if let Some(prev) = &previous {
             for (k, acc) in products.iter_mut().enumerate() {
                 for c in 0..C {
@@ -366,7 +353,7 @@ fn clock_offset<const C: usize>(
             den += w;
         }
     }
-    (den > 0.0 && num.is_finite()).then(|| num / den)
+    (den > 0.0 && num.is_finite()).then(|| (num / den, whole))
 }
 
 /// Demodulates one record of `C` channels for the tones `tones_hz` (one
@@ -430,21 +417,36 @@ pub fn demodulate_record<const C: usize>(
     let first = len - window_len;
     let window_s = window_len as f64 / sample_rate_hz;
     check_separable(tones_hz, sample_rate_hz, window_s)?;
-    check_samples(frames, config.full_scale_v)?;
 
-    // Band-pass from rest, keeping the window only.
+    // The samples checked and band-passed from rest in chunks that stay in
+    // the cache (checked up to the first offender, in sample order), the
+    // window kept.
     let mut stream = StreamFilter::<C>::new(filter);
-    let mut scratch_frames = [[0.0; C]; 256];
-    for chunk in frames[..first].chunks(scratch_frames.len()) {
-        let part = &mut scratch_frames[..chunk.len()];
-        part.copy_from_slice(chunk);
+    let mut scratch_frames = [[0.0; C]; CHUNK];
+    let mut window = Vec::with_capacity(window_len);
+    // Σ y² over the window per channel, in sample order.
+    let mut yy = [0.0; C];
+    for (i, chunk) in frames.chunks(CHUNK).enumerate() {
+        check_samples(chunk, i * CHUNK, config.full_scale_v)?;
+        // The part of the chunk before the window, then the rest.
+        let split = first.saturating_sub(i * CHUNK).min(chunk.len());
+        let part = &mut scratch_frames[..split];
+        part.copy_from_slice(&chunk[..split]);
         stream.process_frames(part);
+        let kept = window.len();
+        window.extend_from_slice(&chunk[split..]);
+        stream.process_frames(&mut window[kept..]);
+        for frame in &window[kept..] {
+            for c in 0..C {
+                yy[c] += frame[c] * frame[c];
+            }
+        }
     }
-    let mut window = frames[first..].to_vec();
-    stream.process_frames(&mut window);
 
-    let mut scratch = Vec::new();
     let mut ratio = 1.0;
+    // The whole window's Σ y φ from the last pass, when it settled at the
+    // frequencies it was run at.
+    let mut settled_sums = None;
     if config.estimate_frequency {
         let spacing = min_spacing(tones_hz);
         let subwindows = (2..=config.subwindows)
@@ -454,13 +456,21 @@ pub fn demodulate_record<const C: usize>(
             let mut rho = 0.0;
             for _ in 0..MAX_FREQUENCY_PASSES {
                 let freqs: Vec<f64> = tones_hz.iter().map(|f| f * (1.0 + rho)).collect();
-                match clock_offset(&window, first, sample_rate_hz, &freqs, j, &mut scratch) {
-                    Some(delta) if delta.abs() <= MAX_CLOCK_OFFSET => {
+                match clock_offset(&window, first, sample_rate_hz, &freqs, j) {
+                    Some((delta, sums)) if delta.abs() <= MAX_CLOCK_OFFSET => {
+                        let turns = delta.abs() * f_max * window_s;
+                        // A step that turns the highest tone by under
+                        // SETTLED_TURNS cycles is not taken: the pass's own
+                        // frequencies and sums are the result.
+                        if turns < SETTLED_TURNS {
+                            settled_sums = Some(sums);
+                            break;
+                        }
                         rho += delta * (1.0 + rho);
                         // Settled when the step turns the highest tone by
                         // under 1e-7 cycles over the window (its effect on an
                         // amplitude is then below 1e-13).
-                        if delta.abs() * f_max * window_s < 1e-7 {
+                        if turns < 1e-7 {
                             break;
                         }
                     }
@@ -469,11 +479,19 @@ pub fn demodulate_record<const C: usize>(
             }
             if rho.abs() <= MAX_CLOCK_OFFSET {
                 ratio = 1.0 + rho;
+            } else {
+                settled_sums = None;
             }
         }
     }
     let freqs: Vec<f64> = tones_hz.iter().map(|f| f * ratio).collect();
-    let detection = detect(&window, first, sample_rate_hz, &freqs, &mut scratch);
+    let detection = match settled_sums {
+        Some(b) => Detection {
+            gram: closed_form_gram(&freqs, sample_rate_hz, first, window_len),
+            b,
+        },
+        None => detect(&window, first, sample_rate_hz, &freqs),
+    };
     let Some((theta, inv)) = detection.solve() else {
         return Err(SignalError::TonesNotSeparable {
             first_hz: f_min,
@@ -490,8 +508,7 @@ pub fn demodulate_record<const C: usize>(
         let fitted: f64 = (0..theta.nrows())
             .map(|i| theta[(i, c)] * detection.b[(i, c)])
             .sum();
-        let yy: f64 = window.iter().map(|f| f[c] * f[c]).sum();
-        *sigma = ((yy - fitted).max(0.0) / (dof * nu)).sqrt();
+        *sigma = ((yy[c] - fitted).max(0.0) / (dof * nu)).sqrt();
     }
     let tones = tones_hz
         .iter()
@@ -549,13 +566,29 @@ fn min_spacing(tones_hz: &[f64]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// Non-finite samples and samples at the ADC's rails.
+/// Frames band-passed and checked at a time (8 KiB of 4-channel frames).
+const CHUNK: usize = 256;
+
+/// Non-finite samples and samples at the ADC's rails in `frames` (sample
+/// `offset` of the record at `frames[0]`): a branch-free scan (`|x| < rail`
+/// fails for both), then the first offender located.
 fn check_samples<const C: usize>(
     frames: &[[f64; C]],
+    offset: usize,
     full_scale_v: f64,
 ) -> Result<(), SignalError> {
     let rail = full_scale_v * (1.0 - 2f64.powi(-15));
-    for (sample, frame) in frames.iter().enumerate() {
+    let mut clean = true;
+    for frame in frames {
+        for v in frame {
+            clean &= v.abs() < rail;
+        }
+    }
+    if clean {
+        return Ok(());
+    }
+    for (i, frame) in frames.iter().enumerate() {
+        let sample = offset + i;
         for (channel, &value) in frame.iter().enumerate() {
             if !value.is_finite() {
                 return Err(SignalError::NonFiniteSample { channel, sample });

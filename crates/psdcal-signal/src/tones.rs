@@ -74,6 +74,95 @@ pub fn fill_reference(
 /// Interleaved rotations in [`fill_reference`].
 const LANES: usize = 4;
 
+/// The projections `(Σ_i y_i[c] c_{first+i}, Σ_i y_i[c] s_{first+i})` of every
+/// channel `c` of `frames` on the reference of the tone `frequency_hz`, the
+/// reference generated on the fly exactly as [`fill_reference`] fills it
+/// (the same values) and never stored: one pass over the frames for both
+/// quadratures and every channel. The products are summed in four
+/// interleaved partial sums by frame index modulo 4 (independent additions
+/// the processor overlaps), the last `len mod 4` frames in a fifth, added
+/// first: `tail + ((p₀ + p₁) + (p₂ + p₃))`.
+pub fn project_frames<const C: usize>(
+    frequency_hz: f64,
+    sample_rate_hz: f64,
+    first: usize,
+    frames: &[[f64; C]],
+) -> [[f64; C]; 2] {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2 (checked just above).
+        return unsafe { project_frames_avx2(frequency_hz, sample_rate_hz, first, frames) };
+    }
+    project_frames_plain(frequency_hz, sample_rate_hz, first, frames)
+}
+
+/// [`project_frames`] compiled for AVX2 (four channels in one register; no
+/// fused multiply-add, so the same operations and the same results).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn project_frames_avx2<const C: usize>(
+    frequency_hz: f64,
+    sample_rate_hz: f64,
+    first: usize,
+    frames: &[[f64; C]],
+) -> [[f64; C]; 2] {
+    project_frames_plain(frequency_hz, sample_rate_hz, first, frames)
+}
+
+/// The body of [`project_frames`].
+#[inline(always)]
+fn project_frames_plain<const C: usize>(
+    frequency_hz: f64,
+    sample_rate_hz: f64,
+    first: usize,
+    frames: &[[f64; C]],
+) -> [[f64; C]; 2] {
+    let ratio = frequency_hz / sample_rate_hz;
+    let (sw, cw) = (TAU * 4.0 * ratio).sin_cos();
+    let len = frames.len();
+    let mut acc_c = [[0.0; C]; LANES];
+    let mut acc_s = [[0.0; C]; LANES];
+    let mut tail_c = [0.0; C];
+    let mut tail_s = [0.0; C];
+    let mut start = 0;
+    while start < len {
+        let end = (start + RESYNC).min(len);
+        let mut c = [0.0; LANES];
+        let mut s = [0.0; LANES];
+        for lane in 0..LANES {
+            let arg = TAU * (((first + start + lane) as f64) * ratio).fract();
+            (s[lane], c[lane]) = arg.sin_cos();
+        }
+        let body = start + (end - start) / LANES * LANES;
+        for group in frames[start..body].chunks_exact(LANES) {
+            for lane in 0..LANES {
+                let frame = &group[lane];
+                for ch in 0..C {
+                    acc_c[lane][ch] += frame[ch] * c[lane];
+                    acc_s[lane][ch] += frame[ch] * s[lane];
+                }
+                let next_c = c[lane] * cw - s[lane] * sw;
+                s[lane] = s[lane] * cw + c[lane] * sw;
+                c[lane] = next_c;
+            }
+        }
+        for (k, frame) in frames[body..end].iter().enumerate() {
+            for ch in 0..C {
+                tail_c[ch] += frame[ch] * c[k];
+                tail_s[ch] += frame[ch] * s[k];
+            }
+        }
+        start = end;
+    }
+    let mut out = [tail_c, tail_s];
+    for (sums, acc) in out.iter_mut().zip([&acc_c, &acc_s]) {
+        for ch in 0..C {
+            sums[ch] += (acc[0][ch] + acc[1][ch]) + (acc[2][ch] + acc[3][ch]);
+        }
+    }
+    out
+}
+
 /// Checks that the tones `frequencies_hz` are finite, positive, below the
 /// Nyquist frequency and pairwise at least `2 / window_s` apart.
 ///
