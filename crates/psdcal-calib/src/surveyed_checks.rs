@@ -87,20 +87,23 @@ pub fn check_surveyed(
         .iter()
         .map(|n| covariance.std(n).unwrap_or(f64::NAN))
         .collect();
-    let ne = solver::normal_equations(&problem, state, None)?;
-    let fit = FitAtSolution {
-        problem: &problem,
-        state,
-        ne: &ne,
-        names: &names,
-        observations: 2 * data.images.iter().map(|i| i.points.len()).sum::<usize>(),
-        robust: None,
-    };
-    let linearity = check_quadratic(&fit, Some(&reported)).unwrap_or_else(|e| LinearityCheck {
-        parameters: Vec::new(),
-        verdict: UncertaintyVerdict::Unreliable {
-            reason: format!("the cost could not be evaluated around the solution: {e}"),
-        },
-    });
+    let linearity = solver::normal_equations(&problem, state, None)
+        .and_then(|ne| {
+            let fit = FitAtSolution {
+                problem: &problem,
+                state,
+                ne: &ne,
+                names: &names,
+                observations: 2 * data.images.iter().map(|i| i.points.len()).sum::<usize>(),
+                robust: None,
+            };
+            check_quadratic(&fit, Some(&reported))
+        })
+        .unwrap_or_else(|e| LinearityCheck {
+            parameters: Vec::new(),
+            verdict: UncertaintyVerdict::Unreliable {
+                reason: format!("the cost could not be evaluated around the solution: {e}"),
+            },
+        });
     Ok(SurveyedChecks { report, linearity })
 }
