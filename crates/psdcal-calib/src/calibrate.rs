@@ -264,7 +264,7 @@ fn calibrate_as_given(
             let method = analytic_method(&refined, &options.refine);
             Ok((
                 covariance_at(&at, data, &refined, &options.refine, method)?,
-                check_linearity_at(&at, data, &refined, &options.refine)?,
+                check_linearity_at(&at, data, &options.refine)?,
             ))
         },
         || {

@@ -82,7 +82,7 @@
 
 use nalgebra::{DMatrix, DVector, Matrix2x3, SymmetricEigen, Vector2};
 use psdcal_model::sensor::{electrode_currents, impact_point_gain_jacobian};
-use psdcal_model::{ChannelGains, Diagnostic, DiagnosticCode, PsdGeometry};
+use psdcal_model::{ChannelGains, Diagnostic, DiagnosticCode, Model, PsdGeometry};
 use psdcal_solver::normal_equations::{inverse_scaled, ResidualTerm, Step};
 use psdcal_solver::solver::{self, Problem};
 use serde::Serialize;
@@ -167,7 +167,48 @@ impl DiagnosticReport {
     }
 }
 
-/// Diagnoses a finished fit (module documentation): `refined` with the
+/// A fit whose residuals are image-plane errors `r = m̂ − m` (mm on the
+/// sensor, unweighted), one 2-vector per observation, image after image,
+/// with one pose block per image: what the residual-structure tests
+/// linearise. The planar fit's image-plane [`CalibrationProblem`] and the
+/// surveyed fit's problem ([`crate::surveyed::SurveyedProblem`]) are such fits.
+pub trait ImagePlaneFit: Problem<State = FitState, Error = CalibError> {
+    /// The PSD's active area (the fields' scale).
+    fn geometry(&self) -> &PsdGeometry;
+    /// Per image, its number of observations, in evaluation order.
+    fn image_sizes(&self) -> Vec<usize>;
+    /// The measured point `m` of observation `k` of image `i` under `model`
+    /// (a gains stage may recompute it from amplitudes).
+    fn measured_point(&self, model: &Model, i: usize, k: usize)
+        -> Result<Vector2<f64>, CalibError>;
+}
+
+impl ImagePlaneFit for CalibrationProblem<'_> {
+    fn geometry(&self) -> &PsdGeometry {
+        &self.data().geometry
+    }
+
+    fn image_sizes(&self) -> Vec<usize> {
+        self.data().images.iter().map(|i| i.points.len()).collect()
+    }
+
+    fn measured_point(
+        &self,
+        model: &Model,
+        i: usize,
+        k: usize,
+    ) -> Result<Vector2<f64>, CalibError> {
+        self.measured(model, i, k).map(|(m, _)| m).map_err(|e| {
+            crate::refine::point_error(self.data(), i, self.data().images[i].points[k].led, e)
+        })
+    }
+}
+
+/// What the user is told to do about a suspected gain imbalance, for a
+/// planar fit (whose gains can be fitted from signals.csv).
+pub const PLANAR_GAIN_ADVICE: &str = "fit the gains from the electrode signals (--signals \
+     signals.csv --fit f,cx,cy,k1,k2,gains), or measure them (psdcal gains) and give them with --gains";
+
 /// Diagnoses a finished fit (module documentation): `refined` with the
 /// options it was refined with, its covariance and the global search's
 /// report when there was one.
@@ -186,18 +227,49 @@ pub fn diagnose(
 
 /// The residual-structure part of [`diagnose`] (`model_misfit`,
 /// `gain_imbalance_suspected`), which needs no covariance: it can run
-/// while the covariance is computed.
+/// while the covariance is computed. The fit's problem is taken in the
+/// image plane whatever cost was minimised (module documentation).
 pub fn diagnose_structure(
     data: &CalibrationData,
     refined: &Refined,
     options: &RefineOptions,
     extra: &DiagnosticOptions,
 ) -> DiagnosticReport {
+    let free = options.free_names();
+    let Ok(problem) = CalibrationProblem::new(data, CostKind::Image, &refined.model, &free, None)
+    else {
+        return DiagnosticReport::default();
+    };
+    let state = FitState {
+        model: refined.model.clone(),
+        poses: refined.poses.clone(),
+    };
+    let gains_fitted = options.fit_gains && refined.model.gains_stage().is_some();
+    diagnose_residuals(&problem, &state, !gains_fitted, extra, PLANAR_GAIN_ADVICE)
+}
+
+/// The residual-structure tests (module documentation) of any
+/// image-plane fit at its solution `state`: `test_gains` when the fit has
+/// no gains of its own (the gain field is then tested), `gain_advice` what
+/// `gain_imbalance_suspected` tells the user to do.
+pub fn diagnose_residuals<P: ImagePlaneFit>(
+    problem: &P,
+    state: &FitState,
+    test_gains: bool,
+    extra: &DiagnosticOptions,
+    gain_advice: &str,
+) -> DiagnosticReport {
     let mut report = DiagnosticReport::default();
     // One linearisation of the fit's own problem with both fields appended
     // serves the structure tests.
-    if let Some(lin) = Linearised::new(data, refined, options) {
-        structure(data, extra, &lin, &mut report);
+    if let Some(lin) = Linearised::new(problem, state, test_gains) {
+        structure(
+            &problem.image_sizes(),
+            extra,
+            &lin,
+            gain_advice,
+            &mut report,
+        );
     }
     report
 }
@@ -213,7 +285,7 @@ pub fn diagnose_uncertainty(
     if let Some(g) = global {
         local_minima(g, covariance.sigma2, report);
     }
-    uncertainty(covariance, report);
+    diagnose_conditioning(covariance.matrix(), report);
 }
 
 /// The fit's problem linearised at the solution with the fields appended.
@@ -226,32 +298,22 @@ struct Linearised {
     s: DMatrix<f64>,
     /// The reduced gradient.
     g: DVector<f64>,
-    /// Per image, `V_i⁻¹` and the freed parameters' rows of `W_i`.
-
     /// `Σ ‖m̂ − m‖²`: the image-plane residual (unweighted).
     image_ss: f64,
 }
 
 impl Linearised {
-    fn new(data: &CalibrationData, refined: &Refined, options: &RefineOptions) -> Option<Self> {
-        let free = options.free_names();
-        let problem =
-            CalibrationProblem::new(data, CostKind::Image, &refined.model, &free, None).ok()?;
-        let state = FitState {
-            model: refined.model.clone(),
-            poses: refined.poses.clone(),
-        };
-        let gain = !(options.fit_gains && refined.model.gains_stage().is_some());
+    fn new<P: ImagePlaneFit>(problem: &P, state: &FitState, gain: bool) -> Option<Self> {
         let augmented = Augmented {
-            inner: &problem,
-            data,
+            inner: problem,
+            sizes: problem.image_sizes(),
             q: CUBIC_COLUMNS + if gain { GAIN_COLUMNS } else { 0 },
             gain,
             image_ss: std::cell::Cell::new(0.0),
         };
-        let ne = solver::normal_equations(&augmented, &state, None).ok()?;
+        let ne = solver::normal_equations(&augmented, state, None).ok()?;
         let s = ne.schur_complement()?;
-        let p = free.len();
+        let p = problem.global_len();
         let mut g = ne.g_a.clone();
         for i in 0..ne.v.len() {
             let v_inv = ne.v[i].cholesky()?.inverse();
@@ -282,16 +344,17 @@ impl Linearised {
 
 /// The residual-structure tests.
 fn structure(
-    data: &CalibrationData,
+    sizes: &[usize],
     extra: &DiagnosticOptions,
     lin: &Linearised,
+    advice: &str,
     report: &mut DiagnosticReport,
 ) {
-    let points = data.point_count();
+    let points: usize = sizes.iter().sum();
     if lin.image_ss <= EXACT_RMS_MM * EXACT_RMS_MM * points as f64 {
         return;
     }
-    let (n, poses, p) = (2 * points, 6 * data.images.len(), lin.p);
+    let (n, poses, p) = (2 * points, 6 * sizes.len(), lin.p);
     let ss = lin.image_ss;
     let base = lin.explained(false, false);
     let cubic = lin.explained(true, false);
@@ -307,8 +370,6 @@ fn structure(
         gain_explains = g.significant() && (gain.0 - base.0) >= GAIN_SHARE * (cubic.0 - base.0);
     }
     if gain_explains {
-        let advice = "fit the gains from the electrode signals (--signals signals.csv --fit \
-                      f,cx,cy,k1,k2,gains), or measure them (psdcal gains) and give them with --gains";
         let t = report.gain.unwrap_or(FIELD_NONE);
         report.diagnostics.push(Diagnostic::warning(
             DiagnosticCode::GainImbalanceSuspected,
@@ -483,9 +544,10 @@ fn field_values(geometry: &PsdGeometry, m: &Vector2<f64>, gain: bool, out: &mut 
 /// `δm = B β` of every measured point; the image-plane residual
 /// `project(θ, pose_i, X_j) − m` moves by `−B β` (the sign is immaterial).
 /// The columns are evaluated at each point's prediction `m̂ = m + r`.
-struct Augmented<'p, 'a> {
-    inner: &'p CalibrationProblem<'a>,
-    data: &'p CalibrationData,
+struct Augmented<'p, P> {
+    inner: &'p P,
+    /// Per image, its number of observations.
+    sizes: Vec<usize>,
     /// Columns appended.
     q: usize,
     /// Whether the gain field's columns follow the cubic field's.
@@ -494,7 +556,7 @@ struct Augmented<'p, 'a> {
     image_ss: std::cell::Cell<f64>,
 }
 
-impl Problem for Augmented<'_, '_> {
+impl<P: ImagePlaneFit> Problem for Augmented<'_, P> {
     type State = FitState;
     type Error = CalibError;
 
@@ -518,18 +580,18 @@ impl Problem for Augmented<'_, '_> {
         let mut ss = 0.0;
         let mut failed = None;
         self.inner.evaluate(state, jacobians, &mut |t| {
-            while k >= self.data.images[i].points.len() {
+            while k >= self.sizes[i] {
                 i += 1;
                 k = 0;
             }
             let r = Vector2::new(t.r[0], t.r[1]);
             ss += r.norm_squared();
             if jacobians {
-                match self.inner.measured(&state.model, i, k) {
-                    Ok((m, _)) => {
-                        field_values(&self.data.geometry, &(m + r), self.gain, &mut a[2 * p..])
+                match self.inner.measured_point(&state.model, i, k) {
+                    Ok(m) => {
+                        field_values(self.inner.geometry(), &(m + r), self.gain, &mut a[2 * p..])
                     }
-                    Err(e) => failed = Some((i, k, e)),
+                    Err(e) => failed = Some(e),
                 }
                 a[..2 * p].copy_from_slice(t.a);
                 visit(&ResidualTerm {
@@ -542,9 +604,8 @@ impl Problem for Augmented<'_, '_> {
             }
             k += 1;
         })?;
-        if let Some((i, k, e)) = failed {
-            let led = self.data.images[i].points[k].led;
-            return Err(crate::refine::point_error(self.data, i, led, e));
+        if let Some(e) = failed {
+            return Err(e);
         }
         self.image_ss.set(ss);
         Ok(())
@@ -585,9 +646,9 @@ fn local_minima(global: &GlobalReport, sigma2: f64, report: &mut DiagnosticRepor
     }
 }
 
-/// The uncertainty diagnostics: conditioning and curvature.
-fn uncertainty(covariance: &Covariance, report: &mut DiagnosticReport) {
-    let sigma = covariance.matrix();
+/// The conditioning part of `uncertainty_unreliable` (module
+/// documentation) for any fit's covariance of its freed parameters.
+pub fn diagnose_conditioning(sigma: &DMatrix<f64>, report: &mut DiagnosticReport) {
     let p = sigma.nrows();
     if p == 0 {
         return;

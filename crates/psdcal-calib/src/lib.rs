@@ -33,6 +33,7 @@ pub mod plan;
 pub mod refine;
 pub mod report;
 pub mod surveyed;
+pub mod surveyed_checks;
 pub mod weighting;
 
 pub use bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};

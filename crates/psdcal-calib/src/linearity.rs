@@ -17,12 +17,12 @@
 //! An exact fit (cost at the solver's exact-fit floor) has nothing to check.
 
 use nalgebra::{DVector, Vector6};
-use psdcal_solver::normal_equations::Step;
+use psdcal_solver::normal_equations::{NormalEquations, Step};
 use psdcal_solver::solver::{self, Problem};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::{AtSolution, RefineOptions, Refined};
+use crate::refine::{AtSolution, FitState, RefineOptions, Refined, RobustLoss};
 use crate::CalibError;
 
 /// Largest accepted `|ρ − 1|` (module documentation). Chosen from the
@@ -97,21 +97,60 @@ pub fn check_linearity(
     options: &RefineOptions,
 ) -> Result<LinearityCheck, CalibError> {
     let at = AtSolution::new(data, refined, options)?;
-    check_linearity_at(&at, data, refined, options)
+    check_linearity_at(&at, data, options)
 }
 
 /// [`check_linearity`] from the fit already linearised at its solution.
 pub(crate) fn check_linearity_at(
     at: &AtSolution<'_>,
     data: &CalibrationData,
-    refined: &Refined,
     options: &RefineOptions,
 ) -> Result<LinearityCheck, CalibError> {
-    let names = options.free_names();
-    let (problem, state, ne) = (&at.problem, &at.state, &at.ne);
-    let base = solver::cost(problem, state, options.robust)?;
-    let observations = 2 * data.point_count();
-    let unknowns = names.len() + 6 * refined.poses.len();
+    let fit = FitAtSolution {
+        problem: &at.problem,
+        state: &at.state,
+        ne: &at.ne,
+        names: &options.free_names(),
+        observations: 2 * data.point_count(),
+        robust: options.robust,
+    };
+    check_quadratic(&fit, None)
+}
+
+/// Any fit of model parameters and one pose per image linearised at its
+/// solution: what the check walks on.
+pub struct FitAtSolution<'f, P> {
+    /// The fit's problem (its cost is the one checked).
+    pub problem: &'f P,
+    /// The solution.
+    pub state: &'f FitState,
+    /// The undamped normal equations at the solution.
+    pub ne: &'f NormalEquations,
+    /// The freed parameters' names, in the problem's column order.
+    pub names: &'f [String],
+    /// Residual coordinates (`2 ·` points).
+    pub observations: usize,
+    /// The fit's robust loss.
+    pub robust: Option<RobustLoss>,
+}
+
+/// The check (module documentation) of any fit at its solution.
+/// `reported`: each freed parameter's reported σ when it is not the
+/// linear `σ_lin` (a covariance with more than the measurement noise, such
+/// as the survey's): the walk then goes to `±3σ_k` along the same
+/// direction, where the quadratic model predicts the rise
+/// `9 σ_k² / S⁻¹_kk`, and `ρ` is the actual rise over that.
+pub fn check_quadratic<P>(
+    fit: &FitAtSolution<'_, P>,
+    reported: Option<&[f64]>,
+) -> Result<LinearityCheck, CalibError>
+where
+    P: Problem<State = FitState, Error = CalibError>,
+{
+    let (problem, state, ne, names) = (fit.problem, fit.state, fit.ne, fit.names);
+    let base = solver::cost(problem, state, fit.robust)?;
+    let observations = fit.observations;
+    let unknowns = names.len() + 6 * state.poses.len();
     if observations <= unknowns || base <= EXACT_VARIANCE * observations as f64 {
         return Ok(LinearityCheck {
             parameters: Vec::new(),
@@ -132,8 +171,13 @@ pub(crate) fn check_linearity_at(
     let mut parameters = Vec::with_capacity(names.len());
     for (k, name) in names.iter().enumerate() {
         let column: DVector<f64> = s_inv.column(k).into_owned();
-        let sigma = (s2 * s_inv[(k, k)]).sqrt();
+        let sigma = match reported {
+            Some(sd) => sd.get(k).copied().unwrap_or(f64::NAN),
+            None => (s2 * s_inv[(k, k)]).sqrt(),
+        };
         let scale = 3.0 * sigma / s_inv[(k, k)];
+        // dᵀ S d with d = scale · S⁻¹ e_k (9 s² for σ_lin).
+        let predicted = scale * scale * s_inv[(k, k)];
         let rho = |sign: f64| -> f64 {
             let da = &column * (sign * scale);
             let db: Vec<Vector6<f64>> =
@@ -147,8 +191,8 @@ pub(crate) fn check_linearity_at(
             let step = Step { da, db };
             problem
                 .apply_step(state, &step)
-                .and_then(|moved| solver::cost(problem, &moved, options.robust).ok())
-                .map_or(f64::NAN, |c| (c - base) / (9.0 * s2))
+                .and_then(|moved| solver::cost(problem, &moved, fit.robust).ok())
+                .map_or(f64::NAN, |c| (c - base) / predicted)
         };
         parameters.push(ParameterLinearity {
             name: name.clone(),

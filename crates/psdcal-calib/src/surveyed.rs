@@ -32,6 +32,9 @@
 //! the survey's share: `E[cost] = σ_m² (2n − p) + σ_s² T`,
 //! `T = tr(J_Pᵀ J_P) − tr(Gᵀ S⁻¹ G)`, so
 //! `σ_m² = max(0, cost − σ_s² T) / (2n − p)`.
+//!
+//! *Diagnostics*: the planar fit's, on this problem
+//! ([`crate::surveyed_checks`]).
 
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x4, SMatrix, Vector2, Vector3};
 use psdcal_model::{Model, Param, ParameterCovariance, Pose, PsdGeometry, SensorModel};
@@ -39,6 +42,9 @@ use psdcal_solver::normal_equations::{ResidualTerm, Step};
 use psdcal_solver::solver::{self, Problem, SolverOptions, SolverReport};
 
 use crate::data::ImageObservations;
+use crate::diagnostics::DiagnosticReport;
+use crate::linearity::LinearityCheck;
+use crate::surveyed_checks::check_surveyed;
 use crate::CalibError;
 
 /// One point's residual, `∂r/∂pose` and `∂r/∂P`.
@@ -125,6 +131,11 @@ pub struct SurveyedCalibration {
     /// What the user should know (residuals smaller than the survey σ
     /// predicts, a poorly determined parameter).
     pub warnings: Vec<String>,
+    /// The diagnostics (calibration.json's `diagnostics`) and their
+    /// statistics ([`crate::surveyed_checks`]).
+    pub diagnostics: DiagnosticReport,
+    /// The cost at ±3σ of each freed parameter ([`crate::surveyed_checks`]).
+    pub linearity: LinearityCheck,
 }
 
 /// The whole calibration: checks, DLT start, refinement, covariance.
@@ -283,6 +294,11 @@ impl<'a> SurveyedProblem<'a> {
             })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self { data, columns })
+    }
+
+    /// The data set.
+    pub fn data(&self) -> &'a SurveyedData {
+        self.data
     }
 
     /// Residual, `∂r/∂θ_free` (2 × p, column-major into `a`), `∂r/∂pose`
@@ -826,6 +842,7 @@ fn finish(
         offset += len;
     }
     let points = r.len() / 2;
+    let checks = check_surveyed(data, options, state, &covariance)?;
     Ok(SurveyedCalibration {
         model: state.model.clone(),
         poses: state.poses.clone(),
@@ -840,6 +857,8 @@ fn finish(
         start: None,
         report: refined.report,
         warnings,
+        diagnostics: checks.report,
+        linearity: checks.linearity,
     })
 }
 

@@ -21,6 +21,9 @@ pub struct InSituArgs {
     /// The survey's standard deviation per coordinate, mm
     #[arg(long, value_name = "MM", default_value_t = 0.0, value_parser = non_negative_mm, allow_negative_numbers = true)]
     pub survey_sigma: f64,
+    /// Channel gains from `psdcal gains` (gains.json), divided out of the amplitudes (needs --signals)
+    #[arg(long, value_name = "FILE")]
+    pub gains: Option<PathBuf>,
     /// Output calibration.json (written atomically)
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
@@ -31,13 +34,13 @@ pub struct InSituArgs {
 
 /// Runs `calibrate-in-situ`.
 pub fn run(config: &InSituArgs, output: Output) -> anyhow::Result<()> {
-    let (files, load) = config.data.clone().into_files(None)?;
+    let (files, load) = config.data.clone().into_files(config.gains.clone())?;
     let set = DataSet::from_files(&files, &load)?;
     crate::report::print_warnings(set.warnings());
     let mut result = psdcal::calibrate_in_situ(&set, config.survey_sigma)?;
     let argv: Vec<String> = std::env::args().collect();
     result.set_command(&argv.join(" "));
     result.write(&config.out, config.poses_out.as_deref())?;
-    let summary = psdcal::Summary::new(result.text(), result.json());
-    crate::report::emit(output, &summary.wrote([config.out.as_path()]))
+    let summary = result.summary(&config.out, config.poses_out.as_deref());
+    crate::report::emit(output, &summary)
 }

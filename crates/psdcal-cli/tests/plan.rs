@@ -193,3 +193,50 @@ fn plan_simulate_calibrate_next_and_focal_check() {
         "the template must not be overwritten"
     );
 }
+
+#[test]
+fn next_refuses_a_calibration_whose_gains_were_fitted() {
+    // The example calibration with the gains among the estimated
+    // parameters: plan does not model them, and says so.
+    let dir = tempfile::tempdir().unwrap();
+    let valid = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/valid/calibration.json"
+    );
+    let mut cal: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(valid).unwrap()).unwrap();
+    // In 'std's order (the JSON object's keys come back sorted).
+    let names = ["cx", "cy", "f", "g_x2", "g_y1", "g_y2", "k1", "k2"];
+    let matrix: Vec<Vec<f64>> = (0..8)
+        .map(|a| (0..8).map(|b| if a == b { 1e-6 } else { 0.0 }).collect())
+        .collect();
+    cal["covariance"] = serde_json::json!({ "parameters": names, "matrix": matrix });
+    cal["stages"][0]["estimated"] = serde_json::json!(["g_x2", "g_y1", "g_y2"]);
+    for n in &names[3..6] {
+        cal["std"][*n] = serde_json::json!(1e-3);
+    }
+    let path = dir.path().join("cal.json");
+    std::fs::write(&path, cal.to_string()).unwrap();
+    let template = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../data/example/template.csv"
+    );
+    let out = psdcal([
+        "plan",
+        "--next",
+        "--calibration",
+        path.to_str().unwrap(),
+        "--template",
+        template,
+        "--snr",
+        "40",
+        "--out",
+        dir.path().join("next.csv").to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("channel gains") && err.contains("--fit"),
+        "{err}"
+    );
+}

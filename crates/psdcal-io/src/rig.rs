@@ -151,7 +151,9 @@ impl RigFile {
                 field: "sensors".into(),
                 message: format!(
                     "the rig has {} sensor(s); expected at least 2 (a position from rays needs \
-                     two sensors)",
+                     two sensors): list the entries of several sensors in one rig.json (each \
+                     sensor's calibrate-in-situ --poses-out gives its entry); one sensor's \
+                     angles need no rig: psdcal aoa --calibration",
                     list.len()
                 ),
             });

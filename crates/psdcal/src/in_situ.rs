@@ -16,7 +16,7 @@ use std::path::Path;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use psdcal_calib::{
     calibrate_surveyed, ImageObservations, Observation, SurveyedCalibration, SurveyedData,
-    SurveyedOptions,
+    SurveyedOptions, UncertaintyVerdict,
 };
 use psdcal_io::{
     write_atomic_bytes, write_calibration, Calibration, FitSummary, ImageFit, StdDevs,
@@ -28,6 +28,7 @@ use serde_json::{json, Value};
 use crate::dataset::DataSet;
 use crate::error::{Error, Result};
 use crate::provenance::provenance;
+use crate::Summary;
 
 /// An in-situ calibration with its records.
 #[derive(Debug, Clone)]
@@ -145,6 +146,7 @@ pub fn calibrate_in_situ(set: &DataSet, survey_sigma_mm: f64) -> Result<InSitu> 
         .zip(&result.rms_per_image_mm)
         .map(|((im, pose), rms)| ImageFit::new(&im.id, pose, *rms, im.points.len()))
         .collect();
+    record.diagnostics = result.diagnostics.diagnostics.clone();
     let region = ValidRegion::of_model(&result.model, geometry);
     record.valid_region = Some(ValidRegionRecord::from_region(&region));
     record.provenance = Some(provenance(
@@ -274,10 +276,21 @@ impl InSitu {
                 p.id, p.position_mm.x, p.position_mm.y, p.position_mm.z, d.x, d.y, d.z, rot_deg
             ));
         }
-        for w in &r.warnings {
-            out.push_str(&format!("warning: {w}\n"));
+        if let UncertaintyVerdict::Unreliable { reason } = &r.linearity.verdict {
+            out.push_str(&format!("  linearity at ±3σ: {reason}\n"));
         }
         out
+    }
+
+    /// The summary after writing calibration.json to `out` (and the poses
+    /// to `poses`): the text, the `--json` summary, and as warnings the
+    /// fit's warnings and diagnostics (as `calibrate` shows them).
+    pub fn summary(&self, out: &Path, poses: Option<&Path>) -> Summary {
+        let diagnostics = self.result.diagnostics.diagnostics.iter();
+        Summary::new(self.text(), self.json())
+            .wrote(std::iter::once(out).chain(poses))
+            .warn(&self.result.warnings)
+            .warn(diagnostics.map(|d| &d.message))
     }
 
     /// The `--json` summary.
@@ -293,6 +306,8 @@ impl InSitu {
             "iterations": r.report.iterations,
             "poses": self.poses_json("calibration.json")["sensors"].clone(),
             "warnings": r.warnings,
+            "diagnostics": r.diagnostics.diagnostics,
+            "linearity": r.linearity,
         })
     }
 }

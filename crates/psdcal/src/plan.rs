@@ -98,6 +98,22 @@ fn setup(request: &PlanRequest) -> Result<(PlanSetup, Option<LoadedSensor>)> {
     for (p, v) in &request.set {
         sensor.set(*p, *v);
     }
+    if let (None, Some(l)) = (&request.fit, &loaded) {
+        let gains = psdcal_model::stages::gains::GAIN_NAMES;
+        if l.sensor
+            .covariance
+            .names()
+            .iter()
+            .any(|n| gains.contains(&n.as_str()))
+        {
+            return Err(Error::Options(
+                "the calibration estimated the channel gains, which plan does not model yet (the \
+                 prediction would silently leave them out): give --fit with the sensor's \
+                 parameters (e.g. --fit f,cx,cy,k1,k2) to plan for them with the gains held"
+                    .into(),
+            ));
+        }
+    }
     let free: Vec<String> = match (&request.fit, &loaded) {
         (Some(fit), _) => fit.iter().map(|p| p.name().to_string()).collect(),
         (None, Some(l)) => l

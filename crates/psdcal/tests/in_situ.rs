@@ -77,6 +77,96 @@ fn files_to_calibration_and_rig_poses() {
     }
     assert!(insitu.text().contains("orientation 'o1'"));
     assert!(insitu.json()["poses"].as_array().unwrap().len() == 2);
+    // A clean scene: no diagnostics, the linearity check ran and holds.
+    assert!(record.diagnostics.is_empty(), "{:?}", record.diagnostics);
+    let json = insitu.json();
+    assert_eq!(json["diagnostics"].as_array().map(Vec::len), Some(0));
+    assert_eq!(json["linearity"]["verdict"]["verdict"], "reliable");
+    assert_eq!(
+        json["linearity"]["parameters"].as_array().map(Vec::len),
+        Some(5)
+    );
+}
+
+/// The impact point a PSD with relative channel gains `(x2, y1, y2)` (x1 = 1)
+/// reports for light at `m` (bilinear current shares, the pin-cushion
+/// formula on the amplified signals; a 9 × 9 mm area).
+fn through_gains(m: &nalgebra::Vector2<f64>, g: [f64; 3]) -> nalgebra::Vector2<f64> {
+    let (u, v) = (m.x / 4.5, m.y / 4.5);
+    let x1 = (1.0 - u) * (1.0 - v);
+    let x2 = (1.0 + u) * (1.0 + v) * g[0];
+    let y1 = (1.0 + u) * (1.0 - v) * g[1];
+    let y2 = (1.0 - u) * (1.0 + v) * g[2];
+    let s = x1 + x2 + y1 + y2;
+    nalgebra::Vector2::new(
+        4.5 * ((x2 + y1) - (x1 + y2)) / s,
+        4.5 * ((x2 + y2) - (x1 + y1)) / s,
+    )
+}
+
+#[test]
+fn unequal_gains_are_diagnosed_stored_and_warned() {
+    let options = InSituOptions {
+        orientations: 3,
+        emitters: 24,
+        survey_sigma_mm: 0.5,
+        ..InSituOptions::default()
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let mut scene = InSituScene::draw(&options, &mut rng).unwrap();
+    for seen in &mut scene.observations {
+        for (_, m) in seen.iter_mut() {
+            *m = through_gains(m, [1.04, 0.96, 1.03]);
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let files = write_scene(dir.path(), &scene, false);
+    let set = DataSet::from_files(&files, &LoadOptions::default()).unwrap();
+    let insitu = calibrate_in_situ(&set, options.survey_sigma_mm).unwrap();
+    let cal = dir.path().join("calibration.json");
+    insitu.write(&cal, None).unwrap();
+    let record = read_calibration(&cal).unwrap();
+    let codes: Vec<_> = record.diagnostics.iter().map(|d| d.code).collect();
+    assert!(
+        codes.contains(&psdcal_model::DiagnosticCode::GainImbalanceSuspected),
+        "{:?}",
+        record.diagnostics
+    );
+    let summary = insitu.summary(&cal, None);
+    assert!(summary
+        .warnings
+        .iter()
+        .any(|w| w.contains("unequal channel gains")));
+    assert_eq!(
+        summary.json["diagnostics"][0]["code"],
+        "gain_imbalance_suspected"
+    );
+}
+
+#[test]
+fn one_orientation_is_no_rig_and_the_reader_says_what_to_do() {
+    let options = InSituOptions::default();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let scene = InSituScene::draw(&options, &mut rng).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let files = write_scene(dir.path(), &scene, false);
+    let set = DataSet::from_files(&files, &LoadOptions::default()).unwrap();
+    let insitu = calibrate_in_situ(&set, options.survey_sigma_mm).unwrap();
+    let (cal, poses) = (dir.path().join("c.json"), dir.path().join("pose.json"));
+    insitu.write(&cal, Some(&poses)).unwrap();
+    let text = std::fs::read_to_string(&poses).unwrap();
+    let e = RigFile::from_json_str("pose.json", &text, dir.path())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("1 sensor(s)") && e.contains("at least 2"), "{e}");
+    assert!(e.contains("--poses-out") && e.contains("psdcal aoa"), "{e}");
+    // Two sensors' entries in one file make a rig.
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let mut second = value["sensors"][0].clone();
+    second["id"] = "other".into();
+    value["sensors"].as_array_mut().unwrap().push(second);
+    let rig = RigFile::from_json_str("rig.json", &value.to_string(), dir.path()).unwrap();
+    assert_eq!(rig.sensors.len(), 2);
 }
 
 #[test]
