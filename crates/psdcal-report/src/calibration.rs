@@ -45,6 +45,9 @@ pub enum PlotData {
         arrows: Vec<Arrow>,
         /// Arrow scale.
         scale: f64,
+        /// The valid region's boundary where the correction folds, as
+        /// polylines in sensor mm (empty: the region holds the whole area).
+        boundary: Vec<Vec<(f64, f64)>>,
         /// Title, labels, ranges.
         frame: Frame,
     },
@@ -131,8 +134,9 @@ impl Plot {
             PlotData::DistortionField {
                 arrows,
                 scale,
+                boundary,
                 frame,
-            } => distortion_field_svg(arrows, *scale, frame),
+            } => distortion_field_svg(arrows, *scale, boundary, frame),
             PlotData::Spiral {
                 measured,
                 corrected,
@@ -174,8 +178,9 @@ impl Plot {
             PlotData::DistortionField {
                 arrows,
                 scale,
+                boundary,
                 frame,
-            } => distortion_field_png(arrows, *scale, frame, path),
+            } => distortion_field_png(arrows, *scale, boundary, frame, path),
             PlotData::Spiral {
                 measured,
                 corrected,

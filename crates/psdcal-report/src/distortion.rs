@@ -21,10 +21,15 @@ fn field_sets(arrows: &[Arrow]) -> [ArrowSet; 1] {
 
 /// The distortion field: one arrow per grid point from the measured point
 /// to its ideal (corrected) point, lengths × `scale`. One `<polygon>` arrow
-/// head per arrow.
+/// head per arrow. `boundary`: the valid region's boundary where the
+/// correction folds (docs/model.md §8.2), as polylines in sensor mm, drawn
+/// in black (one `<polyline>` each) with the legend entry
+/// [`OUTLINE_LABEL`](crate::OUTLINE_LABEL); empty when the region holds the
+/// whole active area.
 pub fn distortion_field_svg(
     arrows: &[Arrow],
     scale: f64,
+    boundary: &[Vec<(f64, f64)>],
     frame: &Frame,
 ) -> Result<String, ReportError> {
     let sets = field_sets(arrows);
@@ -33,6 +38,7 @@ pub fn distortion_field_svg(
         scale,
         frame,
         what: "distortion field",
+        outline: boundary,
     })
 }
 
@@ -40,6 +46,7 @@ pub fn distortion_field_svg(
 pub fn distortion_field_png(
     arrows: &[Arrow],
     scale: f64,
+    boundary: &[Vec<(f64, f64)>],
     frame: &Frame,
     path: &Path,
 ) -> Result<(), ReportError> {
@@ -50,6 +57,7 @@ pub fn distortion_field_png(
             scale,
             frame,
             what: "distortion field",
+            outline: boundary,
         },
         path,
     )

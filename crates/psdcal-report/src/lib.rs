@@ -57,7 +57,7 @@ pub use html::{correlation_colour, inline_svg, Block, Page, Table};
 pub use number::{num, unit_text, value_with_sigma};
 pub use plot::{count_label, tick_label, Arrow, ArrowSet, Frame, PointSet};
 pub use poses::{poses_png, poses_svg, PoseOutline};
-pub use residuals::{residuals_png, residuals_svg};
+pub use residuals::{residuals_png, residuals_svg, OUTLINE_LABEL};
 pub use scatter::{scatter_png, scatter_svg};
 pub use sensitivity::{
     aoa_sensitivity_svg, line_plot_png, line_plot_svg, paper_sensitivity_curves,

@@ -17,7 +17,13 @@ pub(crate) struct Arrows<'a> {
     pub(crate) scale: f64,
     pub(crate) frame: &'a Frame,
     pub(crate) what: &'static str,
+    /// Polylines drawn over the arrows in black, with one legend entry
+    /// [`OUTLINE_LABEL`] (the distortion field's valid-region boundary).
+    pub(crate) outline: &'a [Vec<(f64, f64)>],
 }
+
+/// Legend entry of [`Arrows::outline`].
+pub const OUTLINE_LABEL: &str = "valid region boundary";
 
 impl Figure for Arrows<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), ReportError> {
@@ -36,8 +42,13 @@ impl Figure for Arrows<'_> {
                     .flat_map(|a| [a.at.0, a.at.1, a.delta.0, a.delta.1])
             }),
         )?;
+        finite(
+            self.what,
+            self.outline.iter().flatten().flat_map(|p| [p.0, p.1]),
+        )?;
         let labelled = self.sets.len() > 1 && self.sets.len() <= MAX_LEGEND;
-        let mut chart = if labelled {
+        let outlined = self.outline.iter().any(|l| l.len() > 1);
+        let mut chart = if labelled || outlined {
             chart_legend(root, self.frame)?
         } else {
             chart(root, self.frame)?
@@ -66,10 +77,24 @@ impl Figure for Arrows<'_> {
                 .draw_series(ends.iter().map(|&(a, b)| arrow_parts(a, b, head, style).1))
                 .map_err(draw_err)?;
         }
+        for line in self.outline.iter().filter(|l| l.len() > 1) {
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    line.clone(),
+                    BLACK.stroke_width(2),
+                )))
+                .map_err(draw_err)?;
+        }
+        let mut entries: Vec<_> = Vec::new();
         if labelled {
-            let entries: Vec<_> = (self.sets.iter().enumerate())
-                .map(|(k, set)| (set.label.as_str(), color(k)))
-                .collect();
+            entries.extend(
+                (self.sets.iter().enumerate()).map(|(k, set)| (set.label.as_str(), color(k))),
+            );
+        }
+        if outlined {
+            entries.push((OUTLINE_LABEL, BLACK));
+        }
+        if !entries.is_empty() {
             legend(root, &chart, &entries)?;
         }
         Ok(())
@@ -85,6 +110,7 @@ pub fn residuals_svg(sets: &[ArrowSet], scale: f64, frame: &Frame) -> Result<Str
         scale,
         frame,
         what: "residuals",
+        outline: &[],
     })
 }
 
@@ -101,6 +127,7 @@ pub fn residuals_png(
             scale,
             frame,
             what: "residuals",
+            outline: &[],
         },
         path,
     )

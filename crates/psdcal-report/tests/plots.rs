@@ -79,7 +79,7 @@ fn distortion_field_and_spiral() {
         })
         .collect();
     let frame = Frame::sensor("Distortion field ×20", 9.0, 9.0);
-    let svg = distortion_field_svg(&arrows, 20.0, &frame).unwrap();
+    let svg = distortion_field_svg(&arrows, 20.0, &[], &frame).unwrap();
     assert_axes(&svg, &frame);
     assert_eq!(count(&svg, "<polygon"), 25);
 
@@ -200,4 +200,85 @@ fn legend_swatches_are_drawn_beside_the_data() {
         assert_eq!(swatches, 1, "{fill}: {swatches} swatches");
     }
     assert!(svg.contains("first") && svg.contains("second"));
+}
+
+/// The `points` of every `<polyline>` of an SVG, in pixels.
+fn polylines(svg: &str) -> Vec<(String, Vec<(f64, f64)>)> {
+    svg.split("<polyline")
+        .skip(1)
+        .map(|rest| {
+            let tag = &rest[..rest.find("/>").unwrap()];
+            let start = tag.find("points=\"").unwrap() + 8;
+            let text = &tag[start..start + tag[start..].find('"').unwrap()];
+            let points = text
+                .split_whitespace()
+                .map(|p| {
+                    let (x, y) = p.split_once(',').unwrap();
+                    (x.parse().unwrap(), y.parse().unwrap())
+                })
+                .collect();
+            (tag.to_string(), points)
+        })
+        .collect()
+}
+
+#[test]
+fn distortion_field_draws_the_valid_region_boundary() {
+    // Two arrows at known points give the data → pixel map of each axis
+    // (an arrow's shaft, in the field's colour, starts at its point); the boundary, a circle of
+    // radius 3 mm about (0.5, −0.7) in 90 rays and closed, must come back
+    // from its pixels at that radius, to the pixel rounding.
+    let arrows = [
+        Arrow {
+            at: (-4.0, -4.0),
+            delta: (0.1, 0.0),
+        },
+        Arrow {
+            at: (4.0, 4.0),
+            delta: (0.1, 0.0),
+        },
+    ];
+    let (centre, radius) = ((0.5, -0.7), 3.0);
+    let circle: Vec<(f64, f64)> = (0..=90)
+        .map(|i| {
+            let t = std::f64::consts::TAU * (i % 90) as f64 / 90.0;
+            (centre.0 + radius * t.cos(), centre.1 + radius * t.sin())
+        })
+        .collect();
+    let frame = Frame::sensor("Distortion field", 9.0, 9.0);
+    let plain = distortion_field_svg(&arrows, 1.0, &[], &frame).unwrap();
+    let svg = distortion_field_svg(&arrows, 1.0, std::slice::from_ref(&circle), &frame).unwrap();
+    assert!(svg.contains(OUTLINE_LABEL) && !plain.contains(OUTLINE_LABEL));
+    let lines = polylines(&svg);
+    assert_eq!(lines.len(), polylines(&plain).len() + 1);
+    let shafts: Vec<(f64, f64)> = lines
+        .iter()
+        .filter(|(tag, p)| p.len() == 2 && !tag.contains("#000000"))
+        .map(|(_, p)| p[0])
+        .collect();
+    let (a, b) = (
+        shafts.iter().find(|p| p.0 < 300.0).copied().unwrap(),
+        shafts.iter().find(|p| p.0 > 300.0).copied().unwrap(),
+    );
+    let to_mm = |p: (f64, f64)| {
+        (
+            -4.0 + 8.0 * (p.0 - a.0) / (b.0 - a.0),
+            -4.0 + 8.0 * (p.1 - a.1) / (b.1 - a.1),
+        )
+    };
+    let mm_per_px = 8.0 / (b.0 - a.0).abs().min((b.1 - a.1).abs());
+    let (tag, outline) = lines
+        .iter()
+        .find(|(_, p)| p.len() == circle.len())
+        .expect("the boundary's polyline");
+    assert!(tag.contains("stroke=\"#000000\""), "{tag}");
+    for &p in outline {
+        let q = to_mm(p);
+        let r = (q.0 - centre.0).hypot(q.1 - centre.1);
+        assert!((r - radius).abs() <= 2.0 * mm_per_px, "{q:?} at {r} mm");
+    }
+    // Non-finite boundary points are refused like any other datum.
+    assert!(
+        distortion_field_svg(&arrows, 1.0, &[vec![(0.0, 0.0), (f64::NAN, 1.0)]], &frame).is_err()
+    );
 }

@@ -115,7 +115,7 @@ fn no_axis_of_any_plot_repeats_a_tick_label() {
             ("residuals", residuals_svg(&[set], 1.0, &frame).unwrap()),
             (
                 "distortion",
-                distortion_field_svg(&arrows, 1.0, &frame).unwrap(),
+                distortion_field_svg(&arrows, 1.0, &[], &frame).unwrap(),
             ),
             ("spiral", spiral_svg(&pts, &pts, &frame).unwrap()),
             ("lines", line_plot_svg(&sets, &frame).unwrap()),

@@ -248,6 +248,40 @@ fn region_boundary(region: &ValidRegion) -> PointSet {
     }
 }
 
+/// The valid region's boundary where the correction folds, as polylines
+/// for the distortion field: the runs of consecutive rays (docs/model.md
+/// §8.2) whose boundary point is a fold inside `frame`'s ranges, a closed
+/// loop when every ray is. Empty when the region holds the whole active area.
+fn region_outline(region: &ValidRegion, frame: &Frame) -> Vec<Vec<(f64, f64)>> {
+    if region.whole_active_area() {
+        return Vec::new();
+    }
+    let points = region.boundary();
+    let n = points.len();
+    let within = |r: (f64, f64), v: f64| v >= r.0 && v <= r.1;
+    let shown: Vec<bool> = (0..n)
+        .map(|i| {
+            let p = points[i];
+            region.folds_on_ray(i) && within(frame.x_range, p.x) && within(frame.y_range, p.y)
+        })
+        .collect();
+    let xy = |i: usize| (points[i].x, points[i].y);
+    let Some(gap) = shown.iter().position(|s| !s) else {
+        return vec![(0..=n).map(|i| xy(i % n)).collect()];
+    };
+    let mut lines = Vec::new();
+    let mut line = Vec::new();
+    for k in 1..=n {
+        let i = (gap + k) % n;
+        if shown[i] {
+            line.push(xy(i));
+        } else if !line.is_empty() {
+            lines.push(std::mem::take(&mut line));
+        }
+    }
+    lines
+}
+
 /// The valid region in one line, for the report's list.
 fn region_text(region: &ValidRegion) -> String {
     let c = region.centre();
@@ -258,7 +292,7 @@ fn region_text(region: &ValidRegion) -> String {
         Some(r) => format!(
             "valid region: NOT the whole active area — the distortion correction folds {r:.3} mm \
              from the optical centre ({:.3}, {:.3}) mm at the nearest; points beyond are \
-             answered outside_valid_region (the boundary is drawn on the coverage plot)",
+             answered outside_valid_region (the boundary is drawn on the coverage and distortion-field plots)",
             c.x, c.y
         ),
         None => "valid region: not the whole active area (the optical centre is far off it)".into(),
@@ -475,20 +509,28 @@ fn model_plots(plots: &mut Vec<Plot>, model: &SensorModel, region: &ValidRegion,
         })
         .collect();
     let scale = arrow_scale(field.iter(), lx.max(ly) * 1.1);
+    let frame = Frame::sensor(
+        &format!("Distortion correction × {}", round_scale(scale)),
+        lx,
+        ly,
+    );
+    let boundary = region_outline(region, &frame);
     plots.push(Plot {
         name: "distortion_field",
         caption: format!(
-            "Correction of the calibrated model, measured → ideal point, arrows scaled × {} (paper Figure 16)",
-            round_scale(scale)
+            "Correction of the calibrated model, measured → ideal point, arrows scaled × {} (paper Figure 16){}",
+            round_scale(scale),
+            if boundary.is_empty() {
+                ""
+            } else {
+                "; black: the valid region's boundary, where the correction folds (no arrows beyond)"
+            }
         ),
         data: PlotData::DistortionField {
             arrows: field,
             scale,
-            frame: Frame::sensor(
-                &format!("Distortion correction × {}", round_scale(scale)),
-                lx,
-                ly,
-            ),
+            boundary,
+            frame,
         },
     });
     let (measured, corrected) = spiral(model, region, 0.45 * lx.min(ly));

@@ -140,6 +140,7 @@ pub(crate) fn map_plots(sensor: &CalibratedSensor) -> Vec<Plot> {
             data: PlotData::DistortionField {
                 arrows,
                 scale,
+                boundary: Vec::new(),
                 frame: Frame::sensor(
                     &format!("PSD map × {}", crate::report::scale_text(scale)),
                     lx,

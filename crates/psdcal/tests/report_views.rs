@@ -131,3 +131,68 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
     let html = std::fs::read_to_string(written.html).unwrap();
     assert!(html.contains("PSD map") && !html.contains("<script"));
 }
+
+/// Issue 12's folding calibration (k1 = −0.02 mm⁻² about (0.5, −0.7): the
+/// radial correction's determinant (1 + k1 r²)(1 + 3 k1 r²) first vanishes
+/// at r* = 1/√(3 · 0.02) = 4.08 mm, inside the active area in some
+/// directions): the distortion field carries the valid region's boundary,
+/// every drawn point at r* from the centre and inside the plot, and the
+/// drawing holds its legend entry. A calibration that does not fold has
+/// none.
+#[test]
+fn the_distortion_field_draws_the_valid_region_boundary() {
+    use psdcal_io::{write_calibration, Calibration, Covariance, StdDevs};
+    use psdcal_model::{Param, SensorModel};
+    let dir = tempfile::tempdir().unwrap();
+    let field = |k1: f64| {
+        let mut model = SensorModel::pinhole(8.0, 0.5, -0.7);
+        model.distortion.k1 = k1;
+        let mut cal = Calibration::from_model(&model, &PsdGeometry::default());
+        cal.set_estimated(&[Param::F]);
+        cal.std = StdDevs(vec![("f".into(), 0.01)]);
+        cal.covariance = Covariance {
+            parameters: vec!["f".into()],
+            matrix: vec![vec![1e-4]],
+        };
+        cal.store_valid_region();
+        let path = dir.path().join(format!("cal{k1}.json"));
+        write_calibration(&path, &cal).unwrap();
+        let request = ReportRequest {
+            calibration: path.clone(),
+            data: None,
+            out: dir.path().join("report"),
+        };
+        let loaded = LoadedSensor::read(&path).unwrap();
+        let content = report_content(&request, &loaded, None).unwrap();
+        content
+            .plots
+            .into_iter()
+            .find(|p| p.name == "distortion_field")
+            .expect("a distortion field")
+    };
+    let plot = field(-0.02);
+    let PlotData::DistortionField {
+        boundary, frame, ..
+    } = &plot.data
+    else {
+        panic!("not a field: {:?}", plot.data)
+    };
+    let r_star = 1.0 / (3.0f64 * 0.02).sqrt();
+    let points: Vec<(f64, f64)> = boundary.iter().flatten().copied().collect();
+    assert!(points.len() >= 20, "{} boundary points", points.len());
+    for &(x, y) in &points {
+        let r = (x - 0.5).hypot(y + 0.7);
+        assert!((r - r_star).abs() <= 1e-6 * r_star, "({x}, {y}) at {r} mm");
+        assert!(x >= frame.x_range.0 && x <= frame.x_range.1);
+        assert!(y >= frame.y_range.0 && y <= frame.y_range.1);
+    }
+    let svg = plot.svg().unwrap();
+    assert!(svg.contains(psdcal_report::OUTLINE_LABEL));
+    assert!(plot.caption.contains("valid region"));
+    let plain = field(0.0);
+    let PlotData::DistortionField { boundary, .. } = &plain.data else {
+        panic!("not a field")
+    };
+    assert!(boundary.is_empty());
+    assert!(!plain.svg().unwrap().contains(psdcal_report::OUTLINE_LABEL));
+}
