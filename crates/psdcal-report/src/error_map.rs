@@ -55,7 +55,7 @@ struct HeatMap<'a> {
 
 impl Figure for HeatMap<'_> {
     fn size(&self) -> (u32, u32) {
-        (620, 500)
+        (500, 420)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), ReportError> {
@@ -84,7 +84,7 @@ impl Figure for HeatMap<'_> {
             hi = lo + if lo == 0.0 { 1.0 } else { lo.abs() * 1e-3 };
         }
         let width = root.dim_in_pixel().0;
-        let (left, right) = root.split_horizontally(width.saturating_sub(136));
+        let (left, right) = root.split_horizontally(width.saturating_sub(124));
         let mut chart = chart(&left, self.frame)?;
         // 20 % more than a cell (a pixel or more at the figure's size):
         // neighbours overlap, so no hairline of the background shows between
@@ -103,7 +103,7 @@ impl Figure for HeatMap<'_> {
             .margin_top(42)
             .margin_bottom(54)
             .margin_right(8)
-            .y_label_area_size(88)
+            .y_label_area_size(78)
             .build_cartesian_2d(0.0..1.0, lo..hi)
             .map_err(draw_err)?;
         bar.configure_mesh()

@@ -15,7 +15,8 @@ margin:0 auto;padding:1rem;max-width:72rem;color:#1a1a1a;background:#fff;line-he
 h1{font-size:1.6rem}h2{font-size:1.3rem;margin-top:2rem;border-bottom:1px solid #ccc}\
 .table-wrap{max-width:100%;overflow-x:auto;margin:0.5rem 0 1rem}\
 table{border-collapse:collapse;font-size:0.9rem;font-variant-numeric:tabular-nums}\
-caption{text-align:left;font-weight:600;padding:0.3rem 0}\
+caption{text-align:left;font-weight:600;padding:0.3rem 0;position:sticky;left:0;\
+max-width:calc(100vw - 2rem)}\
 th,td{border:1px solid #ccc;padding:0.25rem 0.5rem;text-align:right;white-space:nowrap}\
 th:first-child,td:first-child{text-align:left}thead th{background:#f2f2f2;white-space:normal}\
 .correlation td{text-align:center;min-width:3.2em}\
