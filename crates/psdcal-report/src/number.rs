@@ -20,6 +20,14 @@ pub fn num(x: f64) -> String {
     }
 }
 
+/// A number that rounded to zero printed without its sign (`-0.0` → `0.0`).
+fn unsigned_zero(text: String) -> String {
+    match text.strip_prefix('-') {
+        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_string(),
+        _ => text,
+    }
+}
+
 fn superscript(n: i32) -> String {
     let digits = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
     let mut s = String::new();
@@ -75,7 +83,10 @@ fn format_value(value: f64, sigma: Option<f64>, digits: usize, unit: &str) -> St
         Some(s) => {
             // σ to two significant digits; the value to the same place.
             let decimals = (1 - s.log10().floor() as i32).clamp(0, 15) as usize;
-            format!("{v:.decimals$} ± {s:.decimals$}")
+            format!(
+                "{} ± {s:.decimals$}",
+                unsigned_zero(format!("{v:.decimals$}"))
+            )
         }
         None => {
             let decimals = if v == 0.0 {
@@ -83,7 +94,7 @@ fn format_value(value: f64, sigma: Option<f64>, digits: usize, unit: &str) -> St
             } else {
                 (digits as i32 - 1 - v.abs().log10().floor() as i32).clamp(0, 15) as usize
             };
-            format!("{v:.decimals$}")
+            unsigned_zero(format!("{v:.decimals$}"))
         }
     };
     match (exponent, sigma.is_some_and(|s| s > 0.0)) {
@@ -128,5 +139,9 @@ mod tests {
         assert_eq!(value_with_digits(3373.4, 3, "mm"), "3373 mm");
         assert_eq!(value_with_digits(3.0864e-5, 2, "mm^-2"), "3.1 × 10⁻⁵ mm⁻²");
         assert_eq!(value_with_digits(-0.084, 2, ""), "-0.084");
+        assert_eq!(
+            value_with_sigma(-2e-8, Some(2.3e-6), ""),
+            "(0.0 ± 2.3) × 10⁻⁶"
+        );
     }
 }
