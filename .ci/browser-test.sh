@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
-# Browser test of `psdcal report` and `psdcal evaluate --report`: each page
+# Browser test of `psdcal report`, `psdcal evaluate --report` and
+# `psdcal study --report` (a small study: Table 1 and Figure 9, 3 trials): each page
 # renders in headless Chromium at 1200 px and at 390 px (a phone) without
 # console errors, and its screenshots are not blank.
 #
 # Installs Debian's `chromium` when it is missing (CI runs as root).
 # Usage: .ci/browser-test.sh [SCREENSHOT_PREFIX]   (default: a temporary folder;
-#        writes PREFIX-report-1200.png, PREFIX-report-390.png, PREFIX-evaluation-….png)
+#        writes PREFIX-report-1200.png, PREFIX-report-390.png, PREFIX-evaluation-….png,
+#        PREFIX-study-….png)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 started=$(date +%s)
@@ -32,6 +34,9 @@ psdcal=${CARGO_TARGET_DIR:-target}/release/psdcal
     --point-sigma 0.0007 --out "$work/room/estimates.csv"
 "$psdcal" -q evaluate --truth "$work/room/truth.csv" --estimates "$work/room/estimates.csv" \
     --rig "$work/room/rig.json" --report "$work/evaluation"
+# The cheapest study with every part of the page (tables, the bias, the
+# paper's numbers, Figure 9's heat maps, histograms): a few seconds.
+"$psdcal" -q study table1 fig9 --trials 3 --out "$work/study" --report "$work/study-page"
 
 # check_page NAME PAGE WIDTH: render PAGE at WIDTH px; fail on a script,
 # console errors, or a (nearly) blank screenshot.
@@ -110,5 +115,6 @@ PY
 for width in 1200 390; do
     check_page report "$work/report/report.html" "$width"
     check_page evaluation "$work/evaluation/evaluation.html" "$width"
+    check_page study "$work/study-page/study.html" "$width"
 done
-echo "browser-test: OK: report.html and evaluation.html render without console errors at 1200 and 390 px ($(( $(date +%s) - started )) s)"
+echo "browser-test: OK: report.html, evaluation.html and study.html render without console errors at 1200 and 390 px ($(( $(date +%s) - started )) s)"

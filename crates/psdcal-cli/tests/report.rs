@@ -179,8 +179,19 @@ fn study_report_page_has_tables_and_histograms() {
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(stdout(&run).is_empty());
     let html = std::fs::read_to_string(page.join("study.html")).unwrap();
-    assert!(html.contains("<table>") && html.contains("f (mm)"));
+    assert!(html.contains("<table>") && html.contains("focal length f (mm)"));
     assert!(html.contains("Histograms"));
+    // Issue 18: warnings and what was run first, the bias against the truth
+    // and the paper's numbers beside psdcal's, numbers rounded by the spread.
+    let at = |s: &str| html.find(s).unwrap_or_else(|| panic!("{s} missing"));
+    assert!(at("<h2>Warnings</h2>") < at("<h2>What was run</h2>"));
+    assert!(at("<h2>What was run</h2>") < at("<h2>Table 1 (lens 1)"));
+    assert!(html.contains("Only 3 trials per condition"));
+    assert!(html.contains("Command: psdcal study table1 --trials 3 --seed 1"));
+    assert!(html.contains(concat!("psdcal version: ", env!("CARGO_PKG_VERSION"))));
+    assert!(html.contains("Bias: mean − true value") && html.contains("style=\"background:"));
+    assert!(html.contains("The paper&#39;s numbers") && html.contains(">26.215</td>"));
+    assert!(html.contains(" ± "));
     assert!(html.matches("<svg").count() >= 3);
     assert!(!html.contains("<script"));
 }

@@ -55,7 +55,7 @@ struct HeatMap<'a> {
 
 impl Figure for HeatMap<'_> {
     fn size(&self) -> (u32, u32) {
-        (720, 560)
+        (500, 420)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), ReportError> {
@@ -84,9 +84,13 @@ impl Figure for HeatMap<'_> {
             hi = lo + if lo == 0.0 { 1.0 } else { lo.abs() * 1e-3 };
         }
         let width = root.dim_in_pixel().0;
-        let (left, right) = root.split_horizontally(width.saturating_sub(150));
+        let (left, right) = root.split_horizontally(width.saturating_sub(124));
         let mut chart = chart(&left, self.frame)?;
-        let (w, h) = (0.5 * self.cell_size.0, 0.5 * self.cell_size.1);
+        // 20 % more than a cell (a pixel or more at the figure's size):
+        // neighbours overlap, so no hairline of the background shows between
+        // cells when the scaled SVG is antialiased (plotters rounds to whole
+        // pixels, and abutting cells would leave seams).
+        let (w, h) = (0.6 * self.cell_size.0, 0.6 * self.cell_size.1);
         chart
             .draw_series(self.cells.iter().map(|c| {
                 Rectangle::new(
@@ -99,7 +103,7 @@ impl Figure for HeatMap<'_> {
             .margin_top(42)
             .margin_bottom(54)
             .margin_right(8)
-            .y_label_area_size(100)
+            .y_label_area_size(78)
             .build_cartesian_2d(0.0..1.0, lo..hi)
             .map_err(draw_err)?;
         bar.configure_mesh()
@@ -107,17 +111,23 @@ impl Figure for HeatMap<'_> {
             .disable_y_mesh()
             .disable_x_axis()
             .y_desc(self.value_label)
-            .label_style((FAMILY, 14))
-            .axis_desc_style((FAMILY, 15))
-            .y_labels(6)
+            .label_style((FAMILY, 15))
+            .axis_desc_style((FAMILY, 16))
+            .y_labels(8)
             .y_label_formatter(&|v| crate::plot::tick_label(*v, (lo, hi)))
             .draw()
             .map_err(draw_err)?;
         let step = (hi - lo) / COLORBAR_STEPS as f64;
         bar.draw_series((0..COLORBAR_STEPS).map(|k| {
             let v0 = lo + k as f64 * step;
+            // Each step overlaps the next (no seams); the last ends at `hi`.
+            let v1 = if k + 1 < COLORBAR_STEPS {
+                v0 + 1.5 * step
+            } else {
+                hi
+            };
             Rectangle::new(
-                [(0.0, v0), (1.0, v0 + step)],
+                [(0.0, v0), (1.0, v1)],
                 heat((k as f64 + 0.5) / COLORBAR_STEPS as f64).filled(),
             )
         }))

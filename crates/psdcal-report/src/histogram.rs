@@ -35,7 +35,15 @@ struct Histogram<'a> {
     title: &'a str,
     x_label: &'a str,
     y_label: &'a str,
+    /// Width and height, pixels.
+    size: (u32, u32),
 }
+
+/// The size of a histogram against the truth: compact, so that its text
+/// stays readable when three share a row or at a phone's width.
+const TRUTH_SIZE: (u32, u32) = (400, 300);
+/// The size of a counts histogram.
+const COUNTS_SIZE: (u32, u32) = (640, 560);
 
 impl Histogram<'_> {
     fn range(&self) -> (f64, f64) {
@@ -55,6 +63,10 @@ impl Histogram<'_> {
 }
 
 impl Figure for Histogram<'_> {
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), ReportError> {
         if self.values.is_empty() {
             return Err(ReportError::InvalidData {
@@ -73,7 +85,7 @@ impl Figure for Histogram<'_> {
             pad((lo, hi)),
             (0.0, 1.1 * top),
         );
-        let mut chart = build_chart(root, &frame, false, true, self.truth.is_some())?;
+        let mut chart = build_chart(root, &frame, false, true, false)?;
         let width = (hi - lo) / counts.len() as f64;
         let fill = color(0).mix(0.75).filled();
         chart
@@ -96,14 +108,14 @@ impl Figure for Histogram<'_> {
                     red.stroke_width(2),
                 )))
                 .map_err(draw_err)?;
-            crate::plot::legend(root, &chart, &[("truth", red)])?;
         }
         Ok(())
     }
 }
 
 /// A histogram of `values` in `bins` equal bins (one `<rect>` per non-empty
-/// bin) with the true value as a red vertical line when given.
+/// bin) with the true value as a red vertical line when given (one line:
+/// no legend; the caption says what it is).
 pub fn histogram_svg(
     values: &[f64],
     truth: Option<f64>,
@@ -118,6 +130,7 @@ pub fn histogram_svg(
         title,
         x_label,
         y_label: "trials",
+        size: TRUTH_SIZE,
     })
 }
 
@@ -138,6 +151,7 @@ pub fn histogram_png(
             title,
             x_label,
             y_label: "trials",
+            size: TRUTH_SIZE,
         },
         path,
     )
@@ -159,6 +173,7 @@ pub fn counts_histogram_svg(
         title,
         x_label,
         y_label,
+        size: COUNTS_SIZE,
     })
 }
 
@@ -179,6 +194,7 @@ pub fn counts_histogram_png(
             title,
             x_label,
             y_label,
+            size: COUNTS_SIZE,
         },
         path,
     )

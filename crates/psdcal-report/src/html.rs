@@ -15,9 +15,10 @@ margin:0 auto;padding:1rem;max-width:72rem;color:#1a1a1a;background:#fff;line-he
 h1{font-size:1.6rem}h2{font-size:1.3rem;margin-top:2rem;border-bottom:1px solid #ccc}\
 .table-wrap{max-width:100%;overflow-x:auto;margin:0.5rem 0 1rem}\
 table{border-collapse:collapse;font-size:0.9rem;font-variant-numeric:tabular-nums}\
-caption{text-align:left;font-weight:600;padding:0.3rem 0}\
+caption{text-align:left;font-weight:600;padding:0.3rem 0;position:sticky;left:0;\
+max-width:calc(100vw - 2rem)}\
 th,td{border:1px solid #ccc;padding:0.25rem 0.5rem;text-align:right;white-space:nowrap}\
-th:first-child,td:first-child{text-align:left}thead th{background:#f2f2f2}\
+th:first-child,td:first-child{text-align:left}thead th{background:#f2f2f2;white-space:normal}\
 .correlation td{text-align:center;min-width:3.2em}\
 figure{margin:1rem 0;max-width:100%}figure svg{max-width:100%;height:auto;display:block}\
 figcaption{font-size:0.9rem;color:#444}li,p{overflow-wrap:anywhere}\
@@ -49,6 +50,15 @@ pub enum Block {
     Table(Table),
     /// Figures side by side (wrapping on narrow screens): `(svg, caption)`.
     Figures(Vec<(String, String)>),
+    /// A table whose cells are coloured by a shade in [−1, 1] with
+    /// [`correlation_colour`] (blue −1, white 0, red +1); `None` and cells
+    /// beyond `shades` stay white.
+    Shaded {
+        /// The table.
+        table: Table,
+        /// Per row, per cell: the shade.
+        shades: Vec<Vec<Option<f64>>>,
+    },
     /// A correlation matrix as a table whose cells are coloured by the
     /// value (blue −1, white 0, red +1), two decimals in each.
     Correlation {
@@ -134,7 +144,8 @@ fn render_block(out: &mut String, block: &Block) {
             }
             out.push_str("</ul>\n");
         }
-        Block::Table(table) => render_table(out, table),
+        Block::Table(table) => render_table(out, table, &[]),
+        Block::Shaded { table, shades } => render_table(out, table, shades),
         Block::Correlation {
             caption,
             names,
@@ -155,7 +166,9 @@ fn render_block(out: &mut String, block: &Block) {
     }
 }
 
-fn render_table(out: &mut String, table: &Table) {
+/// A table; a cell with a shade gets its background and text colour.
+/// Without headers there is no header row.
+fn render_table(out: &mut String, table: &Table, shades: &[Vec<Option<f64>>]) {
     out.push_str("<div class=\"table-wrap\"><table>\n");
     if !table.caption.is_empty() {
         out.push_str(&format!(
@@ -163,15 +176,27 @@ fn render_table(out: &mut String, table: &Table) {
             escape_html(&table.caption)
         ));
     }
-    out.push_str("<thead><tr>");
-    for h in &table.headers {
-        out.push_str(&format!("<th scope=\"col\">{}</th>", escape_html(h)));
+    if !table.headers.is_empty() {
+        out.push_str("<thead><tr>");
+        for h in &table.headers {
+            out.push_str(&format!("<th scope=\"col\">{}</th>", escape_html(h)));
+        }
+        out.push_str("</tr></thead>\n");
     }
-    out.push_str("</tr></thead>\n<tbody>\n");
-    for row in &table.rows {
+    out.push_str("<tbody>\n");
+    for (r, row) in table.rows.iter().enumerate() {
         out.push_str("<tr>");
-        for cell in row {
-            out.push_str(&format!("<td>{}</td>", escape_html(cell)));
+        for (c, cell) in row.iter().enumerate() {
+            match shades.get(r).and_then(|s| s.get(c)).copied().flatten() {
+                Some(shade) => {
+                    let (bg, fg) = correlation_colour(shade);
+                    out.push_str(&format!(
+                        "<td style=\"background:{bg};color:{fg}\">{}</td>",
+                        escape_html(cell)
+                    ));
+                }
+                None => out.push_str(&format!("<td>{}</td>", escape_html(cell))),
+            }
         }
         out.push_str("</tr>\n");
     }
@@ -268,6 +293,18 @@ mod tests {
         let html = page.render();
         assert!(html.contains("<td style=\"background:#b2182b;color:#fff\">1.00</td>"));
         assert!(html.contains(">-0.93</td>"));
+        let mut page = Page::new("s");
+        page.push(Block::Shaded {
+            table: Table {
+                caption: String::new(),
+                headers: Vec::new(),
+                rows: vec![vec!["a".into(), "<b>".into(), "c".into()]],
+            },
+            shades: vec![vec![None, Some(-1.0)]],
+        });
+        let html = page.render();
+        assert!(!html.contains("<thead>"));
+        assert!(html.contains("<tr><td>a</td><td style=\"background:#2166ac;color:#fff\">&lt;b&gt;</td><td>c</td></tr>"));
     }
 
     #[test]

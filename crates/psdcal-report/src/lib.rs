@@ -54,7 +54,7 @@ pub use histogram::{
     bin_counts, counts_histogram_png, counts_histogram_svg, histogram_png, histogram_svg,
 };
 pub use html::{correlation_colour, inline_svg, Block, Page, Table};
-pub use number::{num, unit_text, value_with_sigma};
+pub use number::{num, unit_text, value_with_digits, value_with_sigma};
 pub use plot::{count_label, tick_label, Arrow, ArrowSet, Frame, PointSet};
 pub use poses::{poses_png, poses_svg, PoseOutline};
 pub use residuals::{residuals_png, residuals_svg, OUTLINE_LABEL};
@@ -63,5 +63,7 @@ pub use sensitivity::{
     aoa_sensitivity_svg, line_plot_png, line_plot_svg, paper_sensitivity_curves,
 };
 pub use study::{
-    fig9_cells, study_page, study_table, Fig9Map, StudyColumn, StudyStats, StudyTable,
+    bias_cell, bias_table, estimate_cell, fig9_cells, paper_cell, paper_table, study_page,
+    study_table, study_warnings, Fig9Map, Fig9Offset, StudyColumn, StudyContent, StudyRow,
+    StudyStats, StudyTable, BIAS_FULL_SHADE, FEW_TRIALS, MAX_HISTOGRAM_CONDITIONS,
 };

@@ -4,7 +4,8 @@
 //! `value_with_sigma`: σ to two significant digits, the value to the same
 //! decimal place (`7.958 ± 0.024 mm`); beyond 1e-2…1e5 a shared power of
 //! ten (`(9.945 ± 0.049) × 10⁻³ mm⁻²`). Without a σ (or a σ of zero), five
-//! significant digits. Units written `mm^-2` print as `mm⁻²`.
+//! significant digits ([`value_with_digits`] for any other count). Units
+//! written `mm^-2` print as `mm⁻²`.
 
 /// A number with four significant digits, in plain or scientific notation
 /// (the same form as the study's Markdown tables).
@@ -16,6 +17,14 @@ pub fn num(x: f64) -> String {
         format!("{x:.digits$}")
     } else {
         format!("{x:.3e}")
+    }
+}
+
+/// A number that rounded to zero printed without its sign (`-0.0` → `0.0`).
+fn unsigned_zero(text: String) -> String {
+    match text.strip_prefix('-') {
+        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_string(),
+        _ => text,
     }
 }
 
@@ -44,6 +53,19 @@ pub fn unit_text(unit: &str) -> String {
 
 /// `value ± sigma unit`, rounded by σ (module documentation).
 pub fn value_with_sigma(value: f64, sigma: Option<f64>, unit: &str) -> String {
+    format_value(value, sigma, 5, unit)
+}
+
+/// `value unit` with `digits` significant digits (at least one), in the
+/// same plain or shared-power-of-ten form as [`value_with_sigma`]:
+/// `value_with_digits(0.34491, 2, "deg")` is `0.34 deg`.
+pub fn value_with_digits(value: f64, digits: usize, unit: &str) -> String {
+    format_value(value, None, digits.max(1), unit)
+}
+
+/// The one formatter behind [`value_with_sigma`] and [`value_with_digits`]:
+/// rounded by σ when σ is positive, else to `digits` significant digits.
+fn format_value(value: f64, sigma: Option<f64>, digits: usize, unit: &str) -> String {
     let unit = unit_text(unit);
     let space = if unit.is_empty() { "" } else { " " };
     if !value.is_finite() {
@@ -61,15 +83,18 @@ pub fn value_with_sigma(value: f64, sigma: Option<f64>, unit: &str) -> String {
         Some(s) => {
             // σ to two significant digits; the value to the same place.
             let decimals = (1 - s.log10().floor() as i32).clamp(0, 15) as usize;
-            format!("{v:.decimals$} ± {s:.decimals$}")
+            format!(
+                "{} ± {s:.decimals$}",
+                unsigned_zero(format!("{v:.decimals$}"))
+            )
         }
         None => {
             let decimals = if v == 0.0 {
                 0
             } else {
-                (4 - v.abs().log10().floor() as i32).clamp(0, 15) as usize
+                (digits as i32 - 1 - v.abs().log10().floor() as i32).clamp(0, 15) as usize
             };
-            format!("{v:.decimals$}")
+            unsigned_zero(format!("{v:.decimals$}"))
         }
     };
     match (exponent, sigma.is_some_and(|s| s > 0.0)) {
@@ -110,5 +135,13 @@ mod tests {
         );
         assert_eq!(value_with_sigma(f64::NAN, None, "mm"), "–");
         assert_eq!(unit_text("mm^-6"), "mm⁻⁶");
+        assert_eq!(value_with_digits(0.344913, 2, "deg"), "0.34 deg");
+        assert_eq!(value_with_digits(3373.4, 3, "mm"), "3373 mm");
+        assert_eq!(value_with_digits(3.0864e-5, 2, "mm^-2"), "3.1 × 10⁻⁵ mm⁻²");
+        assert_eq!(value_with_digits(-0.084, 2, ""), "-0.084");
+        assert_eq!(
+            value_with_sigma(-2e-8, Some(2.3e-6), ""),
+            "(0.0 ± 2.3) × 10⁻⁶"
+        );
     }
 }

@@ -142,16 +142,18 @@ fn histogram_has_one_bar_per_non_empty_bin_and_the_truth() {
     let svg = histogram_svg(&values, Some(8.02), 10, "f <lens 2>", "f (mm)").unwrap();
     let no_truth = histogram_svg(&values, None, 10, "f", "f (mm)").unwrap();
     assert!(svg.contains("f &lt;lens 2&gt;") && svg.contains("f (mm)") && svg.contains("trials"));
-    assert!(svg.contains("truth"));
+    // The truth is one red line, explained by the caption: no legend.
+    assert_eq!(count(&svg, "<polyline") - count(&no_truth, "<polyline"), 1);
+    assert!(svg.contains("stroke=\"#D62728\""));
+    assert!(!svg.contains("truth"));
     let bars = bin_counts(&values, 10, 8.0, 8.049)
         .iter()
         .filter(|n| **n > 0)
         .count();
     assert_eq!(bars, 10);
-    // Bars, the background and (with the truth) the legend's key (the
-    // legend stands beside the data, without a box).
+    // Bars and the background.
     assert_eq!(count(&no_truth, "<rect"), 1 + bars);
-    assert_eq!(count(&svg, "<rect"), 1 + bars + 1);
+    assert_eq!(count(&svg, "<rect"), 1 + bars);
     assert!(histogram_svg(&[], None, 10, "f", "f").is_err());
     assert!(histogram_svg(&[f64::NAN], None, 10, "f", "f").is_err());
 }

@@ -196,3 +196,151 @@ fn tick_labels_are_short_and_distinct_at_their_step() {
         tick_label(3.0e-5 + 2.5e-10, (3.0e-5, 3.0e-5 + 2e-9))
     );
 }
+
+/// The `<svg>…</svg>` figures of a page.
+fn page_svgs(html: &str) -> Vec<&str> {
+    let mut out = Vec::new();
+    let mut rest = html;
+    while let Some(start) = rest.find("<svg") {
+        let end = rest[start..].find("</svg>").unwrap() + start + 6;
+        out.push(&rest[start..end]);
+        rest = &rest[end..];
+    }
+    out
+}
+
+/// Deterministic, roughly normal values: `mean + std·z` over a fixed
+/// sequence of `z` with mean 0 (a sum of uniforms).
+fn spread(mean: f64, std: f64, n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|k| {
+            let z: f64 = (1..=4)
+                .map(|j| ((k * 7919 * j + 13 * j) % 1000) as f64 / 1000.0 - 0.5)
+                .sum::<f64>();
+            mean + std * z * 1.7
+        })
+        .collect()
+}
+
+/// A study table over values like the study's own: every column
+/// `(label, n, scale of the spread)`.
+pub fn study_table_of(columns: &[(&str, usize, f64)]) -> StudyTable {
+    let rows: [(&str, &str, f64, f64); 5] = [
+        ("focal length f", "mm", 25.0, 0.14),
+        ("optical centre Cx", "mm", 0.5, 0.03),
+        ("optical centre Cy", "mm", -0.7, 0.014),
+        ("radial distortion k1", "mm^-2", 2.0e-3, 8.0e-6),
+        ("radial distortion k2", "mm^-4", 0.0, 5.8e-7),
+    ];
+    StudyTable {
+        title: "Table 9 (lens 1): the conditions compared".into(),
+        rows: rows
+            .iter()
+            .map(|(l, u, _, _)| StudyRow {
+                label: l.to_string(),
+                unit: u.to_string(),
+                bias: true,
+            })
+            .collect(),
+        histogram_rows: vec![0, 1, 2, 3, 4],
+        columns: columns
+            .iter()
+            .map(|&(label, n, scale)| {
+                let values: Vec<Vec<f64>> = rows
+                    .iter()
+                    .map(|(_, _, t, s)| spread(t + 0.3 * s, s * scale, n))
+                    .collect();
+                let stats = values
+                    .iter()
+                    .map(|v| {
+                        let m = v.iter().sum::<f64>() / v.len() as f64;
+                        let var = if v.len() > 1 {
+                            v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64
+                        } else {
+                            0.0
+                        };
+                        Some(StudyStats {
+                            mean: m,
+                            std: var.sqrt(),
+                            n: v.len(),
+                        })
+                    })
+                    .collect();
+                StudyColumn {
+                    label: label.into(),
+                    ideal: rows.iter().map(|r| Some(r.2)).collect(),
+                    stats,
+                    trials: n + 1,
+                    failures: 1,
+                    failure_reasons: vec!["refinement did not converge".into()],
+                    values,
+                    paper: rows.iter().map(|r| Some((r.2, Some(r.3)))).collect(),
+                }
+            })
+            .collect(),
+        notes: Vec::new(),
+    }
+}
+
+/// A Figure 9 map over a 41 × 41 grid whose errors span `[lo, hi]`.
+pub fn fig9_map_of(lo: f64, hi: f64) -> Fig9Map {
+    let grid = (0..41 * 41)
+        .map(|k| {
+            let (i, j) = ((k % 41) as f64, (k / 41) as f64);
+            let (x, y) = (-4.5 + 9.0 * i / 40.0, -4.5 + 9.0 * j / 40.0);
+            let t = (x.hypot(y) / 6.4).min(1.0);
+            [
+                x,
+                y,
+                lo + (hi - lo) * t,
+                5000.0 * (lo + (hi - lo) * t).to_radians(),
+            ]
+        })
+        .collect();
+    Fig9Map {
+        lens: 1,
+        condition: "40 dB".into(),
+        offsets: vec![Fig9Offset {
+            name: "focal length f".into(),
+            delta: 0.31,
+            unit: "mm".into(),
+        }],
+        grid,
+        max_aoa_deg: hi,
+        max_position_mm: 5000.0 * hi.to_radians(),
+        mean_aoa_deg: 0.5 * (lo + hi),
+    }
+}
+
+#[test]
+fn no_axis_of_any_plot_on_the_study_page_repeats_a_tick_label() {
+    let table = study_table_of(&[
+        ("40 dB", 200, 1.0),
+        ("a tiny spread", 40, 1e-6),
+        ("three trials", 3, 1.0),
+        ("one trial", 1, 1.0),
+        ("all equal", 5, 0.0),
+        ("wide", 12, 1e3),
+    ]);
+    let content = StudyContent {
+        title: "study".into(),
+        intro: String::new(),
+        summary: Vec::new(),
+        reading: Vec::new(),
+        warnings: Vec::new(),
+        tables: vec![table],
+        maps: vec![
+            fig9_map_of(0.21, 0.34),
+            fig9_map_of(1e-4, 1.0001e-4),
+            fig9_map_of(2.0, 28.0),
+        ],
+        extra: Vec::new(),
+    };
+    let html = study_page(&content).unwrap().render();
+    let svgs = page_svgs(&html);
+    // 6 maps (AoA and position for 3 conditions) + 6 × 5 histograms.
+    assert_eq!(svgs.len(), 6 + 30);
+    for (k, svg) in svgs.iter().enumerate() {
+        assert_distinct_ticks(svg, &format!("study page figure {k}"));
+    }
+}

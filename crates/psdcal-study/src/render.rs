@@ -30,8 +30,9 @@ pub fn num(x: f64) -> String {
     }
 }
 
-/// The paper's cell for a table, column and quantity.
-fn paper_cell(table: &TableResult, column: usize, q: Quantity) -> Option<(f64, Option<f64>)> {
+/// The paper's cell for a table, column and quantity: its mean and, where
+/// printed, its standard deviation.
+pub fn paper_cell(table: &TableResult, column: usize, q: Quantity) -> Option<(f64, Option<f64>)> {
     let t = paper::table(table.spec.paper?)?;
     let row = match q {
         Quantity::Cx => 0,

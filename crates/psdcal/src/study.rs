@@ -17,8 +17,9 @@ use psdcal_study::render::{csv_rows, markdown, num, CSV_HEADER};
 use psdcal_study::{run_tables, table_spec, StudyOptions, TableResult, TableSpec, TABLE_IDS};
 
 use crate::error::{Error, Result};
+use crate::provenance::utc_iso8601;
 use crate::simulate::{chain_with_record, record_cycles_flag};
-use crate::study_page::study_page;
+use crate::study_page::{study_page, StudyRun};
 use crate::study_psd_map::{pooled, psd_map_seed, SeedErrors};
 
 /// The PSD-map condition's section of study.md: the pooled RMS angle
@@ -351,14 +352,12 @@ impl StudyPlan {
         }
         let page = match &r.report {
             Some(dir) => {
-                let intro = format!(
-                    "{} trials per condition, seed {} ({:.1} s). Reproduce with: {}",
-                    r.trials,
-                    r.seed,
-                    elapsed,
-                    self.reproduce()
-                );
-                let page = study_page("psdcal study", &intro, tables, maps)?;
+                let run = StudyRun {
+                    summary: self.summary(tables, elapsed),
+                    psd_map,
+                    out: &r.out,
+                };
+                let page = study_page(&run, tables, maps)?;
                 let path = dir.join("study.html");
                 write_atomic_bytes(&path, page.render().as_bytes())?;
                 Some(path)
@@ -370,6 +369,58 @@ impl StudyPlan {
             json,
             page,
         })
+    }
+
+    /// What was run, for the page: the studies, conditions, trials, seed,
+    /// data, run time, version, command and time.
+    fn summary(&self, tables: &[TableResult], elapsed: f64) -> Vec<(String, String)> {
+        let r = &self.request;
+        let studies: Vec<String> = r
+            .tables
+            .iter()
+            .map(|t| match t.strip_prefix("table") {
+                Some(n) => format!("Table {n}"),
+                None if t == "fig9" => "Figure 9 (from Tables 9 and 10)".into(),
+                None if t == PSD_MAP_STUDY => "the PSD map's condition".into(),
+                None => t.clone(),
+            })
+            .collect();
+        let columns: usize = tables.iter().map(|t| t.columns.len()).sum();
+        let distinct = psdcal_study::study::trial_count(&self.specs, 1);
+        let threads = r
+            .threads
+            .map_or("every core".to_string(), |n| format!("{n} threads"));
+        [
+            ("Studies", studies.join(", ")),
+            (
+                "Conditions",
+                format!(
+                    "{columns} table columns, {distinct} distinct conditions (a condition                      repeated in another table runs once)"
+                ),
+            ),
+            ("Trials per condition", r.trials.to_string()),
+            ("Trials in all", self.trial_count().to_string()),
+            (
+                "Data of a trial",
+                format!(
+                    "{} images of the {} template, {} modulation cycles per LED",
+                    self.options.images,
+                    self.options.template.name(),
+                    r.record_cycles
+                ),
+            ),
+            (
+                "Seed",
+                format!("{} (each trial its own ChaCha8 stream)", r.seed),
+            ),
+            ("Run time", format!("{elapsed:.1} s on {threads}")),
+            ("psdcal version", env!("CARGO_PKG_VERSION").to_string()),
+            ("Command", self.reproduce()),
+            ("Written (UTC)", utc_iso8601(std::time::SystemTime::now())),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
     }
 
     /// The command that reproduces this study.
