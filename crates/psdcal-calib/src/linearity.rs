@@ -110,7 +110,8 @@ pub(crate) fn check_linearity_at(
     let names = options.free_names();
     let (problem, state, ne) = (&at.problem, &at.state, &at.ne);
     let base = solver::cost(problem, state, options.robust)?;
-    let observations = 2 * data.point_count();
+    // A prior's residuals count as observations (augmented regression).
+    let observations = 2 * data.point_count() + problem.prior().map_or(0, |p| p.len());
     let unknowns = names.len() + 6 * refined.poses.len();
     if observations <= unknowns || base <= EXACT_VARIANCE * observations as f64 {
         return Ok(LinearityCheck {

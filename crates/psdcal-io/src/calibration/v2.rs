@@ -183,7 +183,11 @@ impl FileV2 {
                 (Some(map), StageKind::PsdMap) => Some(Stage {
                     kind,
                     parameters: NamedValues(map.parameters.clone()),
-                    estimated: Vec::new(),
+                    estimated: if map.estimated {
+                        map.parameters.iter().map(|(n, _)| n.clone()).collect()
+                    } else {
+                        Vec::new()
+                    },
                     configuration: Some(map.configuration.clone()),
                     covariance: Some(map.covariance.clone()),
                 }),
@@ -269,13 +273,23 @@ impl FileV2 {
                         "the psd_map stage needs its 'configuration' and 'covariance'".to_string(),
                     );
                 };
-                if !s.estimated.is_empty() {
-                    return Err("the psd_map stage is held fixed; expected 'estimated': []".into());
+                let all = s.estimated.len() == s.parameters.0.len()
+                    && s.estimated
+                        .iter()
+                        .zip(&s.parameters.0)
+                        .all(|(e, (n, _))| e == n);
+                if !s.estimated.is_empty() && !all {
+                    return Err(
+                        "the psd_map stage's 'estimated' lists none of its parameters (held \
+                         fixed) or all of them in order (refined)"
+                            .into(),
+                    );
                 }
                 let map = PsdMapStageRecord {
                     configuration: configuration.clone(),
                     parameters: s.parameters.0.clone(),
                     covariance: covariance.clone(),
+                    estimated: !s.estimated.is_empty(),
                 };
                 map.to_stage(self.covariance.parameters.len())?;
                 Some(map)
