@@ -273,21 +273,21 @@ impl FileV2 {
                         "the psd_map stage needs its 'configuration' and 'covariance'".to_string(),
                     );
                 };
-                let all = s.estimated.len() == s.parameters.0.len()
-                    && s.estimated
-                        .iter()
-                        .zip(&s.parameters.0)
-                        .all(|(e, (n, _))| e == n);
-                if !s.estimated.is_empty() && !all {
+                let parameters = s.parameters.0.clone();
+                let mut listed: Vec<&str> = s.estimated.iter().map(String::as_str).collect();
+                let mut names: Vec<&str> = parameters.iter().map(|(n, _)| n.as_str()).collect();
+                listed.sort_unstable();
+                names.sort_unstable();
+                if !listed.is_empty() && listed != names {
                     return Err(
-                        "the psd_map stage's 'estimated' lists none of its parameters (held \
-                         fixed) or all of them in order (refined)"
+                        "the psd_map stage's 'estimated' must list none of its parameters (held \
+                         fixed) or all of them (refined)"
                             .into(),
                     );
                 }
                 let map = PsdMapStageRecord {
                     configuration: configuration.clone(),
-                    parameters: s.parameters.0.clone(),
+                    parameters,
                     covariance: covariance.clone(),
                     estimated: !s.estimated.is_empty(),
                 };
