@@ -4,7 +4,7 @@
 //! simulated 0.25 mm raster scan (37 × 37, stage σ 0.3 µm, 50 dB) held
 //! fixed, (b) with `l1` freed instead, and (c) the same data set without
 //! any non-linearity (the same seed: the same poses and noise), calibrated
-//! plainly. Each calibration is judged by its RMS angle error over 9 × 9
+//! plainly; and (d) with the same map refined (`--refine-psd-map`). Each calibration is judged by its RMS angle error over 9 × 9
 //! held-out directions (80 % of the sensor), measured through the true
 //! non-linearity without noise, answered from the calibration record alone
 //! (`sensor_of`), against the true ray: `e = atan2(|d̂ × t̂|, d̂ · t̂)`,
@@ -36,6 +36,8 @@ use psdcal_psdmap::ModelChoice as PsdMapModel;
 pub struct SeedErrors {
     /// Calibrated with the map.
     pub map: f64,
+    /// Calibrated with the map refined, its scan as the prior.
+    pub refined: f64,
     /// Calibrated with `l1` freed.
     pub l1: f64,
     /// The same data without non-linearity.
@@ -43,6 +45,8 @@ pub struct SeedErrors {
     /// RMS of the map's error against the true field over the scan's
     /// interior, mm.
     pub map_error_mm: f64,
+    /// The same for the refined map, mm.
+    pub refined_map_error_mm: f64,
     /// The scan's noise per axis (√(σx² + σy²)/√2), mm.
     pub scan_noise_mm: f64,
 }
@@ -141,6 +145,24 @@ pub fn psd_map_seed(dir: &Path, seed: u64, amplitudes: bool) -> Result<SeedError
         ..CalibrationOptions::default()
     };
     let map = aoa_error(&calibrate(&noisy, &with_map)?.record, true)?;
+    let refined_record = calibrate(
+        &noisy,
+        &CalibrationOptions {
+            refine_psd_map: true,
+            ..with_map
+        },
+    )?
+    .record;
+    let refined = aoa_error(&refined_record, true)?;
+    let refined_block: Vec<f64> = refined_record
+        .psd_map
+        .as_ref()
+        .ok_or_else(|| Error::Input("the refined calibration lost its map".into()))?
+        .parameters
+        .iter()
+        .map(|(_, v)| *v)
+        .collect();
+    let refined_map_error_mm = map_error(&fitted.fit.map, &refined_block)?;
     let free_l1 = CalibrationOptions {
         free: vec![
             Param::F,
@@ -160,6 +182,8 @@ pub fn psd_map_seed(dir: &Path, seed: u64, amplitudes: bool) -> Result<SeedError
     )?;
     Ok(SeedErrors {
         map,
+        refined,
+        refined_map_error_mm,
         l1,
         clean,
         map_error_mm,
@@ -298,6 +322,8 @@ mod tests {
     fn pooling_is_the_rms_over_seeds() {
         let e = |map: f64| super::SeedErrors {
             map,
+            refined: 0.0,
+            refined_map_error_mm: 0.0,
             l1: 0.0,
             clean: 0.0,
             map_error_mm: 0.0,
