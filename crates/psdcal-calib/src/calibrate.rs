@@ -402,7 +402,7 @@ fn refine_with_prior(
     }
     let unknowns = held_names.len() + 6 * held.poses.len();
     let observations = 2 * data.point_count();
-    if observations <= unknowns || !(held.cost > 0.0) {
+    if observations <= unknowns || held.cost.is_nan() || held.cost <= 0.0 {
         return Err(CalibError::Degenerate {
             reason: "refining with a prior needs the data's noise: more coordinates than \
                      parameters and a non-zero residual"
