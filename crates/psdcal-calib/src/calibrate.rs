@@ -7,6 +7,16 @@
 //! ([`crate::diagnostics`]: misfit, gain imbalance, local minima,
 //! unreliable uncertainty).
 //!
+//! With [`CalibrateOptions::prior`] (a PSD map refined with its scan's
+//! information, docs/model.md §8.3), the fit above runs with the prior's
+//! parameters held at their values in `base` (`μ`); then one more
+//! refinement frees them, starting from that solution, with the prior
+//! residuals `s L (m − μ)` ([`crate::prior`]), `s² = cost / dof` of the
+//! fit with them held (the data's variance per coordinate in cost units).
+//! The covariance, the linearity check and the bootstrap are then those of
+//! the joint fit (data and prior); the residual-structure diagnostics keep
+//! the prior's parameters held (at their refined values).
+//!
 //! Fixed parameters keep the values of [`CalibrateOptions::base`] (zero
 //! distortion by default, or e.g. an `l1` known from a PSD scan). Freed
 //! parameters start from the initialisation where it estimates them
@@ -18,7 +28,8 @@
 
 use psdcal_model::stages::gains::GAIN_NAMES;
 use psdcal_model::{
-    ChannelGains, Diagnostic, DiagnosticCode, Model, Param, Pose, SensorModel, ValidRegion,
+    ChannelGains, Diagnostic, DiagnosticCode, Model, Param, ParameterCovariance, Pose, SensorModel,
+    ValidRegion,
 };
 use serde::Serialize;
 
@@ -30,6 +41,7 @@ use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
 use crate::linearity::{check_linearity_at, LinearityCheck};
 use crate::misplaced::misplaced_led;
+use crate::prior::Prior;
 use crate::refine::{
     refine, AtSolution, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
 };
@@ -58,6 +70,11 @@ pub struct CalibrateOptions {
     pub uncertainty: Uncertainty,
     /// What the diagnostics may use beyond the fit (a known point noise).
     pub diagnostics: DiagnosticOptions,
+    /// A Gaussian prior on parameters of `base` (a PSD map's coefficients
+    /// with their scan's covariance), its mean their values in `base`:
+    /// they are freed in a last refinement (module documentation). `None`
+    /// by default.
+    pub prior: Option<ParameterCovariance>,
 }
 
 /// How [`calibrate`] estimates the covariance.
@@ -83,6 +100,7 @@ impl Default for CalibrateOptions {
             base: Model::standard(&SensorModel::pinhole(8.0, 0.0, 0.0)),
             uncertainty: Uncertainty::Linear,
             diagnostics: DiagnosticOptions::default(),
+            prior: None,
         }
     }
 }
@@ -166,7 +184,6 @@ fn calibrate_as_given(
     data: &CalibrationData,
     options: &CalibrateOptions,
 ) -> Result<CalibrationResult, CalibError> {
-    let free = options.refine.free_names();
     let init = initialize(data, &options.init)?;
     // The global search's cold starts use the same start options.
     let global_options = GlobalOptions {
@@ -244,27 +261,25 @@ fn calibrate_as_given(
         let (r, g) = refine_global(data, &start, &init.poses, &options.refine, global_options)?;
         (r, g, None)
     };
+    check_converged(&refined)?;
+    let (refined, refine_options) = match &options.prior {
+        None => (refined, options.refine.clone()),
+        Some(prior) => refine_with_prior(data, refined, options, prior)?,
+    };
+    let refine_options = &refine_options;
+    let free = refine_options.free_names();
     let fitted_gains = refined.model.gains();
-    if !refined.report.termination.converged() {
-        return Err(CalibError::NotConverged {
-            reason: format!(
-                "{} iterations without meeting a stopping criterion (cost {:.6e}); \
-                 try --focal-guess, fewer freed parameters, or more images",
-                refined.report.iterations, refined.cost
-            ),
-        });
-    }
     // What the finished fit is asked runs on two threads (the results do
     // not depend on it): one linearisation at the solution serves the
     // covariance and the linearity check; the fit statistics, the residual
     // structure tests and the valid region need no covariance.
     let (after_fit, (statistics, mut diagnosed, valid_region)) = join(
         || -> Result<_, CalibError> {
-            let at = AtSolution::new(data, &refined, &options.refine)?;
-            let method = analytic_method(&refined, &options.refine);
+            let at = AtSolution::new(data, &refined, refine_options)?;
+            let method = analytic_method(&refined, refine_options);
             Ok((
-                covariance_at(&at, data, &refined, &options.refine, method)?,
-                check_linearity_at(&at, data, &options.refine)?,
+                covariance_at(&at, data, &refined, refine_options, method)?,
+                check_linearity_at(&at, data, refine_options)?,
             ))
         },
         || {
@@ -298,7 +313,7 @@ fn calibrate_as_given(
         Uncertainty::Linear => (covariance, None),
         Uncertainty::Bootstrap(boot) => {
             let (c, report) =
-                bootstrap_covariance(data, &refined, &options.refine, &covariance, &boot)?;
+                bootstrap_covariance(data, &refined, refine_options, &covariance, &boot)?;
             (c, Some(report))
         }
     };
@@ -354,6 +369,67 @@ fn calibrate_as_given(
         warnings,
         diagnostics,
     })
+}
+
+/// A refinement that ran out of iterations is an error.
+fn check_converged(refined: &Refined) -> Result<(), CalibError> {
+    if refined.report.termination.converged() {
+        return Ok(());
+    }
+    Err(CalibError::NotConverged {
+        reason: format!(
+            "{} iterations without meeting a stopping criterion (cost {:.6e}); \
+             try --focal-guess, fewer freed parameters, or more images",
+            refined.report.iterations, refined.cost
+        ),
+    })
+}
+
+/// The last refinement with `prior`'s parameters freed (module
+/// documentation), from `held` (the fit with them held at `options.base`'s
+/// values); returns it and its options.
+fn refine_with_prior(
+    data: &CalibrationData,
+    held: Refined,
+    options: &CalibrateOptions,
+    prior: &ParameterCovariance,
+) -> Result<(Refined, RefineOptions), CalibError> {
+    let held_names = options.refine.free_names();
+    if let Some(name) = prior.names().iter().find(|n| held_names.contains(n)) {
+        return Err(CalibError::InvalidInput {
+            reason: format!("'{name}' is both freed and given a prior; expected one of the two"),
+        });
+    }
+    let unknowns = held_names.len() + 6 * held.poses.len();
+    let observations = 2 * data.point_count();
+    if observations <= unknowns || held.cost.is_nan() || held.cost <= 0.0 {
+        return Err(CalibError::Degenerate {
+            reason: "refining with a prior needs the data's noise: more coordinates than \
+                     parameters and a non-zero residual"
+                .into(),
+        });
+    }
+    let scale = (held.cost / (observations - unknowns) as f64).sqrt();
+    let mean = prior
+        .names()
+        .iter()
+        .map(|n| {
+            options.base.get(n).ok_or_else(|| CalibError::InvalidInput {
+                reason: format!("the prior's parameter '{n}' is not in the model"),
+            })
+        })
+        .collect::<Result<Vec<f64>, _>>()?;
+    let mut joint = options.refine.clone();
+    joint
+        .free_stage_parameters
+        .extend(prior.names().iter().cloned());
+    joint.prior = Some(Prior::new(prior, &mean, scale)?);
+    let mut refined = refine(data, held.model, &held.poses, &joint)?;
+    check_converged(&refined)?;
+    // The report counts both refinements.
+    refined.report.iterations += held.report.iterations;
+    refined.report.accepted += held.report.accepted;
+    Ok((refined, joint))
 }
 
 /// The refinement's start: `options.base` with the freed parameters the

@@ -6,6 +6,15 @@
 //! the variance of a unit-weight coordinate and `σ² (JᵀJ)⁻¹` the
 //! generalised-least-squares covariance.
 //!
+//! With a prior on some parameters ([`crate::prior`]: a PSD map refined
+//! with its scan's information), `S = S_d + P` holds the data's information
+//! `S_d` and the prior's `P = s² Σ⁻¹`; the estimate's covariance is the
+//! sandwich `S⁻¹ (σ² S_d + s² P) S⁻¹` (the data's noise and the prior's own,
+//! `s⁴ Σ⁻¹`; `σ² S⁻¹` when `s² = σ²`), the data's noise from the data's
+//! cost alone with `dof = 2·points − parameters + tr(S⁻¹ P)` (the prior
+//! determines `tr(S⁻¹ P)` of the parameters). For the sandwich method the
+//! data's part is the sandwich below.
+//!
 //! `(JᵀJ)⁻¹` is never formed whole: the sensor-parameter block is the inverse
 //! of the Schur complement `S⁻¹`, and each pose's 6 × 6 block is
 //! `V_i⁻¹ + V_i⁻¹ W_iᵀ S⁻¹ W_i V_i⁻¹` ([`psdcal_solver::normal_equations`]).
@@ -153,19 +162,36 @@ pub(crate) fn covariance_at(
     let (columns, poses, cost) = (problem.columns(), &refined.poses, refined.cost);
     let parameters = columns.len() + 6 * poses.len();
     let observations = 2 * data.point_count();
-    if observations <= parameters {
+    let prior_rows = problem.prior().map_or(0, |p| p.len());
+    if observations + prior_rows <= parameters {
         return Err(CalibError::Degenerate {
             reason: format!(
                 "{observations} coordinates cannot determine {parameters} parameters; add images or LEDs"
             ),
         });
     }
-    let dof = observations - parameters;
     let (s_inv, pose_inv) = ne.inverse_blocks().ok_or_else(|| CalibError::Degenerate {
         reason: "the information matrix is singular: some freed parameter is not determined by the data \
                  (fix it, or add images that vary the template pose)"
             .into(),
     })?;
+    // The prior's information P at the freed slots; the parameters it
+    // determines, tr(S⁻¹ P); the data's cost without its residuals.
+    let prior_info = problem.embed_prior(|p| p.information());
+    let prior_share = prior_info
+        .as_ref()
+        .map_or(0.0, |p| (&s_inv * p).trace().clamp(0.0, parameters as f64));
+    let data_cost = (cost - problem.prior_residuals(state).norm_squared()).max(0.0);
+    let dof_real = observations as f64 - parameters as f64 + prior_share;
+    if dof_real < 1.0 {
+        return Err(CalibError::Degenerate {
+            reason: format!(
+                "{observations} coordinates leave no degrees of freedom for the noise beside \
+                 {parameters} parameters ({prior_share:.1} of them held by the prior)"
+            ),
+        });
+    }
+    let dof = dof_real.round() as usize;
     let mut warnings = Vec::new();
     if let Some(s) = ne.schur_complement() {
         for (k, p) in names.iter().enumerate() {
@@ -180,11 +206,26 @@ pub(crate) fn covariance_at(
     }
     let (matrix, pose_blocks, sigma2) = match method {
         CovarianceMethod::Linear => {
-            let sigma2 = cost / dof as f64;
+            let sigma2 = data_cost / dof_real;
             let blocks = pose_inv.into_iter().map(|b| b * sigma2).collect();
-            (s_inv * sigma2, blocks, sigma2)
+            let matrix = match (&prior_info, problem.prior()) {
+                // S⁻¹ (σ² (S − P) + s² P) S⁻¹.
+                (Some(p), Some(prior)) => {
+                    let s_full =
+                        s_inv
+                            .clone()
+                            .try_inverse()
+                            .ok_or_else(|| CalibError::Degenerate {
+                                reason: "the information matrix is singular".into(),
+                            })?;
+                    let meat = (s_full - p) * sigma2 + p * prior.scale().powi(2);
+                    &s_inv * meat * &s_inv
+                }
+                _ => s_inv * sigma2,
+            };
+            (matrix, blocks, sigma2)
         }
-        CovarianceMethod::Sandwich => sandwich(problem, state, ne, &s_inv, dof)?,
+        CovarianceMethod::Sandwich => sandwich(problem, state, ne, &s_inv, dof_real)?,
         CovarianceMethod::Bootstrap { .. } => {
             return Err(CalibError::InvalidInput {
                 reason: "a bootstrap covariance comes from psdcal_calib::bootstrap".into(),
@@ -253,7 +294,7 @@ fn sandwich(
     state: &FitState,
     ne: &NormalEquations,
     s_inv: &DMatrix<f64>,
-    dof: usize,
+    dof: f64,
 ) -> Result<Sandwich, CalibError> {
     let p = problem.columns().len();
     let data = problem.data();
@@ -291,9 +332,15 @@ fn sandwich(
         images.push(terms);
         v_inv.push(vi);
     }
-    let sigma2 = weighted_sum / dof as f64;
-    // K = Σ g C̃ gᵀ with g = S⁻¹ Ãᵀ, i.e. S⁻¹ (Σ Ãᵀ C̃ Ã) S⁻¹.
-    let mut meat = DMatrix::zeros(p, p);
+    let sigma2 = weighted_sum / dof;
+    // K = Σ g C̃ gᵀ with g = S⁻¹ Ãᵀ, i.e. S⁻¹ (Σ Ãᵀ C̃ Ã) S⁻¹; a prior's
+    // gradient adds s⁴ Σ⁻¹ = s² P to the meat (in units of σ_m²).
+    let mut meat = match problem.prior() {
+        Some(_) if sigma2 > 0.0 => problem
+            .embed_prior(|q| q.meat())
+            .map_or_else(|| DMatrix::zeros(p, p), |m| m / sigma2),
+        _ => DMatrix::zeros(p, p),
+    };
     for t in images.iter().flatten() {
         let c = DMatrix::from_column_slice(2, 2, t.c.as_slice());
         meat += t.a_tilde.transpose() * c * &t.a_tilde;

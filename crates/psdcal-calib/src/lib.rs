@@ -30,6 +30,7 @@ pub mod global;
 pub mod linearity;
 pub mod misplaced;
 pub mod plan;
+pub mod prior;
 pub mod refine;
 pub mod report;
 pub mod surveyed;
@@ -43,6 +44,7 @@ pub use diagnostics::{diagnose, DiagnosticOptions, DiagnosticReport};
 pub use electrical::{equal_current_gains, GainEstimate};
 pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
 pub use linearity::{check_linearity, LinearityCheck, ParameterLinearity, UncertaintyVerdict};
+pub use prior::Prior;
 pub use psdcal_solver::{self as solver, normal_equations};
 pub use psdcal_solver::{Problem, Solution, SolverOptions, SolverReport};
 pub use refine::{

@@ -111,7 +111,8 @@ pub(crate) fn check_linearity_at(
         state: &at.state,
         ne: &at.ne,
         names: &options.free_names(),
-        observations: 2 * data.point_count(),
+        // A prior's residuals count as observations (augmented regression).
+        observations: 2 * data.point_count() + at.problem.prior().map_or(0, |p| p.len()),
         robust: options.robust,
     };
     check_quadratic(&fit, None)

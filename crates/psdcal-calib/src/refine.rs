@@ -19,6 +19,10 @@
 //! amplitudes through the gains stage, docs/model.md §1), or the parameters of any
 //! other stage. Poses are updated additively in `(rvec, t)`.
 //!
+//! A [`Prior`] (`RefineOptions::prior`: a PSD map refined with its scan's
+//! information) adds one residual group on the sensor parameters only,
+//! `s L (m − μ)` ([`crate::prior`]).
+//!
 //! With a noise model other than uniform, each residual is whitened
 //! ([`crate::weighting`]); because template-plane weights depend on the
 //! parameters, they are recomputed at the solution and the refinement
@@ -35,6 +39,7 @@ use psdcal_model::stages::Gains;
 use psdcal_model::{ChainJacobian, Model, ModelError, Param, Pose, SensorModel};
 
 use crate::data::CalibrationData;
+use crate::prior::Prior;
 use crate::weighting::{NoiseModel, PointWeights};
 use crate::CalibError;
 use psdcal_solver::normal_equations::{NormalEquations, ResidualTerm, Step};
@@ -76,6 +81,9 @@ pub struct RefineOptions {
     pub step_tolerance: f64,
     /// Starting damping.
     pub initial_lambda: f64,
+    /// A Gaussian prior on some freed parameters (none by default): its
+    /// residuals join the cost ([`crate::prior`]).
+    pub prior: Option<Prior>,
 }
 
 impl Default for RefineOptions {
@@ -91,6 +99,7 @@ impl Default for RefineOptions {
             cost_tolerance: 1e-10,
             step_tolerance: 1e-10,
             initial_lambda: 1e-3,
+            prior: None,
         }
     }
 }
@@ -173,6 +182,17 @@ pub struct CalibrationProblem<'a> {
     /// Recompute the points from the amplitudes through the gains stage.
     amplitudes: bool,
     weights: Option<&'a PointWeights>,
+    prior: Option<PriorTerms<'a>>,
+}
+
+/// A prior attached to a problem: its model columns and, per parameter,
+/// its slot among the freed ones (a fixed one only adds to the cost).
+#[derive(Debug, Clone)]
+struct PriorTerms<'a> {
+    prior: &'a Prior,
+    columns: Vec<usize>,
+    slots: Vec<Option<usize>>,
+    jacobian: nalgebra::DMatrix<f64>,
 }
 
 impl<'a> CalibrationProblem<'a> {
@@ -218,7 +238,72 @@ impl<'a> CalibrationProblem<'a> {
             position,
             amplitudes,
             weights,
+            prior: None,
         })
+    }
+
+    /// The problem with `prior`'s residuals added ([`crate::prior`]);
+    /// its parameters must be the model's.
+    pub fn with_prior(
+        mut self,
+        model: &Model,
+        prior: Option<&'a Prior>,
+    ) -> Result<Self, CalibError> {
+        self.prior = match prior {
+            None => None,
+            Some(prior) => {
+                let columns = prior.columns(model)?;
+                let slots = columns.iter().map(|c| self.position[*c]).collect();
+                Some(PriorTerms {
+                    prior,
+                    columns,
+                    slots,
+                    jacobian: prior.jacobian(),
+                })
+            }
+        };
+        Ok(self)
+    }
+
+    /// The attached prior.
+    pub fn prior(&self) -> Option<&'a Prior> {
+        self.prior.as_ref().map(|p| p.prior)
+    }
+
+    /// The prior's residuals at `state` (empty without a prior).
+    pub fn prior_residuals(&self, state: &FitState) -> nalgebra::DVector<f64> {
+        match &self.prior {
+            None => nalgebra::DVector::zeros(0),
+            Some(t) => {
+                let values = state.model.values();
+                let m = nalgebra::DVector::from_iterator(
+                    t.columns.len(),
+                    t.columns.iter().map(|c| values[*c]),
+                );
+                t.prior.residuals(&m)
+            }
+        }
+    }
+
+    /// A prior matrix over its parameters (`information` or `meat`)
+    /// placed at their slots among the freed parameters (p × p; `None`
+    /// without a prior).
+    pub fn embed_prior(
+        &self,
+        matrix: impl Fn(&Prior) -> nalgebra::DMatrix<f64>,
+    ) -> Option<nalgebra::DMatrix<f64>> {
+        let t = self.prior.as_ref()?;
+        let m = matrix(t.prior);
+        let p = self.columns.len();
+        let mut out = nalgebra::DMatrix::zeros(p, p);
+        for (i, si) in t.slots.iter().enumerate() {
+            for (j, sj) in t.slots.iter().enumerate() {
+                if let (Some(a), Some(b)) = (si, sj) {
+                    out[(*a, *b)] = m[(i, j)];
+                }
+            }
+        }
+        Some(out)
     }
 
     /// The flat model columns of the freed parameters.
@@ -343,7 +428,7 @@ impl<'a> AtSolution<'a> {
     pub(crate) fn new(
         data: &'a CalibrationData,
         refined: &'a Refined,
-        options: &RefineOptions,
+        options: &'a RefineOptions,
     ) -> Result<Self, CalibError> {
         let names = options.free_names();
         let problem = CalibrationProblem::new(
@@ -352,7 +437,8 @@ impl<'a> AtSolution<'a> {
             &refined.model,
             &names,
             refined.weights.as_ref(),
-        )?;
+        )?
+        .with_prior(&refined.model, options.prior.as_ref())?;
         let state = FitState {
             model: refined.model.clone(),
             poses: refined.poses.clone(),
@@ -418,6 +504,26 @@ impl Problem for CalibrationProblem<'_> {
                         block: None,
                     });
                 }
+            }
+        }
+        if let Some(t) = &self.prior {
+            // One row per prior residual: `s L (m − μ)`, `∂/∂m = s L`.
+            let r = self.prior_residuals(state);
+            let mut row = vec![0.0; if jacobians { p } else { 0 }];
+            for (k, rk) in r.iter().enumerate() {
+                if jacobians {
+                    row.fill(0.0);
+                    for (j, slot) in t.slots.iter().enumerate() {
+                        if let Some(slot) = slot {
+                            row[*slot] = t.jacobian[(k, j)];
+                        }
+                    }
+                }
+                visit(&ResidualTerm {
+                    r: std::slice::from_ref(rk),
+                    a: &row,
+                    block: None,
+                });
             }
         }
         Ok(())
@@ -525,7 +631,8 @@ pub fn refine(
     let mut weights = weights_at(&state)?;
     let settings = solver_options(data, options);
     let problem =
-        CalibrationProblem::new(data, options.cost, &state.model, &free, weights.as_ref())?;
+        CalibrationProblem::new(data, options.cost, &state.model, &free, weights.as_ref())?
+            .with_prior(&state.model, options.prior.as_ref())?;
     let mut solution = solver::solve(&problem, state, &settings)?;
     let parameter_dependent = options.cost == CostKind::Template || options.fit_gains;
     if weights.is_some() && parameter_dependent {
@@ -541,7 +648,8 @@ pub fn refine(
                     &solution.state.model,
                     &[],
                     next.as_ref(),
-                )?;
+                )?
+                .with_prior(&solution.state.model, options.prior.as_ref())?;
                 solver::cost(&p, &solution.state, options.robust)?
             };
             weights = next;
@@ -555,7 +663,8 @@ pub fn refine(
                 &solution.state.model,
                 &free,
                 weights.as_ref(),
-            )?;
+            )?
+            .with_prior(&solution.state.model, options.prior.as_ref())?;
             let mut pass = solver::solve(&p, solution.state.clone(), &settings)?;
             pass.report.iterations += solution.report.iterations;
             pass.report.accepted += solution.report.accepted;

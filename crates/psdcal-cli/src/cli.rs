@@ -176,6 +176,9 @@ pub struct CalibrateArgs {
     /// model and held fixed (its uncertainty carried)
     #[arg(long, value_name = "FILE")]
     pub psd_map: Option<PathBuf>,
+    /// Refine the PSD map's coefficients too, its scan's covariance as their prior
+    #[arg(long, requires = "psd_map")]
+    pub refine_psd_map: bool,
     /// Value of a fixed parameter, NAME=VALUE (repeatable), e.g. l1=-1.3058e-3
     #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment, allow_negative_numbers = true)]
     pub set: Vec<(Param, f64)>,
@@ -310,6 +313,7 @@ impl Cli {
                     robust: args.robust,
                     uncertainty: args.uncertainty,
                     psd_map: args.psd_map,
+                    refine_psd_map: args.refine_psd_map,
                 };
                 let signals = matches!(files.points, PointSource::Signals(_));
                 options.check(signals, files.gains.is_some()).map_err(|m| {

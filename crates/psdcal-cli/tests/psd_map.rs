@@ -101,6 +101,56 @@ fn scan_map_calibrate_and_answer() {
         "{out}"
     );
 
+    // The map refined: its stage lists its coefficients as estimated and
+    // carries their covariance; aoa answers from it alone.
+    let run = psdcal([
+        "-q",
+        "calibrate",
+        "-t",
+        &format!("{sim}/template.csv"),
+        "-o",
+        &format!("{sim}/observations.csv"),
+        "--psd-map",
+        &p("map.json"),
+        "--refine-psd-map",
+        "--out",
+        &p("refined.json"),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let cal: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("refined.json")).unwrap()).unwrap();
+    let stage = cal["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["kind"] == "psd_map")
+        .unwrap();
+    let k = stage["parameters"].as_object().unwrap().len();
+    assert_eq!(stage["estimated"].as_array().unwrap().len(), k);
+    assert_eq!(stage["covariance"]["matrix"].as_array().unwrap().len(), k);
+    assert_eq!(cal["provenance"]["options"]["refine_psd_map"], true);
+    let run = psdcal([
+        "aoa",
+        "--calibration",
+        &p("refined.json"),
+        "--points",
+        &p("pts.csv"),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    // --refine-psd-map needs --psd-map.
+    let run = psdcal([
+        "calibrate",
+        "-t",
+        &format!("{sim}/template.csv"),
+        "-o",
+        &format!("{sim}/observations.csv"),
+        "--refine-psd-map",
+        "--out",
+        &p("cal3.json"),
+    ]);
+    assert!(!run.status.success());
+    assert!(stderr(&run).contains("--psd-map"), "{}", stderr(&run));
+
     // A map of another sensor size, named.
     let run = psdcal([
         "calibrate",

@@ -74,6 +74,9 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
     }
     if let Some(map) = &map {
         calibrate_options.base = calibrate_map::with_map(&calibrate_options.base, map)?;
+        if options.refine_psd_map {
+            calibrate_options.prior = Some(map.loaded.covariance.clone());
+        }
     }
     let mut result = psdcal_calib::calibrate(&data, &calibrate_options).map_err(|e| match e {
         CalibError::MisplacedLed {
@@ -95,6 +98,9 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
     })?;
     check_data_in_region(&result, &data, set, &result.valid_region)?;
     let map_stage = match &map {
+        Some(map) if options.refine_psd_map => {
+            Some(calibrate_map::refined_stage(&mut result, map)?)
+        }
         Some(map) => Some(calibrate_map::carry(
             &mut result,
             &data,

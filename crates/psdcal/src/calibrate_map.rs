@@ -1,8 +1,11 @@
 //! `calibrate --psd-map`: the PSD's non-linearity map (psd_map.json,
-//! docs/model.md §8.3) as the first, fixed stage of the calibrated model,
-//! its covariance carried into the parameters' (psdcal-calib's
-//! `carry_fixed_covariance`) and, through calibration.json's `psd_map`
-//! stage, into every angle's uncertainty.
+//! docs/model.md §8.3) as the first stage of the calibrated model, held
+//! fixed with its covariance carried into the parameters' (psdcal-calib's
+//! `carry_fixed_covariance`), or with `--refine-psd-map` refined with the
+//! scan's covariance as the prior (psdcal-calib's `CalibrateOptions::prior`:
+//! the joint covariance then holds the map's uncertainty, nothing is
+//! carried); through calibration.json's `psd_map` stage it reaches every
+//! angle's uncertainty.
 
 use std::path::Path;
 
@@ -62,6 +65,71 @@ pub(crate) fn with_map(base: &Model, map: &MapInput) -> Result<Model> {
     Ok(model)
 }
 
+/// The refined map's stage of calibration.json: its coefficients from
+/// `result`'s model, `matrix` their block of the joint covariance and
+/// `cross` their covariance with the other estimated parameters, to which
+/// `result`'s covariance is narrowed (the record's `covariance` names the
+/// model's scalar parameters only).
+pub(crate) fn refined_stage(
+    result: &mut CalibrationResult,
+    map: &MapInput,
+) -> Result<PsdMapStageRecord> {
+    let stage = &map.loaded.stage;
+    let names: Vec<String> = stage.parameters().iter().map(|p| p.name.clone()).collect();
+    let joint = &result.covariance.parameters;
+    let others: Vec<String> = joint
+        .names()
+        .iter()
+        .filter(|n| !names.contains(n))
+        .cloned()
+        .collect();
+    let index = |n: &String| {
+        joint
+            .index(n)
+            .ok_or_else(|| Error::Input(format!("the refined map's '{n}' has no covariance")))
+    };
+    let (rows, cols) = (
+        names.iter().map(index).collect::<Result<Vec<_>>>()?,
+        others.iter().map(index).collect::<Result<Vec<_>>>()?,
+    );
+    let m = joint.matrix();
+    let table = |a: &[usize], b: &[usize]| -> Vec<Vec<f64>> {
+        a.iter()
+            .map(|i| b.iter().map(|j| m[(*i, *j)]).collect())
+            .collect()
+    };
+    let (matrix, cross) = (table(&rows, &rows), table(&rows, &cols));
+    let parameters = names
+        .iter()
+        .map(|n| {
+            result
+                .model
+                .get(n)
+                .map(|v| (n.clone(), v))
+                .ok_or_else(|| Error::Input(format!("the refined model has no '{n}'")))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let narrowed = ParameterCovariance::new(
+        others.clone(),
+        DMatrix::from_fn(cols.len(), cols.len(), |i, j| m[(cols[i], cols[j])]),
+    )
+    .map_err(|e| Error::Input(format!("the calibration's covariance: {e}")))?;
+    result.covariance.parameters = narrowed;
+    let c = &map.file.covariance;
+    Ok(PsdMapStageRecord {
+        configuration: stage.configuration(),
+        parameters,
+        covariance: PsdMapStageCovariance {
+            sigma_x_mm: c.sigma_x_mm,
+            sigma_y_mm: c.sigma_y_mm,
+            unit: c.unit.clone(),
+            cross,
+            matrix: Some(matrix),
+        },
+        estimated: true,
+    })
+}
+
 /// Carries the map's covariance into `result`'s and returns the
 /// calibration.json stage of the map (with the cross-covariance).
 pub(crate) fn carry(
@@ -97,7 +165,9 @@ pub(crate) fn carry(
             cross: (0..carried.cross.nrows())
                 .map(|i| carried.cross.row(i).iter().copied().collect())
                 .collect(),
+            matrix: None,
         },
+        estimated: false,
     })
 }
 

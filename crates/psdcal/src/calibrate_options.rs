@@ -17,7 +17,7 @@ use crate::option_text::{
 use crate::options::CalibrationOptions;
 
 /// The names accepted, in the command line's order.
-pub const CALIBRATE_OPTION_NAMES: [&str; 14] = [
+pub const CALIBRATE_OPTION_NAMES: [&str; 15] = [
     "fit",
     "focal_guess",
     "cost",
@@ -27,6 +27,7 @@ pub const CALIBRATE_OPTION_NAMES: [&str; 14] = [
     "robust",
     "uncertainty",
     "psd_map",
+    "refine_psd_map",
     "set",
     "gains",
     "lx",
@@ -81,6 +82,7 @@ pub fn calibrate_settings(pairs: &[(String, Vec<String>)]) -> Result<CalibrateSe
             "robust" => o.robust = Some(parse_robust(one()?).map_err(named)?),
             "uncertainty" => o.uncertainty = parse_uncertainty(one()?).map_err(named)?,
             "psd_map" => o.psd_map = Some(PathBuf::from(one()?)),
+            "refine_psd_map" => o.refine_psd_map = parse_switch(one()?).map_err(named)?,
             "set" => {
                 for v in values {
                     let (p, x) = parse_assignment(v).map_err(named)?;

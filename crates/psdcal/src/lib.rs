@@ -158,7 +158,7 @@ pub use simulate_raw::{
 };
 pub use simulate_scan::{scan_samples, simulate_scan_file, ScanRequest, SimulatedScan};
 pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
-pub use study_psd_map::{pooled, psd_map_seed, SeedErrors};
+pub use study_psd_map::{pooled, psd_map_seed, refine_seed, RefineErrors, ScanSpec, SeedErrors};
 pub use summary::Summary;
 pub use summary_text::summary_text;
 pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};

@@ -103,6 +103,9 @@ pub struct CalibrationOptions {
     /// A PSD map (psd_map.json from `psdcal psd-map`) to put first in the
     /// model, held fixed (docs/model.md §8.3).
     pub psd_map: Option<std::path::PathBuf>,
+    /// Refine the map's coefficients too, with its scan's covariance as
+    /// their prior (docs/model.md §8.3); needs `psd_map`.
+    pub refine_psd_map: bool,
 }
 
 impl Default for CalibrationOptions {
@@ -120,6 +123,7 @@ impl Default for CalibrationOptions {
             robust: None,
             uncertainty: Uncertainty::Linear,
             psd_map: None,
+            refine_psd_map: false,
         }
     }
 }
@@ -175,6 +179,9 @@ impl CalibrationOptions {
                         list, or drop the gains file"
                     .into(),
             );
+        }
+        if self.refine_psd_map && self.psd_map.is_none() {
+            return Err("refining the PSD map needs the map: give --psd-map psd_map.json".into());
         }
         if let Some((p, _)) = self.fixed.iter().find(|(p, _)| self.free.contains(p)) {
             return Err(format!(

@@ -168,7 +168,8 @@ pub(crate) fn map_plots(sensor: &CalibratedSensor) -> Vec<Plot> {
         plots.push(Plot {
             name: "psd_map_uncertainty",
             caption: format!(
-                "The PSD map's own uncertainty (1σ, from its scan's fit residuals), largest {} µm",
+                "The PSD map's own uncertainty (1σ: its scan's fit, or, refined by the \
+                 calibration, the scan and the calibration data together), largest {} µm",
                 psdcal_report::num(largest)
             ),
             data: PlotData::HeatMap {

@@ -22,11 +22,28 @@ use crate::simulate::{chain_with_record, record_cycles_flag};
 use crate::study_page::{study_page, StudyRun};
 use crate::study_psd_map::{pooled, psd_map_seed, SeedErrors};
 
+/// The PSD-map condition's seeds: those that ran and those refused (a
+/// calibration of the seed refused its data: seed, message).
+#[derive(Debug, Clone, Default)]
+struct PsdMapRun {
+    seeds: Vec<SeedErrors>,
+    failures: Vec<(u64, String)>,
+}
+
 /// The PSD-map condition's section of study.md: the pooled RMS angle
-/// errors (µrad) of the three calibrations, their ratios, and the map's
-/// own error next to the scan's noise.
-fn psd_map_markdown(seeds: &[SeedErrors]) -> String {
+/// errors (µrad) of the four calibrations, their ratios, the map's own
+/// error next to the scan's noise, and the refused seeds.
+fn psd_map_markdown(run: &PsdMapRun) -> String {
+    let seeds = &run.seeds;
     let mut out = String::new();
+    let failed = run.failures.len();
+    if seeds.is_empty() {
+        let _ = writeln!(
+            out,
+            "### The PSD's non-radial non-linearity\n\nEvery seed was refused ({failed}).\n"
+        );
+        return out;
+    }
     let (map, l1, clean) = (
         pooled(seeds, |e| e.map),
         pooled(seeds, |e| e.l1),
@@ -35,7 +52,7 @@ fn psd_map_markdown(seeds: &[SeedErrors]) -> String {
     let _ = writeln!(
         out,
         "### The PSD's non-radial non-linearity: lens 2, 40 dB, 12 images, {} seeds\n",
-        seeds.len()
+        seeds.len() + failed
     );
     let _ = writeln!(
         out,
@@ -48,12 +65,22 @@ fn psd_map_markdown(seeds: &[SeedErrors]) -> String {
     let _ = writeln!(out, "|---|---|---|");
     for (name, v) in [
         ("map from a 0.25 mm scan, held fixed", map),
+        (
+            "the same map refined (--refine-psd-map)",
+            pooled(seeds, |e| e.refined),
+        ),
         ("l1 freed instead", l1),
         ("no non-linearity (same poses and noise)", clean),
     ] {
         let _ = writeln!(out, "| {name} | {} | {} |", num(1e6 * v), num(v / clean));
     }
     let worst = seeds.iter().map(|e| e.map_error_mm).fold(0.0, f64::max);
+    let _ = writeln!(
+        out,
+        "\nThe map's RMS error against the true field, pooled: {} µm held, {} µm refined.",
+        num(1e3 * pooled(seeds, |e| e.map_error_mm)),
+        num(1e3 * pooled(seeds, |e| e.refined_map_error_mm))
+    );
     let noise = seeds
         .iter()
         .map(|e| e.scan_noise_mm)
@@ -66,16 +93,31 @@ fn psd_map_markdown(seeds: &[SeedErrors]) -> String {
         num(1e3 * worst),
         num(1e3 * noise)
     );
+    if failed > 0 {
+        let _ = writeln!(
+            out,
+            "{failed} of {} seeds were refused by a calibration and are not pooled:\n",
+            seeds.len() + failed
+        );
+        for (seed, message) in &run.failures {
+            let _ = writeln!(out, "- seed {seed}: {message}");
+        }
+        out.push('\n');
+    }
     out
 }
 
 /// The PSD-map condition in study.json.
-fn psd_map_json(seeds: &[SeedErrors]) -> serde_json::Value {
+fn psd_map_json(run: &PsdMapRun) -> serde_json::Value {
+    let seeds = &run.seeds;
+    let pool = |f: fn(&SeedErrors) -> f64| (!seeds.is_empty()).then(|| pooled(seeds, f));
     serde_json::json!({
         "seeds": seeds,
-        "pooled_map_rad": pooled(seeds, |e| e.map),
-        "pooled_l1_rad": pooled(seeds, |e| e.l1),
-        "pooled_clean_rad": pooled(seeds, |e| e.clean),
+        "pooled_map_rad": pool(|e| e.map),
+        "pooled_refined_rad": pool(|e| e.refined),
+        "pooled_l1_rad": pool(|e| e.l1),
+        "pooled_clean_rad": pool(|e| e.clean),
+        "failures": run.failures.iter().map(|(seed, message)| serde_json::json!({"seed": seed, "error": message})).collect::<Vec<_>>(),
     })
 }
 
@@ -265,45 +307,55 @@ impl StudyPlan {
         } else {
             Vec::new()
         };
-        self.write(&tables, &maps, psd_map.as_deref(), elapsed)
+        self.write(&tables, &maps, psd_map.as_ref(), elapsed)
     }
 
     /// The PSD-map condition: one seed per trial (`seed + k`), its files in
-    /// a work folder under the output folder, removed afterwards.
-    fn run_psd_map(
-        &self,
-        tick: &(dyn Fn() + Sync),
-        cancel: &AtomicBool,
-    ) -> Result<Vec<SeedErrors>> {
+    /// a work folder under the output folder, removed afterwards. A seed
+    /// whose calibration is refused is counted, not pooled.
+    fn run_psd_map(&self, tick: &(dyn Fn() + Sync), cancel: &AtomicBool) -> Result<PsdMapRun> {
         use rayon::prelude::*;
         use std::sync::atomic::Ordering;
         let work = self.request.out.join(".psdmap-work");
-        let result: Result<Vec<SeedErrors>> = (0..self.request.trials)
-            .into_par_iter()
-            .map(|k| {
-                if cancel.load(Ordering::Relaxed) {
-                    return Err(Error::Interrupted);
-                }
-                let dir = work.join(format!("trial{k}"));
-                std::fs::create_dir_all(&dir).map_err(|e| Error::OutputFolder {
-                    path: dir.clone(),
-                    message: format!("cannot create {}: {e}", dir.display()),
-                })?;
-                let e = psd_map_seed(&dir, self.request.seed + k as u64, false);
-                let _ = std::fs::remove_dir_all(&dir);
-                tick();
-                e
-            })
-            .collect();
+        let result: Result<Vec<std::result::Result<SeedErrors, (u64, String)>>> =
+            (0..self.request.trials)
+                .into_par_iter()
+                .map(|k| {
+                    if cancel.load(Ordering::Relaxed) {
+                        return Err(Error::Interrupted);
+                    }
+                    let dir = work.join(format!("trial{k}"));
+                    std::fs::create_dir_all(&dir).map_err(|e| Error::OutputFolder {
+                        path: dir.clone(),
+                        message: format!("cannot create {}: {e}", dir.display()),
+                    })?;
+                    let seed = self.request.seed + k as u64;
+                    let e = psd_map_seed(&dir, seed, false);
+                    let _ = std::fs::remove_dir_all(&dir);
+                    tick();
+                    match e {
+                        Ok(e) => Ok(Ok(e)),
+                        Err(e @ (Error::Interrupted | Error::OutputFolder { .. })) => Err(e),
+                        Err(e) => Ok(Err((seed, e.to_string()))),
+                    }
+                })
+                .collect();
         let _ = std::fs::remove_dir_all(&work);
-        result
+        let mut run = PsdMapRun::default();
+        for r in result? {
+            match r {
+                Ok(e) => run.seeds.push(e),
+                Err(f) => run.failures.push(f),
+            }
+        }
+        Ok(run)
     }
 
     fn write(
         &self,
         tables: &[TableResult],
         maps: &[Figure9Map],
-        psd_map: Option<&[SeedErrors]>,
+        psd_map: Option<&PsdMapRun>,
         elapsed: f64,
     ) -> Result<StudyOutcome> {
         let r = &self.request;
@@ -354,7 +406,7 @@ impl StudyPlan {
             Some(dir) => {
                 let run = StudyRun {
                     summary: self.summary(tables, elapsed),
-                    psd_map,
+                    psd_map: psd_map.map(|r| (r.seeds.as_slice(), r.failures.as_slice())),
                     out: &r.out,
                 };
                 let page = study_page(&run, tables, maps)?;

@@ -141,10 +141,12 @@ pub fn fig9_map(m: &Figure9Map) -> Fig9Map {
 }
 
 /// The PSD map's condition as a section of the page: the pooled RMS angle
-/// errors of the three calibrations and their ratios.
-pub fn psd_map_blocks(seeds: &[SeedErrors]) -> Vec<Block> {
-    let (map, l1, clean) = (
+/// errors of the four calibrations and their ratios, and the seeds a
+/// calibration refused, `(seed, reason)`.
+pub fn psd_map_blocks(seeds: &[SeedErrors], refused: &[(u64, String)]) -> Vec<Block> {
+    let (map, refined, l1, clean) = (
         pooled(seeds, |e| e.map),
+        pooled(seeds, |e| e.refined),
         pooled(seeds, |e| e.l1),
         pooled(seeds, |e| e.clean),
     );
@@ -153,10 +155,10 @@ pub fn psd_map_blocks(seeds: &[SeedErrors]) -> Vec<Block> {
         .iter()
         .map(|e| e.scan_noise_mm)
         .fold(f64::INFINITY, f64::min);
-    vec![
+    let mut blocks = vec![
         Block::Heading(format!(
             "The PSD's non-radial non-linearity: lens 2, 40 dB, 12 images, {} seeds",
-            seeds.len()
+            seeds.len() + refused.len()
         )),
         Block::Table(Table {
             caption: "RMS angle error over 9 × 9 held-out directions, pooled over the seeds".into(),
@@ -169,6 +171,7 @@ pub fn psd_map_blocks(seeds: &[SeedErrors]) -> Vec<Block> {
             .to_vec(),
             rows: [
                 ("with the map from a 0.25 mm scan, held fixed", map),
+                ("with the same map refined, its scan as the prior", refined),
                 ("with l1 freed instead", l1),
                 ("without non-linearity (same poses and noise)", clean),
             ]
@@ -182,7 +185,18 @@ pub fn psd_map_blocks(seeds: &[SeedErrors]) -> Vec<Block> {
             num(1e3 * worst),
             num(1e3 * noise)
         )),
-    ]
+    ];
+    if !refused.is_empty() {
+        blocks.push(Block::Paragraph(format!(
+            "Seeds refused by a calibration (left out of the pooled errors): {}.",
+            refused
+                .iter()
+                .map(|(seed, reason)| format!("{seed} ({reason})"))
+                .collect::<Vec<_>>()
+                .join("; ")
+        )));
+    }
+    blocks
 }
 
 /// What the page says about a run besides its results.
@@ -190,7 +204,7 @@ pub struct StudyRun<'a> {
     /// What was run, `(what, value)`.
     pub summary: Vec<(String, String)>,
     /// The PSD map's condition, if run.
-    pub psd_map: Option<&'a [SeedErrors]>,
+    pub psd_map: Option<(&'a [SeedErrors], &'a [(u64, String)])>,
     /// The folder of study.md, study.csv and study.json.
     pub out: &'a std::path::Path,
 }
@@ -224,7 +238,10 @@ pub fn study_page(
         warnings: Vec::new(),
         tables: tables.iter().map(study_table).collect(),
         maps: maps.iter().map(fig9_map).collect(),
-        extra: run.psd_map.map(psd_map_blocks).unwrap_or_default(),
+        extra: run
+            .psd_map
+            .map(|(seeds, refused)| psd_map_blocks(seeds, refused))
+            .unwrap_or_default(),
     };
     psdcal_report::study_page(&content)
 }

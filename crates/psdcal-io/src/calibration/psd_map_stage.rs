@@ -1,6 +1,7 @@
 //! calibration.json version 2's `psd_map` stage (docs/formats.md,
-//! docs/model.md §8.3): the PSD's non-linearity map, held fixed in the
-//! calibration, first among the distortion stages.
+//! docs/model.md §8.3): the PSD's non-linearity map, first among the
+//! distortion stages, held fixed in the calibration or refined with its
+//! scan as the prior (`calibrate --refine-psd-map`).
 //!
 //! `{"kind": "psd_map", "parameters": {"map_x_0_0": …}, "estimated": [],
 //! "configuration": {basis, order or cells, frame_mm, hull_mm},
@@ -10,6 +11,13 @@
 //! the calibration's estimated parameters (the map's error carried into
 //! them, docs/model.md §8.3), whose `covariance` already includes it. Its
 //! coefficients live in the stage only, not in the flat `parameters`.
+//!
+//! A refined map lists all its parameters in `estimated` and carries
+//! `covariance.matrix` (2K × 2K, the stage's parameter order): its
+//! coefficients' covariance from the joint information of the calibration
+//! data and the scan (`sigma_x_mm`, `sigma_y_mm`, `unit` stay the scan's,
+//! the prior); `cross` is then the refined coefficients' covariance with the
+//! other estimated parameters.
 
 use nalgebra::DMatrix;
 use psdcal_model::stages::PsdMap;
@@ -29,6 +37,10 @@ pub struct PsdMapStageCovariance {
     /// order) with the calibration's estimated parameters (columns, the
     /// order of `covariance.parameters`).
     pub cross: Vec<Vec<f64>>,
+    /// A refined map's coefficients' covariance (2K × 2K, the stage's
+    /// parameter order); absent for a map held fixed (then `σ² U`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub matrix: Option<Vec<Vec<f64>>>,
 }
 
 /// A calibration's PSD map.
@@ -40,6 +52,9 @@ pub struct PsdMapStageRecord {
     pub parameters: Vec<(String, f64)>,
     /// Their covariance.
     pub covariance: PsdMapStageCovariance,
+    /// Whether the calibration refined the coefficients (then
+    /// `covariance.matrix` is theirs).
+    pub estimated: bool,
 }
 
 impl PsdMapStageRecord {
@@ -73,6 +88,18 @@ impl PsdMapStageRecord {
                 && m.iter()
                     .all(|r| r.len() == cols && r.iter().all(|v| v.is_finite()))
         };
+        if self.estimated != c.matrix.is_some() {
+            return Err(
+                "the psd_map stage's covariance: a refined map (its parameters in                  'estimated') carries 'matrix', a fixed one does not"
+                    .into(),
+            );
+        }
+        if c.matrix.as_ref().is_some_and(|m| !square(m, 2 * k, 2 * k)) {
+            return Err(format!(
+                "the psd_map stage's covariance: 'matrix' must be {0} × {0}, of finite numbers",
+                2 * k
+            ));
+        }
         if !square(&c.unit, k, k) || !square(&c.cross, 2 * k, estimated) {
             return Err(format!(
                 "the psd_map stage's covariance: 'unit' must be {k} × {k} and 'cross' {} × \
@@ -87,13 +114,18 @@ impl PsdMapStageRecord {
     pub fn map_covariance(&self, stage: &PsdMap) -> Result<ParameterCovariance, String> {
         let k = stage.terms();
         let c = &self.covariance;
+        let names: Vec<String> = stage.parameters().iter().map(|p| p.name.clone()).collect();
+        if let Some(matrix) = &c.matrix {
+            let m = DMatrix::from_fn(2 * k, 2 * k, |i, j| matrix[i][j]);
+            return ParameterCovariance::new(names, m)
+                .map_err(|e| format!("the psd_map stage's covariance.matrix: {e}"));
+        }
         let unit = DMatrix::from_fn(k, k, |i, j| c.unit[i][j]);
         let mut m = DMatrix::zeros(2 * k, 2 * k);
         m.view_mut((0, 0), (k, k))
             .copy_from(&(&unit * c.sigma_x_mm.powi(2)));
         m.view_mut((k, k), (k, k))
             .copy_from(&(&unit * c.sigma_y_mm.powi(2)));
-        let names = stage.parameters().iter().map(|p| p.name.clone()).collect();
         ParameterCovariance::new(names, m)
             .map_err(|e| format!("the psd_map stage's covariance: {e}"))
     }

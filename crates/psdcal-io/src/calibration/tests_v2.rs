@@ -234,3 +234,129 @@ fn diagnostics_round_trip_with_their_stable_codes() {
     let err = Calibration::from_json_str("c.json", &bad).unwrap_err();
     assert!(err.to_string().contains("c.json"), "{err}");
 }
+
+/// `sample()` with a polynomial PSD map of order 1 (3 coefficients per
+/// axis), held fixed or refined (`matrix`, all names `estimated`).
+fn with_map(refined: bool) -> Calibration {
+    use psdcal_model::stages::{MapBasis, MapFrame, PsdMap};
+    use psdcal_model::Stage;
+    let stage = PsdMap::new(
+        MapBasis::Polynomial { order: 1 },
+        MapFrame::centred(9.0, 9.0),
+        None,
+    )
+    .unwrap();
+    let mut cal = sample();
+    let k = stage.terms();
+    let nt = cal.covariance.parameters.len();
+    let matrix = (0..2 * k)
+        .map(|i| {
+            (0..2 * k)
+                .map(|j| if i == j { 4e-6 } else { 1e-7 })
+                .collect()
+        })
+        .collect();
+    cal.psd_map = Some(PsdMapStageRecord {
+        configuration: stage.configuration(),
+        parameters: stage
+            .parameters()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.name.clone(), 1e-3 * i as f64))
+            .collect(),
+        covariance: PsdMapStageCovariance {
+            sigma_x_mm: 3e-4,
+            sigma_y_mm: 4e-4,
+            unit: (0..k)
+                .map(|i| (0..k).map(|j| if i == j { 2.0 } else { 0.1 }).collect())
+                .collect(),
+            cross: vec![vec![1e-8; nt]; 2 * k],
+            matrix: refined.then_some(matrix),
+        },
+        estimated: refined,
+    });
+    cal
+}
+
+#[test]
+fn a_psd_map_stage_round_trips_held_or_refined() {
+    for refined in [false, true] {
+        let cal = with_map(refined);
+        let text = cal.to_json_string("c.json").unwrap();
+        let back = Calibration::from_json_str("c.json", &text).unwrap();
+        assert_eq!(back, cal);
+        let map = back.psd_map.as_ref().unwrap();
+        let (stage, _) = map.to_stage(cal.covariance.parameters.len()).unwrap();
+        let c = map.map_covariance(&stage).unwrap();
+        // Held: σx² U on the x block (2 · 9e-8); refined: the matrix (4e-6).
+        let expected = if refined { 4e-6 } else { 2.0 * 9e-8 };
+        assert!((c.matrix()[(0, 0)] - expected).abs() < 1e-18, "{refined}");
+        let stages = &json(&cal)["stages"];
+        let map_json = stages
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["kind"] == "psd_map")
+            .unwrap();
+        assert_eq!(
+            map_json["estimated"].as_array().unwrap().len(),
+            if refined { 6 } else { 0 }
+        );
+        assert_eq!(map_json["covariance"].get("matrix").is_some(), refined);
+    }
+}
+
+/// The byte range of the array value of `"key"`, the first after the
+/// psd_map stage's kind in `text` (brackets matched).
+fn array_in_map_stage(text: &str, key: &str) -> std::ops::Range<usize> {
+    let stage = text.find("\"kind\": \"psd_map\"").unwrap();
+    let start = stage + text[stage..].find(&format!("\"{key}\": [")).unwrap() + key.len() + 4;
+    let mut depth = 0;
+    for (i, c) in text[start..].char_indices() {
+        match c {
+            '[' => depth += 1,
+            ']' => {
+                depth -= 1;
+                if depth == 0 {
+                    return start..start + i + 1;
+                }
+            }
+            _ => {}
+        }
+    }
+    panic!("unbalanced {key}")
+}
+
+#[test]
+fn a_refined_psd_map_needs_all_its_names_and_its_matrix() {
+    let read = |text: &str| {
+        Calibration::from_json_str("c.json", text)
+            .unwrap_err()
+            .to_string()
+    };
+    let text = with_map(true).to_json_string("c.json").unwrap();
+    let mut bad = text.clone();
+    bad.replace_range(array_in_map_stage(&text, "estimated"), "[\"map_x_0_0\"]");
+    assert!(
+        read(&bad).contains("none of its parameters"),
+        "{}",
+        read(&bad)
+    );
+    // Held (nothing estimated) with a matrix.
+    let mut bad = text.clone();
+    bad.replace_range(array_in_map_stage(&text, "estimated"), "[]");
+    assert!(read(&bad).contains("carries 'matrix'"), "{}", read(&bad));
+    let mut bad = text.clone();
+    bad.replace_range(array_in_map_stage(&text, "matrix"), "[[1.0]]");
+    assert!(
+        read(&bad).contains("'matrix' must be 6 × 6"),
+        "{}",
+        read(&bad)
+    );
+    // Refined without its matrix.
+    let range = array_in_map_stage(&text, "matrix");
+    let key = text[..range.start].rfind(",").unwrap();
+    let mut bad = text.clone();
+    bad.replace_range(key..range.end, "");
+    assert!(read(&bad).contains("carries 'matrix'"), "{}", read(&bad));
+}

@@ -183,7 +183,11 @@ impl FileV2 {
                 (Some(map), StageKind::PsdMap) => Some(Stage {
                     kind,
                     parameters: NamedValues(map.parameters.clone()),
-                    estimated: Vec::new(),
+                    estimated: if map.estimated {
+                        map.parameters.iter().map(|(n, _)| n.clone()).collect()
+                    } else {
+                        Vec::new()
+                    },
                     configuration: Some(map.configuration.clone()),
                     covariance: Some(map.covariance.clone()),
                 }),
@@ -269,13 +273,23 @@ impl FileV2 {
                         "the psd_map stage needs its 'configuration' and 'covariance'".to_string(),
                     );
                 };
-                if !s.estimated.is_empty() {
-                    return Err("the psd_map stage is held fixed; expected 'estimated': []".into());
+                let parameters = s.parameters.0.clone();
+                let mut listed: Vec<&str> = s.estimated.iter().map(String::as_str).collect();
+                let mut names: Vec<&str> = parameters.iter().map(|(n, _)| n.as_str()).collect();
+                listed.sort_unstable();
+                names.sort_unstable();
+                if !listed.is_empty() && listed != names {
+                    return Err(
+                        "the psd_map stage's 'estimated' must list none of its parameters (held \
+                         fixed) or all of them (refined)"
+                            .into(),
+                    );
                 }
                 let map = PsdMapStageRecord {
                     configuration: configuration.clone(),
-                    parameters: s.parameters.0.clone(),
+                    parameters,
                     covariance: covariance.clone(),
+                    estimated: !s.estimated.is_empty(),
                 };
                 map.to_stage(self.covariance.parameters.len())?;
                 Some(map)
