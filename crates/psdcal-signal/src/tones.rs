@@ -47,12 +47,7 @@ pub fn fill_reference(
     let mut start = 0;
     while start < len {
         let end = (start + RESYNC).min(len);
-        let mut c = [0.0; LANES];
-        let mut s = [0.0; LANES];
-        for lane in 0..LANES {
-            let arg = TAU * (((first + start + lane) as f64) * ratio).fract();
-            (s[lane], c[lane]) = arg.sin_cos();
-        }
+        let (mut c, mut s) = lane_phases(first + start, ratio);
         let mut i = start;
         while i + LANES <= end {
             for lane in 0..LANES {
@@ -73,6 +68,19 @@ pub fn fill_reference(
 
 /// Interleaved rotations in [`fill_reference`].
 const LANES: usize = 4;
+
+/// `(sin, cos)` of the reference's phase `2π · ratio · n` at the frames
+/// `n = first .. first + LANES`, each computed afresh (the recursions
+/// restart from these every `RESYNC` frames, so rounding cannot build up).
+#[inline]
+fn lane_phases(first: usize, ratio: f64) -> ([f64; LANES], [f64; LANES]) {
+    let (mut s, mut c) = ([0.0; LANES], [0.0; LANES]);
+    for lane in 0..LANES {
+        let arg = TAU * (((first + lane) as f64) * ratio).fract();
+        (s[lane], c[lane]) = arg.sin_cos();
+    }
+    (c, s)
+}
 
 /// The projections `(Σ_i y_i[c] c_{first+i}, Σ_i y_i[c] s_{first+i})` of every
 /// channel `c` of `frames` on the reference of the tone `frequency_hz`, the
@@ -127,12 +135,7 @@ fn project_frames_plain<const C: usize>(
     let mut start = 0;
     while start < len {
         let end = (start + RESYNC).min(len);
-        let mut c = [0.0; LANES];
-        let mut s = [0.0; LANES];
-        for lane in 0..LANES {
-            let arg = TAU * (((first + start + lane) as f64) * ratio).fract();
-            (s[lane], c[lane]) = arg.sin_cos();
-        }
+        let (mut c, mut s) = lane_phases(first + start, ratio);
         let body = start + (end - start) / LANES * LANES;
         for group in frames[start..body].chunks_exact(LANES) {
             for lane in 0..LANES {
