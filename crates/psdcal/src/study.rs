@@ -19,7 +19,7 @@ use psdcal_study::{run_tables, table_spec, StudyOptions, TableResult, TableSpec,
 use crate::error::{Error, Result};
 use crate::provenance::utc_iso8601;
 use crate::simulate::{chain_with_record, record_cycles_flag};
-use crate::study_page::{study_page, StudyRun};
+use crate::study_page::{study_page, PsdMapSeeds, StudyRun};
 use crate::study_psd_map::{pooled, psd_map_seed, SeedErrors};
 
 /// The PSD-map condition's seeds: those that ran and those refused (a
@@ -406,7 +406,10 @@ impl StudyPlan {
             Some(dir) => {
                 let run = StudyRun {
                     summary: self.summary(tables, elapsed),
-                    psd_map: psd_map.map(|r| (r.seeds.as_slice(), r.failures.as_slice())),
+                    psd_map: psd_map.map(|r| PsdMapSeeds {
+                        seeds: &r.seeds,
+                        refused: &r.failures,
+                    }),
                     out: &r.out,
                 };
                 let page = study_page(&run, tables, maps)?;

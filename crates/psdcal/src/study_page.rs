@@ -199,12 +199,22 @@ pub fn psd_map_blocks(seeds: &[SeedErrors], refused: &[(u64, String)]) -> Vec<Bl
     blocks
 }
 
+/// The PSD map's condition: the seeds that ran and those a calibration
+/// refused, `(seed, reason)`.
+#[derive(Debug, Clone, Copy)]
+pub struct PsdMapSeeds<'a> {
+    /// The seeds that ran.
+    pub seeds: &'a [SeedErrors],
+    /// The seeds refused.
+    pub refused: &'a [(u64, String)],
+}
+
 /// What the page says about a run besides its results.
 pub struct StudyRun<'a> {
     /// What was run, `(what, value)`.
     pub summary: Vec<(String, String)>,
     /// The PSD map's condition, if run.
-    pub psd_map: Option<(&'a [SeedErrors], &'a [(u64, String)])>,
+    pub psd_map: Option<PsdMapSeeds<'a>>,
     /// The folder of study.md, study.csv and study.json.
     pub out: &'a std::path::Path,
 }
@@ -240,7 +250,7 @@ pub fn study_page(
         maps: maps.iter().map(fig9_map).collect(),
         extra: run
             .psd_map
-            .map(|(seeds, refused)| psd_map_blocks(seeds, refused))
+            .map(|m| psd_map_blocks(m.seeds, m.refused))
             .unwrap_or_default(),
     };
     psdcal_report::study_page(&content)
