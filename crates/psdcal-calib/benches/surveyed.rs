@@ -80,17 +80,8 @@ fn room(seed: u64) -> SurveyedData {
     );
     let half = 0.4 * 9.0 / 8.0;
     let room_from_sensor = first.inverse();
-    let points: Vec<Vector3<f64>> = (0..20)
-        .map(|_| {
-            let z = rng.random_range(1500.0..5000.0);
-            let p = Vector3::new(
-                rng.random_range(-half..half) * z,
-                rng.random_range(-half..half) * z,
-                z,
-            );
-            room_from_sensor.transform(&p)
-        })
-        .collect();
+    let points: Vec<Vector3<f64>> =
+        psdcal_testkit::points_in_view(&room_from_sensor, half, 20, &mut rng);
     let turn = 0.25 * half;
     let poses: Vec<Pose> = [0.0, 1.0, -1.0]
         .iter()

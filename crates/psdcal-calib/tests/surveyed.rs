@@ -33,17 +33,7 @@ fn scene(truth: &SensorModel, n: usize, seed: u64) -> (Vec<Vector3<f64>>, Pose) 
     );
     let room_from_sensor = pose.inverse();
     let half = 0.4 * 9.0 / truth.intrinsics.f;
-    let points = (0..n)
-        .map(|_| {
-            let z = rng.random_range(1500.0..5000.0);
-            let p = Vector3::new(
-                rng.random_range(-half..half) * z,
-                rng.random_range(-half..half) * z,
-                z,
-            );
-            room_from_sensor.transform(&p)
-        })
-        .collect();
+    let points = psdcal_testkit::points_in_view(&room_from_sensor, half, n, &mut rng);
     (points, pose)
 }
 

@@ -46,17 +46,7 @@ fn scene(
     );
     let half = 0.4 * 9.0 / truth.intrinsics.f;
     let room_from_sensor = first.inverse();
-    let points = (0..n)
-        .map(|_| {
-            let z = rng.random_range(1500.0..5000.0);
-            let p = Vector3::new(
-                rng.random_range(-half..half) * z,
-                rng.random_range(-half..half) * z,
-                z,
-            );
-            room_from_sensor.transform(&p)
-        })
-        .collect();
+    let points = psdcal_testkit::points_in_view(&room_from_sensor, half, n, rng);
     let turn = 0.25 * half;
     let poses = (0..orientations)
         .map(|k| {

@@ -34,7 +34,9 @@ pub mod wide;
 
 pub use observe::{add_noise, image_points, PointKind};
 pub use poly_stage::PolyField;
-pub use poses::{aimed_grid_poses, aimed_pose, covering_poses, fits, perturbed, HALF_SIDE_MM};
+pub use poses::{
+    aimed_grid_poses, aimed_pose, covering_poses, fits, perturbed, points_in_view, HALF_SIDE_MM,
+};
 pub use psdcal_model::paper_setup::{scatter14, SCATTER14_MM};
 pub use templates::{grid75, scatter, EXTRA_MM};
 pub use wide::{WideImage, WideScenario};

@@ -155,3 +155,26 @@ pub fn perturbed(truth: &SensorModel, poses: &[Pose]) -> (SensorModel, Vec<Pose>
         .collect();
     (m, p)
 }
+
+/// `n` emitters in view of a sensor placed at `room_from_sensor`, in the
+/// room frame: depth 1.5–5 m along the optical axis, `x/z` and `y/z` within
+/// `±half_tan` (the surveyed and in-situ tests' draw: depth, then x, then y
+/// per point, from `rng`).
+pub fn points_in_view(
+    room_from_sensor: &Pose,
+    half_tan: f64,
+    n: usize,
+    rng: &mut ChaCha8Rng,
+) -> Vec<Vector3<f64>> {
+    (0..n)
+        .map(|_| {
+            let z = rng.random_range(1500.0..5000.0);
+            let p = Vector3::new(
+                rng.random_range(-half_tan..half_tan) * z,
+                rng.random_range(-half_tan..half_tan) * z,
+                z,
+            );
+            room_from_sensor.transform(&p)
+        })
+        .collect()
+}
