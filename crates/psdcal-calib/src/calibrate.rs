@@ -270,20 +270,17 @@ fn calibrate_as_given(
     let free = refine_options.free_names();
     let fitted_gains = refined.model.gains();
     // What the finished fit is asked runs on two threads (the results do
-    // not depend on it): one linearisation at the solution serves the
-    // covariance and the linearity check; the fit statistics, the residual
-    // structure tests and the valid region need no covariance.
-    let (after_fit, (statistics, mut diagnosed, valid_region)) = join(
+    // not depend on it), in two shares of about equal work: one
+    // linearisation at the solution serves the covariance and the linearity
+    // check, with the fit statistics; the residual structure tests and the
+    // valid region need no covariance.
+    let (after_fit, (mut diagnosed, valid_region)) = join(
         || -> Result<_, CalibError> {
             let at = AtSolution::new(data, &refined, refine_options)?;
             let method = analytic_method(&refined, refine_options);
             Ok((
                 covariance_at(&at, data, &refined, refine_options, method)?,
                 check_linearity_at(&at, data, refine_options)?,
-            ))
-        },
-        || {
-            (
                 fit_statistics(
                     data,
                     &refined.model,
@@ -291,12 +288,16 @@ fn calibrate_as_given(
                     options.refine.cost,
                     options.refine.robust,
                 ),
+            ))
+        },
+        || {
+            (
                 diagnose_structure(data, &refined, &options.refine, &options.diagnostics),
                 ValidRegion::of_model(&refined.model, &data.geometry),
             )
         },
     );
-    let (covariance, linearity) = after_fit?;
+    let (covariance, linearity, statistics) = after_fit?;
     if let Some(sd) = covariance.std("f") {
         let f = refined.model.get("f").unwrap_or(f64::NAN);
         if sd > MAX_RELATIVE_STD_F * f {

@@ -44,7 +44,10 @@
 //!    subset iterations and 3 on the whole set, against 10–17 on the whole
 //!    set from the closed form (the damping of the strongly correlated
 //!    directions decays by a factor 3 an iteration, which near the minimum
-//!    cost 5–6 of them).
+//!    cost 5–6 of them). The subset's descent itself starts with little
+//!    damping ([`REFINED_LAMBDA`]): the closed form is near enough for
+//!    Gauss–Newton steps, and a step that overshoots is rejected and damped
+//!    as usual.
 //!    The closed-form candidate, when there is one and `J` at 0.5, 0.7, 1.4
 //!    and 2 × its `f` (with its centre and with the centre at (0, 0)) is not
 //!    below half its own (it sits in the right basin),
@@ -115,6 +118,12 @@ pub const REFINE_SUBSET_IMAGES: usize = 4;
 /// directions (f with the depths) would cost an iteration for each factor 3
 /// that it decays by.
 const NEAR_LAMBDA: f64 = 1e-6;
+
+/// Starting damping of the closed form's refinement. Measured on 18 sets
+/// (lenses 1 and 2; 9, 12 and 20 images; 3 seeds; 40 dB): against 1e-3, the
+/// whole `calibrate` process executes 3–14 % fewer instructions, and the
+/// final answers agree within 2e-7 σ.
+const REFINED_LAMBDA: f64 = 1e-7;
 
 /// Solver iterations of one precise evaluation of `J`.
 const PROFILE_ITERATIONS: usize = 40;
@@ -388,7 +397,7 @@ impl Problem {
             max_iterations: REFINED_ITERATIONS,
             cost_tolerance: 1e-6,
             step_tolerance: 1e-8,
-            initial_lambda: 1e-3,
+            initial_lambda: REFINED_LAMBDA,
             exact_cost: 1e-3 * self.floor,
             step_floor: 1e-3 * self.floor,
             robust: None,

@@ -57,6 +57,11 @@ pub struct ResidualTerm<'a> {
     pub block: Option<(usize, &'a [f64])>,
 }
 
+/// Most global parameters whose two-row Jacobians [`NormalEquations::add`]
+/// copies into contiguous rows; larger blocks (a PSD map's hundreds of
+/// coefficients) use the interleaved loop.
+pub const SPLIT_COLUMNS: usize = 48;
+
 impl NormalEquations {
     /// Adds one residual with weight `weight` (robust reweighting). Only the
     /// upper triangle of `U` is accumulated ([`Self::finish`] mirrors it).
@@ -100,19 +105,38 @@ impl NormalEquations {
     }
 
     /// [`Self::add`] for a two-row residual (an image point), the common
-    /// case, with the rows unrolled.
+    /// case, with the rows unrolled. For up to [`SPLIT_COLUMNS`] parameters
+    /// the Jacobian's two rows are first copied apart (on the stack), so
+    /// that the inner loops read contiguous slices and vectorise; every entry
+    /// is the same expression as in the interleaved loop, so the sums are the
+    /// same to the bit.
     fn add_pair(&mut self, weight: f64, term: &ResidualTerm<'_>) {
         let p = self.g_a.len();
         let (r0, r1) = (term.r[0], term.r[1]);
         let a = &term.a[..2 * p];
+        let (mut rows0, mut rows1) = ([0.0; SPLIT_COLUMNS], [0.0; SPLIT_COLUMNS]);
+        let split = p <= SPLIT_COLUMNS;
+        if split {
+            for (j, aj) in a.chunks_exact(2).enumerate() {
+                rows0[j] = aj[0];
+                rows1[j] = aj[1];
+            }
+        }
+        let (a0, a1) = (&rows0[..p.min(SPLIT_COLUMNS)], &rows1[..p.min(SPLIT_COLUMNS)]);
         let u = self.u.as_mut_slice();
         let g_a = self.g_a.as_mut_slice();
         for (j, aj) in a.chunks_exact(2).enumerate() {
             let (x0, x1) = (weight * aj[0], weight * aj[1]);
             g_a[j] += x0 * r0 + x1 * r1;
             let column = &mut u[p * j..p * j + j + 1];
-            for (slot, ak) in column.iter_mut().zip(a.chunks_exact(2)) {
-                *slot += x0 * ak[0] + x1 * ak[1];
+            if split {
+                for ((slot, y0), y1) in column.iter_mut().zip(&a0[..=j]).zip(&a1[..=j]) {
+                    *slot += x0 * y0 + x1 * y1;
+                }
+            } else {
+                for (slot, ak) in column.iter_mut().zip(a.chunks_exact(2)) {
+                    *slot += x0 * ak[0] + x1 * ak[1];
+                }
             }
         }
         if let Some((i, b)) = term.block {
@@ -126,8 +150,15 @@ impl NormalEquations {
                 for k in 0..6 {
                     v_i[6 * c + k] += y0 * b[2 * k] + y1 * b[2 * k + 1];
                 }
-                for (slot, aj) in w_i[c * p..c * p + p].iter_mut().zip(a.chunks_exact(2)) {
-                    *slot += aj[0] * y0 + aj[1] * y1;
+                let column = &mut w_i[c * p..c * p + p];
+                if split {
+                    for ((slot, x0), x1) in column.iter_mut().zip(a0).zip(a1) {
+                        *slot += x0 * y0 + x1 * y1;
+                    }
+                } else {
+                    for (slot, aj) in column.iter_mut().zip(a.chunks_exact(2)) {
+                        *slot += aj[0] * y0 + aj[1] * y1;
+                    }
                 }
             }
         }
