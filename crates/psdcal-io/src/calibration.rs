@@ -28,7 +28,8 @@
 //! pose); gains are relative channel gains (docs/model.md §1). `std` has one entry
 //! per estimated parameter, named as in `estimated`, plus `g_x2`, `g_y1`,
 //! `g_y2` when the gains were estimated; `covariance.parameters` lists the
-//! same names in the same order and `matrix` is square and symmetric.
+//! same names (its order, not the key order of `std`, which JSON does not
+//! keep, is the order) and `matrix` is square and symmetric.
 //!
 //! Compatibility: a file of this or an older version is read; a newer
 //! version is refused with a message saying so; unknown fields are ignored,
@@ -251,7 +252,7 @@ impl Calibration {
         let version = serde_json::from_str::<Header>(text)
             .map(|h| h._version)
             .unwrap_or(CALIBRATION_VERSION);
-        let calibration: Calibration = if version >= 2 {
+        let mut calibration: Calibration = if version >= 2 {
             let file: v2::FileV2 =
                 serde_json::from_str(text).map_err(|e| json_error(source, &e))?;
             file.into_record().map_err(|message| IoError::Invalid {
@@ -261,6 +262,10 @@ impl Calibration {
         } else {
             serde_json::from_str(text).map_err(|e| json_error(source, &e))?
         };
+        // A JSON object's keys have no order (RFC 8259): a file whose keys a
+        // tool sorted (`jq -S`, Python's `sort_keys`) reads the same. `std`
+        // follows `covariance.parameters`, which is an array.
+        calibration.std.order_as(&calibration.covariance.parameters);
         calibration.validate(source)?;
         Ok(calibration)
     }

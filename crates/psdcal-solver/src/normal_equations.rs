@@ -122,7 +122,10 @@ impl NormalEquations {
                 rows1[j] = aj[1];
             }
         }
-        let (a0, a1) = (&rows0[..p.min(SPLIT_COLUMNS)], &rows1[..p.min(SPLIT_COLUMNS)]);
+        let (a0, a1) = (
+            &rows0[..p.min(SPLIT_COLUMNS)],
+            &rows1[..p.min(SPLIT_COLUMNS)],
+        );
         let u = self.u.as_mut_slice();
         let g_a = self.g_a.as_mut_slice();
         for (j, aj) in a.chunks_exact(2).enumerate() {

@@ -138,6 +138,22 @@ impl GainsRecord {
 pub struct StdDevs(pub Vec<(String, f64)>);
 
 impl StdDevs {
+    /// Reorders the entries as `names` lists them, when `names` holds
+    /// exactly the entries' names (otherwise leaves them for validation to
+    /// refuse).
+    pub fn order_as(&mut self, names: &[String]) {
+        if names.len() != self.0.len() {
+            return;
+        }
+        let ordered: Option<Vec<(String, f64)>> = names
+            .iter()
+            .map(|n| self.0.iter().find(|(m, _)| m == n).cloned())
+            .collect();
+        if let Some(ordered) = ordered {
+            self.0 = ordered;
+        }
+    }
+
     /// The standard deviation of `name`.
     pub fn get(&self, name: &str) -> Option<f64> {
         self.0.iter().find(|(n, _)| n == name).map(|(_, v)| *v)

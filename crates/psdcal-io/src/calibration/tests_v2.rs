@@ -360,3 +360,47 @@ fn a_refined_psd_map_needs_all_its_names_and_its_matrix() {
     bad.replace_range(key..range.end, "");
     assert!(read(&bad).contains("carries 'matrix'"), "{}", read(&bad));
 }
+
+/// `value` as JSON text with every object's keys in reverse alphabetical
+/// order (what no writer of psdcal produces).
+fn reordered(value: &serde_json::Value) -> String {
+    match value {
+        serde_json::Value::Object(map) => {
+            let mut keys: Vec<&String> = map.keys().collect();
+            keys.sort_unstable_by(|a, b| b.cmp(a));
+            let fields: Vec<String> = keys
+                .into_iter()
+                .map(|k| {
+                    format!(
+                        "{}:{}",
+                        serde_json::Value::from(k.as_str()),
+                        reordered(&map[k])
+                    )
+                })
+                .collect();
+            format!("{{{}}}", fields.join(","))
+        }
+        serde_json::Value::Array(items) => {
+            let items: Vec<String> = items.iter().map(reordered).collect();
+            format!("[{}]", items.join(","))
+        }
+        other => other.to_string(),
+    }
+}
+
+#[test]
+fn key_order_carries_no_meaning() {
+    // A tool that sorts or shuffles an object's keys (jq -S, Python's
+    // sort_keys) leaves the same calibration: std follows the covariance's
+    // parameter list, not its own key order.
+    let cal = sample();
+    let text = reordered(&json(&cal));
+    assert!(text.find("\"std\"").is_some());
+    let std_at = text.find("\"std\":{").unwrap();
+    assert!(
+        text[std_at..].find("\"k2\"").unwrap() < text[std_at..].find("\"cx\"").unwrap(),
+        "the test's std must be out of the covariance's order"
+    );
+    let read = Calibration::from_json_str("sorted.json", &text).expect("reads");
+    assert_eq!(read, cal);
+}
