@@ -41,7 +41,7 @@ pub struct PlanArgs {
     /// Margin kept between every LED and the active area's edge, mm
     #[arg(long, value_name = "MM", default_value_t = 0.2)]
     pub margin: f64,
-    /// Parameters the calibration will estimate (default f,cx,cy,k1,k2)
+    /// Parameters the calibration will estimate (default f,cx,cy,k1,k2; 'gains' adds the channel gains)
     #[arg(long, value_name = "LIST", value_parser = parse_fit)]
     pub fit: Option<FitList>,
     /// Nominal value of another parameter, e.g. k1=1e-2 (repeatable)
