@@ -41,7 +41,7 @@ pub struct PlanArgs {
     /// Margin kept between every LED and the active area's edge, mm
     #[arg(long, value_name = "MM", default_value_t = 0.2)]
     pub margin: f64,
-    /// Parameters the calibration will estimate (default f,cx,cy,k1,k2)
+    /// Parameters the calibration will estimate (default f,cx,cy,k1,k2; 'gains' adds the channel gains)
     #[arg(long, value_name = "LIST", value_parser = parse_fit)]
     pub fit: Option<FitList>,
     /// Nominal value of another parameter, e.g. k1=1e-2 (repeatable)
@@ -69,9 +69,6 @@ pub struct PlanArgs {
 
 /// Runs `plan`.
 pub fn run(a: &PlanArgs, output: crate::cli::Output) -> anyhow::Result<()> {
-    if a.fit.as_ref().is_some_and(|f| f.1) {
-        anyhow::bail!("plan does not model the gains yet: leave 'gains' out of --fit (plan with the other parameters)");
-    }
     let planned = psdcal::plan_poses(&psdcal::PlanRequest {
         f_mm: a.f,
         template: a.template.clone(),
@@ -84,7 +81,7 @@ pub fn run(a: &PlanArgs, output: crate::cli::Output) -> anyhow::Result<()> {
         distance_mm: a.distance,
         tilt_max_deg: a.tilt_max,
         margin_mm: a.margin,
-        fit: a.fit.as_ref().map(|f| f.0.clone()),
+        fit: a.fit.clone(),
         set: a.set.clone(),
         minimise_max: a.minimise_max,
         seed: a.seed,

@@ -195,48 +195,108 @@ fn plan_simulate_calibrate_next_and_focal_check() {
 }
 
 #[test]
-fn next_refuses_a_calibration_whose_gains_were_fitted() {
-    // The example calibration with the gains among the estimated
-    // parameters: plan does not model them, and says so.
+fn plan_with_the_gains_freed_and_next_from_a_calibration_that_fitted_them() {
+    // plan --fit …,gains → simulate --poses with unequal gains →
+    // calibrate --fit …,gains → plan --next from that calibration: its
+    // gains are modelled (freed again, at their fitted values), and
+    // holding them (--fit without gains) predicts a smaller σ.
     let dir = tempfile::tempdir().unwrap();
-    let valid = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/valid/calibration.json"
+    let d = |name: &str| dir.path().join(name).display().to_string();
+    assert!(
+        psdcal(["simulate", "--snr", "40", "-q", "--out", &d("sim0")])
+            .status
+            .success()
     );
-    let mut cal: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(valid).unwrap()).unwrap();
-    // In 'std's order (the JSON object's keys come back sorted).
-    let names = ["cx", "cy", "f", "g_x2", "g_y1", "g_y2", "k1", "k2"];
-    let matrix: Vec<Vec<f64>> = (0..8)
-        .map(|a| (0..8).map(|b| if a == b { 1e-6 } else { 0.0 }).collect())
-        .collect();
-    cal["covariance"] = serde_json::json!({ "parameters": names, "matrix": matrix });
-    cal["stages"][0]["estimated"] = serde_json::json!(["g_x2", "g_y1", "g_y2"]);
-    for n in &names[3..6] {
-        cal["std"][*n] = serde_json::json!(1e-3);
+    let template = &d("sim0/template.csv");
+    let plan = |fit: &str, out: &str| {
+        json(&psdcal([
+            "plan",
+            "--json",
+            "--f",
+            "8",
+            "--set",
+            "k1=1e-2",
+            "--set",
+            "k2=3e-5",
+            "--set",
+            "cx=0.5",
+            "--set",
+            "cy=-0.7",
+            "--margin",
+            "0.3",
+            "--template",
+            template,
+            "--snr",
+            "40",
+            "--images",
+            "9",
+            "--fit",
+            fit,
+            "--out",
+            out,
+        ]))
+    };
+    let planned = plan("f,cx,cy,k1,k2,gains", &d("poses.csv"));
+    let plain = plan("f,cx,cy,k1,k2", &d("plain.csv"));
+    for name in ["f", "g_x2", "g_y1", "g_y2"] {
+        assert!(
+            planned["parameter_sigma"][name].as_f64().unwrap() > 0.0,
+            "{name}"
+        );
     }
-    let path = dir.path().join("cal.json");
-    std::fs::write(&path, cal.to_string()).unwrap();
-    let template = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../data/example/template.csv"
-    );
-    let out = psdcal([
-        "plan",
-        "--next",
-        "--calibration",
-        path.to_str().unwrap(),
-        "--template",
-        template,
+    assert!(plain["parameter_sigma"].get("g_x2").is_none());
+    let sigma = |v: &serde_json::Value| v["aoa_sigma_deg"]["rms"].as_f64().unwrap();
+    assert!(sigma(&planned) > sigma(&plain));
+    let sim = json(&psdcal([
+        "simulate",
+        "--json",
         "--snr",
         "40",
+        "--imbalance",
+        "--poses",
+        &d("poses.csv"),
         "--out",
-        dir.path().join("next.csv").to_str().unwrap(),
+        &d("sim"),
+    ]));
+    assert_eq!(sim["images"], 9);
+    let run = psdcal([
+        "-q",
+        "calibrate",
+        "-t",
+        &d("sim/template.csv"),
+        "-s",
+        &d("sim/signals.csv"),
+        "--fit",
+        "f,cx,cy,k1,k2,gains",
+        "--out",
+        &d("cal.json"),
     ]);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("channel gains") && err.contains("--fit"),
-        "{err}"
-    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let next = |fit: Option<&str>, out: &str| {
+        let mut args = vec![
+            "plan".to_string(),
+            "--json".into(),
+            "--next".into(),
+            "--calibration".into(),
+            d("cal.json"),
+            "--template".into(),
+            d("sim/template.csv"),
+            "--snr".into(),
+            "40".into(),
+            "--out".into(),
+            out.to_string(),
+        ];
+        if let Some(fit) = fit {
+            args.extend(["--fit".to_string(), fit.to_string()]);
+        }
+        json(&psdcal(args))
+    };
+    let with_gains = next(None, &d("next.csv"));
+    assert_eq!(with_gains["poses"].as_array().unwrap().len(), 1);
+    assert!(with_gains["parameter_sigma"]["g_y2"].as_f64().unwrap() > 0.0);
+    let before = |v: &serde_json::Value| v["before_aoa_sigma_deg"]["rms"].as_f64().unwrap();
+    assert!(sigma(&with_gains) < before(&with_gains));
+    let held = next(Some("f,cx,cy,k1,k2"), &d("held.csv"));
+    assert!(held["parameter_sigma"].get("g_y2").is_none());
+    assert!(before(&held) < before(&with_gains));
 }

@@ -1,8 +1,9 @@
 //! Issue 16's acceptance at full size: planned against random poses over
 //! seeded simulations (lens 2, 40 dB, nine images, the 14-LED template).
 //!
-//! `cargo run --release -p psdcal-study --example plan_acceptance -- [TRIALS] [IMAGES]`
-//! (default 30 trials, 9 images).
+//! `cargo run --release -p psdcal-study --example plan_acceptance -- [TRIALS] [IMAGES] [gains]`
+//! (default 30 trials, 9 images; `gains`: the data with the study's gain
+//! imbalance, the gains freed in the plan and in every calibration).
 
 use psdcal_calib::plan::{plan, PlanOptions};
 use psdcal_sim::SimulationOptions;
@@ -12,11 +13,13 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let trials: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(30);
     let images: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(9);
+    let gains = args.next().is_some_and(|a| a == "gains");
     let options = SimulationOptions {
         images,
+        imbalance: gains,
         ..SimulationOptions::default()
     };
-    let setup = simulation_setup(&options);
+    let setup = simulation_setup(&options, gains);
     let start = std::time::Instant::now();
     let planned = match plan(
         &setup,
@@ -52,7 +55,7 @@ fn main() {
         planned.prediction.max.to_degrees(),
         predicted.to_degrees()
     );
-    let results = compare_poses(&options, &poses, trials, 1000);
+    let results = compare_poses(&options, &poses, trials, 1000, gains);
     let failed = |f: fn(&psdcal_study::planned::PlanTrial) -> Option<f64>| {
         results.iter().filter(|t| f(t).is_none()).count()
     };

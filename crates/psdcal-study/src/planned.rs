@@ -10,6 +10,12 @@
 //! same grid (its points measured through the true model) is what the
 //! simulated spread `√(mean over trials of the squared RMS error)` is
 //! compared with.
+//!
+//! With the gains ([`planned_errors`] with `fit_gains`, [`simulation_setup`]
+//! with `gains`): the data carry the study's gain imbalance, `calibrate`
+//! estimates the gains with the optics (`--fit f,cx,cy,k1,k2,gains`), the
+//! held-out error divides the estimated gains out, and the plan's setup
+//! frees `g_x2, g_y1, g_y2` at unit nominal gains.
 
 use nalgebra::Vector2;
 use psdcal_calib::plan::{AoaMetric, PlanSetup};
@@ -31,30 +37,57 @@ pub struct PlanTrial {
     pub planned: Option<f64>,
 }
 
-/// Runs `trials` paired trials from `seed` (module documentation).
+/// Runs `trials` paired trials from `seed` (module documentation), the
+/// gains estimated too when `fit_gains`.
 pub fn compare_poses(
     options: &SimulationOptions,
     planned: &[Pose],
     trials: usize,
     seed: u64,
+    fit_gains: bool,
 ) -> Vec<PlanTrial> {
-    let run = |sim: Result<psdcal_sim::Simulation, psdcal_sim::SimError>| -> Option<f64> {
-        let sim = sim.ok()?;
-        let result = calibrate(&sim.calibration_data(), &CalibrateOptions::default()).ok()?;
-        Some(sim.aoa_rms_error(&result.sensor_model(), &ChannelGains::UNIT))
-    };
+    let with_plan = planned_errors(options, planned, trials, seed, fit_gains);
+    (0..trials)
+        .into_par_iter()
+        .zip(with_plan)
+        .map(|(k, planned)| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed + k as u64);
+            PlanTrial {
+                random: simulate(options, &mut rng)
+                    .ok()
+                    .and_then(|sim| score(&sim, fit_gains)),
+                planned,
+            }
+        })
+        .collect()
+}
+
+/// `sim` calibrated with `calibrate`'s defaults (the gains estimated too
+/// when `fit_gains`), its held-out RMS AoA error (rad).
+fn score(sim: &psdcal_sim::Simulation, fit_gains: bool) -> Option<f64> {
+    let mut options = CalibrateOptions::default();
+    options.refine.fit_gains = fit_gains;
+    let result = calibrate(&sim.calibration_data(), &options).ok()?;
+    let gains = result.gains.unwrap_or(ChannelGains::UNIT);
+    Some(sim.aoa_rms_error(&result.sensor_model(), &gains))
+}
+
+/// The held-out RMS AoA errors (rad) of `trials` simulations at the poses
+/// `planned` (trial `k` seeded with `seed + k`), each calibrated with
+/// `calibrate`'s defaults, the gains estimated too when `fit_gains`
+/// (`None`: the simulation or calibration failed).
+pub fn planned_errors(
+    options: &SimulationOptions,
+    planned: &[Pose],
+    trials: usize,
+    seed: u64,
+    fit_gains: bool,
+) -> Vec<Option<f64>> {
     (0..trials)
         .into_par_iter()
         .map(|k| {
-            let s = seed + k as u64;
-            PlanTrial {
-                random: run(simulate(options, &mut ChaCha8Rng::seed_from_u64(s))),
-                planned: run(simulate_at(
-                    options,
-                    planned,
-                    &mut ChaCha8Rng::seed_from_u64(s),
-                )),
-            }
+            let mut rng = ChaCha8Rng::seed_from_u64(seed + k as u64);
+            score(&simulate_at(options, planned, &mut rng).ok()?, fit_gains)
         })
         .collect()
 }
@@ -113,9 +146,10 @@ pub fn rms(values: impl Iterator<Item = Option<f64>>) -> Option<f64> {
 
 /// The planner's view of a simulation's sensor: its true model as the
 /// nominal one, `f, cx, cy, k1, k2` freed on the template plane (the
-/// defaults of `calibrate`), the point noise of the simulation's chain at
-/// its SNR (none without one: `ρ = 0` gives a zero covariance).
-pub fn simulation_setup(options: &SimulationOptions) -> PlanSetup {
+/// defaults of `calibrate`) — and the gains `g_x2, g_y1, g_y2` at unit
+/// nominal values when `gains` — the point noise of the simulation's chain
+/// at its SNR (none without one: `ρ = 0` gives a zero covariance).
+pub fn simulation_setup(options: &SimulationOptions, gains: bool) -> PlanSetup {
     let mut truth = options.lens.model();
     if options.psd_distortion {
         truth.distortion.l1 = psdcal_model::SensorModel::PAPER_L1;
@@ -124,11 +158,20 @@ pub fn simulation_setup(options: &SimulationOptions) -> PlanSetup {
         .snr_db
         .and_then(|snr| options.chain.amplitude_std(1.0, snr).ok())
         .unwrap_or(0.0);
+    let refine = psdcal_calib::RefineOptions {
+        fit_gains: gains,
+        ..psdcal_calib::RefineOptions::default()
+    };
+    let model = if gains {
+        Model::standard_with_gains(&truth, options.geometry, &ChannelGains::UNIT)
+    } else {
+        Model::standard(&truth)
+    };
     PlanSetup {
-        model: Model::standard(&truth),
+        model,
         template: options.template.template().leds,
         geometry: options.geometry,
-        free: psdcal_calib::RefineOptions::default().free_names(),
+        free: refine.free_names(),
         cost: psdcal_model::CostKind::Template,
         relative_noise,
     }

@@ -14,11 +14,12 @@ use std::path::{Path, PathBuf};
 
 use psdcal_calib::plan::{self, Objective, Plan, PlanOptions, PlanSetup, PoseRanges};
 use psdcal_io::{write_poses, PoseRow, Template};
-use psdcal_model::{CostKind, Model, Param, PsdGeometry, SensorModel};
+use psdcal_model::{ChannelGains, CostKind, Model, Param, PsdGeometry, SensorModel};
 use psdcal_report::{heat_map_png, heat_map_svg, Frame, HeatCell};
 use serde_json::json;
 
 use crate::error::{Error, Result};
+use crate::option_text::FitList;
 use crate::sensor::LoadedSensor;
 use crate::simulate::{chain_with_record, DEFAULT_RECORD_CYCLES};
 
@@ -41,9 +42,9 @@ pub struct PlanRequest {
     pub tilt_max_deg: f64,
     /// Margin of every LED inside the active area, mm.
     pub margin_mm: f64,
-    /// Freed parameters (`None`: the calibration default, or the
-    /// calibration's with `next`).
-    pub fit: Option<Vec<Param>>,
+    /// Freed parameters and whether the gains are freed too (`None`: the
+    /// calibration default, or the calibration's with `next`).
+    pub fit: Option<FitList>,
     /// Nominal values of other parameters (`k1=…`).
     pub set: Vec<(Param, f64)>,
     /// Minimise the largest σ instead of the RMS.
@@ -98,40 +99,33 @@ fn setup(request: &PlanRequest) -> Result<(PlanSetup, Option<LoadedSensor>)> {
     for (p, v) in &request.set {
         sensor.set(*p, *v);
     }
-    if let (None, Some(l)) = (&request.fit, &loaded) {
-        let gains = psdcal_model::stages::gains::GAIN_NAMES;
-        if l.sensor
-            .covariance
-            .names()
-            .iter()
-            .any(|n| gains.contains(&n.as_str()))
-        {
-            return Err(Error::Options(
-                "the calibration estimated the channel gains, which plan does not model yet (the \
-                 prediction would silently leave them out): give --fit with the sensor's \
-                 parameters (e.g. --fit f,cx,cy,k1,k2) to plan for them with the gains held"
-                    .into(),
-            ));
-        }
-    }
+    let gains = psdcal_model::stages::gains::GAIN_NAMES;
     let free: Vec<String> = match (&request.fit, &loaded) {
-        (Some(fit), _) => fit.iter().map(|p| p.name().to_string()).collect(),
-        (None, Some(l)) => l
-            .sensor
-            .covariance
-            .names()
+        (Some(FitList(fit, with_gains)), _) => fit
             .iter()
-            .filter(|n| n.parse::<Param>().is_ok())
-            .cloned()
+            .map(|p| p.name())
+            .chain(gains.into_iter().filter(|_| *with_gains))
+            .map(str::to_string)
             .collect(),
+        (None, Some(l)) => {
+            let names = l.sensor.covariance.names();
+            let standard = names.iter().filter(|n| n.parse::<Param>().is_ok());
+            let fitted = names.iter().filter(|n| gains.contains(&n.as_str()));
+            standard.chain(fitted).cloned().collect()
+        }
         (None, None) => psdcal_calib::RefineOptions::default().free_names(),
     };
     if free.is_empty() {
         return Err(Error::Options(
-            "the calibration estimated none of the sensor's standard parameters; give --fit".into(),
+            "the calibration estimated none of the sensor's parameters; give --fit".into(),
         ));
     }
-    let model = Model::standard(&sensor);
+    let model = if free.iter().any(|n| gains.contains(&n.as_str())) {
+        let nominal = loaded.as_ref().and_then(|l| l.sensor.gains);
+        Model::standard_with_gains(&sensor, geometry, &nominal.unwrap_or(ChannelGains::UNIT))
+    } else {
+        Model::standard(&sensor)
+    };
     model.validate()?;
     Ok((
         PlanSetup {

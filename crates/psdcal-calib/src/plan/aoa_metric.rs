@@ -9,10 +9,17 @@
 //! parameter covariance `C`. The grid is the centres of `g × g` equal cells
 //! over the active area; the RMS over it is `√(tr(C H̄))`, `H̄` the mean of
 //! the `H_m`.
+//!
+//! When the model owns the channel gains, a point is measured from
+//! amplitudes, `m = P(V / g)`, and an error `δg` in the gains moves it by
+//! `∂m/∂g δg` before the chain: `G`'s gain columns are
+//! `(∂u/∂m)(∂m/∂g)`, at the amplitudes the signal chain gives at `m`
+//! ([`crate::plan::information::nominal_amplitudes`]).
 
 use nalgebra::{DMatrix, Matrix2, Vector2};
 use psdcal_model::{Model, PsdGeometry};
 
+use crate::plan::information::nominal_amplitudes;
 use crate::CalibError;
 
 /// `H_m` at each point of a grid (module documentation).
@@ -67,6 +74,23 @@ impl AoaMetric {
             for (slot, c) in columns.iter().enumerate() {
                 g[(0, slot)] = jac.wrt_params[2 * c];
                 g[(1, slot)] = jac.wrt_params[2 * c + 1];
+            }
+            if let (Some(amps), Some(cols)) = (nominal_amplitudes(model, m), model.gain_columns()) {
+                let (_, dm_dg) = model
+                    .measured_from_amplitudes_with_jacobian(&amps)
+                    .map_err(|e| CalibError::InvalidInput {
+                        reason: format!(
+                            "no impact point at the grid point ({}, {}) mm: {e}",
+                            m.x, m.y
+                        ),
+                    })?;
+                let du_dg = jac.wrt_point * dm_dg;
+                for (n, c) in cols.iter().enumerate() {
+                    if let Some(slot) = columns.iter().position(|k| k == c) {
+                        g[(0, slot)] = du_dg[(0, n)];
+                        g[(1, slot)] = du_dg[(1, n)];
+                    }
+                }
             }
             let q = DMatrix::from_column_slice(2, 2, q.as_slice());
             let h = g.transpose() * q * &g;

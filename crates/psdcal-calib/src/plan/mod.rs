@@ -11,6 +11,12 @@
 //! ([`select`]). [`plan_next`] picks the one pose that most lowers the AoA
 //! σ of a calibration from poses already taken (their `S_i`, `M_i` at the
 //! calibration's model are the starting sums).
+//!
+//! The channel gains are modelled like any freed parameter: a `PlanSetup`
+//! whose model owns a gains stage (`Model::standard_with_gains`) with
+//! `g_x2, g_y1, g_y2` among `free` predicts `calibrate --fit …,gains`
+//! (`g_x1 = 1`, as the calibration fixes it); the gains enter through the
+//! electrode amplitudes of each LED ([`information`], [`aoa_metric`]).
 
 pub mod aoa_metric;
 pub mod candidates;
