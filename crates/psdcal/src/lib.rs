@@ -91,6 +91,7 @@ mod plan;
 mod point_rows;
 mod provenance;
 mod psd_map;
+mod psd_map_report;
 mod report;
 mod report_tables;
 mod report_views;
@@ -139,7 +140,9 @@ pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
 pub use psd_map::{
     parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, RESIDUAL_MAP_CELLS,
+    SCAN_SUMMARY_CELLS,
 };
+pub use psd_map_report::PSD_MAP_PAGE;
 pub use psdcal_io::RawFormat;
 pub use psdcal_psdmap::ModelChoice as PsdMapModel;
 pub use psdcal_signal::DemodConfig;

@@ -32,6 +32,7 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
         geometry: PsdGeometry::default(),
         seed: 0,
         command: String::new(),
+        report: None,
     })
     .unwrap();
     let map_path = dir.path().join("psd_map.json");
