@@ -221,7 +221,13 @@ fn content(outcome: &PsdMapOutcome) -> PsdMapReport {
             .into()
     };
     PsdMapReport {
-        title: format!("PSD map from {scan_name}"),
+        title: format!(
+            "PSD map from {}",
+            outcome
+                .scan
+                .file_name()
+                .map_or(scan_name.clone(), |n| n.to_string_lossy().into_owned())
+        ),
         summary,
         cross_validation,
         choice,
