@@ -51,15 +51,8 @@ pub(crate) struct PreparedReport {
 }
 
 impl PreparedReport {
-    /// Writes the page and the figures.
+    /// Writes the page and the figures (into the folder [`prepare`] made).
     pub(crate) fn write(self) -> Result<Vec<PathBuf>> {
-        std::fs::create_dir_all(&self.dir).map_err(|e| Error::OutputFolder {
-            path: self.dir.clone(),
-            message: format!(
-                "cannot create the report folder {}: {e}",
-                self.dir.display()
-            ),
-        })?;
         let html = self.dir.join(PSD_MAP_PAGE);
         psdcal_io::write_atomic_bytes(&html, self.page.as_bytes())?;
         let mut files = vec![html];
@@ -69,7 +62,8 @@ impl PreparedReport {
 }
 
 /// The report of `outcome` for the folder `dir`, psd_map.json going to
-/// `out`: refused when a file of it would be the scan or `out`.
+/// `out`: refused when a file of it would be the scan or `out`; the folder
+/// is made once every figure is drawn.
 pub(crate) fn prepare(outcome: &PsdMapOutcome, dir: &Path, out: &Path) -> Result<PreparedReport> {
     let content = content(outcome);
     let files: Vec<PathBuf> = std::iter::once(dir.join(PSD_MAP_PAGE))
@@ -84,6 +78,12 @@ pub(crate) fn prepare(outcome: &PsdMapOutcome, dir: &Path, out: &Path) -> Result
         .map(Plot::svg)
         .collect::<std::result::Result<_, _>>()?;
     let page = psd_map_page(&content, &svgs).render();
+    // The folder before psd_map.json: a folder that cannot be made leaves
+    // nothing behind.
+    std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
+        path: dir.to_path_buf(),
+        message: format!("cannot create the report folder {}: {e}", dir.display()),
+    })?;
     Ok(PreparedReport {
         dir: dir.to_path_buf(),
         page,
@@ -139,7 +139,12 @@ fn content(outcome: &PsdMapOutcome) -> PsdMapReport {
             }
         )
     };
-    let auto = fit.candidates.len() > 1;
+    let auto = file
+        .provenance
+        .options
+        .get("model")
+        .and_then(|m| m.as_str())
+        == Some("auto");
     let summary = vec![
         format!(
             "Scan: {scan_name}, {} points{} on a {lx} mm × {ly} mm sensor",

@@ -5,7 +5,8 @@
 //! every candidate's row, the residual arrows' lengths in the SVG against
 //! the file's residuals in µm, the worst cell's RMS recomputed from the
 //! file), outliers drawn apart, and a report that would overwrite the scan
-//! or psd_map.json refused before anything is written.
+//! or psd_map.json, or whose folder cannot be made, refused before anything
+//! is written.
 
 use std::path::Path;
 
@@ -329,4 +330,11 @@ fn a_report_that_would_overwrite_an_input_or_the_map_is_refused() {
     let err = outcome.write(&page).unwrap_err().to_string();
     assert!(err.contains("--out") && err.contains("--report"), "{err}");
     assert!(!page.exists());
+    // A report folder that is a file: refused before psd_map.json is written.
+    let not_a_folder = dir.path().join("file");
+    std::fs::write(&not_a_folder, "x").unwrap();
+    let outcome = psd_map_from_scan(&request(&scan, &not_a_folder)).unwrap();
+    let err = outcome.write(&map_path).unwrap_err().to_string();
+    assert!(err.contains("report folder"), "{err}");
+    assert!(!map_path.exists());
 }
