@@ -1,9 +1,9 @@
 //! The page of `psdcal psd-map --report`: a PSD map fitted to a lensless
 //! scan, from plain content ([`PsdMapReport`]) the caller fills: what was
 //! fitted in a list (model, cross-validated RMS, noise, rejected points,
-//! the scan's hull), the cross-validation's candidates in a table, and the
-//! figures (the field, its size, the scan's residuals), drawn by
-//! [`Plot`]s like the calibration report's.
+//! the scan's hull), then the figures (the field, its size, the scan's
+//! residuals), drawn by [`Plot`]s like the calibration report's, then the
+//! model choice and the cross-validation's candidates in a table.
 
 use crate::calibration::Plot;
 use crate::html::{Block, Page, Table};
@@ -29,9 +29,6 @@ pub struct PsdMapReport {
 pub fn psd_map_page(report: &PsdMapReport, svgs: &[String]) -> Page {
     let mut page = Page::new(&report.title);
     page.push(Block::List(report.summary.clone()));
-    page.push(Block::Heading("Model choice".into()));
-    page.push(Block::Paragraph(report.choice.clone()));
-    page.push(Block::Table(report.cross_validation.clone()));
     page.push(Block::Heading("Plots".into()));
     page.push(Block::Figures(
         svgs.iter()
@@ -39,6 +36,9 @@ pub fn psd_map_page(report: &PsdMapReport, svgs: &[String]) -> Page {
             .map(|(svg, p)| (svg.clone(), p.caption.clone()))
             .collect(),
     ));
+    page.push(Block::Heading("Model choice".into()));
+    page.push(Block::Paragraph(report.choice.clone()));
+    page.push(Block::Table(report.cross_validation.clone()));
     if let Some(t) = &report.provenance {
         page.push(Block::Heading("Provenance".into()));
         page.push(Block::Table(t.clone()));
