@@ -49,7 +49,7 @@
 //! | a calibration file (version 1 or 2) as a sensor | [`LoadedSensor`], [`sensor_of`] |
 //! | measured → ideal points, angles of arrival, positions, error maps | [`correct()`], [`aoa_table`], [`locate_table`], [`map_table`] |
 //! | electrical gains | [`estimate_gains`] |
-//! | the PSD's non-linearity map from a lensless scan | [`psd_map_from_scan`], [`simulate_scan_file`] |
+//! | the PSD's non-linearity map from a lensless scan (and its report page) | [`psd_map_from_scan`], [`PsdMapOutcome::write`], [`simulate_scan_file`] |
 //! | positions (and angles) against a surveyed truth: the standard metrics | [`evaluate()`] |
 //! | raw recordings → signals.csv (band-pass, lock-in, SNR) | [`demodulate()`] |
 //! | a live stream of samples → angles per window and LED | [`track()`] |
