@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
-# Browser test of `psdcal report`, `psdcal evaluate --report` and
-# `psdcal study --report` (a small study: Table 1 and Figure 9, 3 trials): each page
+# Browser test of `psdcal report`, `psdcal evaluate --report`,
+# `psdcal study --report` (a small study: Table 1 and Figure 9, 3 trials) and
+# `psdcal psd-map --report` (a 0.25 mm simulated scan, under a second): each page
 # renders in headless Chromium at 1200 px and at 390 px (a phone) without
 # console errors, and its screenshots are not blank.
 #
 # Installs Debian's `chromium` when it is missing (CI runs as root).
 # Usage: .ci/browser-test.sh [SCREENSHOT_PREFIX]   (default: a temporary folder;
 #        writes PREFIX-report-1200.png, PREFIX-report-390.png, PREFIX-evaluation-….png,
-#        PREFIX-study-….png)
+#        PREFIX-study-….png, PREFIX-psd_map-….png)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 started=$(date +%s)
@@ -34,6 +35,8 @@ psdcal=${CARGO_TARGET_DIR:-target}/release/psdcal
     --point-sigma 0.0007 --out "$work/room/estimates.csv"
 "$psdcal" -q evaluate --truth "$work/room/truth.csv" --estimates "$work/room/estimates.csv" \
     --rig "$work/room/rig.json" --report "$work/evaluation"
+"$psdcal" -q simulate-scan --step 0.25 --stage-sigma 0.3 --snr 50 --out "$work/scan.csv"
+"$psdcal" -q psd-map --scan "$work/scan.csv" --out "$work/psd_map.json" --report "$work/psd-map-page"
 # The cheapest study with every part of the page (tables, the bias, the
 # paper's numbers, Figure 9's heat maps, histograms): a few seconds.
 "$psdcal" -q study table1 fig9 --trials 3 --out "$work/study" --report "$work/study-page"
@@ -116,5 +119,6 @@ for width in 1200 390; do
     check_page report "$work/report/report.html" "$width"
     check_page evaluation "$work/evaluation/evaluation.html" "$width"
     check_page study "$work/study-page/study.html" "$width"
+    check_page psd_map "$work/psd-map-page/psd_map.html" "$width"
 done
-echo "browser-test: OK: report.html, evaluation.html and study.html render without console errors at 1200 and 390 px ($(( $(date +%s) - started )) s)"
+echo "browser-test: OK: report.html, evaluation.html, study.html and psd_map.html render without console errors at 1200 and 390 px ($(( $(date +%s) - started )) s)"

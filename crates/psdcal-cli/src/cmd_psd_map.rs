@@ -30,6 +30,9 @@ pub struct PsdMapArgs {
     /// Seed of the cross-validation's folds
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
+    /// Folder for the report (psd_map.html, figures as SVG and PNG)
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
 }
 
 /// Runs `psd-map`.
@@ -43,6 +46,7 @@ pub fn run(args: &PsdMapArgs, output: Output) -> anyhow::Result<()> {
         },
         seed: args.seed,
         command: std::env::args().collect::<Vec<_>>().join(" "),
+        report: args.report.clone(),
     };
     let outcome = psdcal::psd_map_from_scan(&request)?;
     outcome.write(&args.out)?;

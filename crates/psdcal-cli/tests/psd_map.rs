@@ -1,6 +1,7 @@
 //! The PSD map from the command line (docs/model.md §8.3): `simulate-scan`
-//! → `psd-map` → `calibrate --psd-map` → `aoa`, and the bad inputs, each
-//! one clear line naming the file.
+//! → `psd-map` (with `--report`) → `calibrate --psd-map` → `aoa`, and the
+//! bad inputs (a report over the scan too), each one clear line naming the
+//! file.
 
 mod common;
 
@@ -34,8 +35,32 @@ fn scan_map_calibrate_and_answer() {
         &p("scan.csv"),
         "--out",
         &p("map.json"),
+        "--report",
+        &p("map_report"),
     ]);
     assert!(run.status.success(), "{}", stderr(&run));
+    for file in ["psd_map.html", "psd_map_field.svg", "psd_map_residuals.png"] {
+        assert!(dir.path().join("map_report").join(file).exists(), "{file}");
+    }
+    // A report over its own scan: one line, nothing written.
+    std::fs::copy(p("scan.csv"), p("map_report/psd_map_field.svg")).unwrap();
+    let refused = psdcal([
+        "psd-map",
+        "--scan",
+        &p("map_report/psd_map_field.svg"),
+        "--out",
+        &p("map2.json"),
+        "--report",
+        &p("map_report"),
+    ]);
+    assert!(!refused.status.success());
+    let err = stderr(&refused);
+    assert!(
+        err.contains("would overwrite the input given with --scan"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(!dir.path().join("map2.json").exists());
     let json: serde_json::Value = serde_json::from_str(&stdout(&run)).unwrap();
     assert_eq!(json["format"], "psdcal-psd-map");
     // 361 points: the map's error is a fraction of the ~0.37 µm noise.

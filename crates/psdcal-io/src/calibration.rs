@@ -60,7 +60,9 @@ mod tests_v2;
 mod v2;
 
 pub use provenance::{Diagnostic, InputFile, Provenance};
-pub use psd_map_stage::{PsdMapStageCovariance, PsdMapStageRecord};
+pub use psd_map_stage::{
+    PsdMapScanRecord, PsdMapStageCovariance, PsdMapStageRecord, ScanResidualCells,
+};
 pub use records::{
     BootstrapRecord, CostKind, Covariance, FitSummary, GainsRecord, ImageFit, IntrinsicsRecord,
     SensorSize, Software, StdDevs,

@@ -75,8 +75,8 @@ pub use atomic::{write_atomic, write_atomic_bytes};
 pub use calibration::{
     read_calibration, write_calibration, BootstrapRecord, Calibration, CostKind, Covariance,
     Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile, IntrinsicsRecord, Provenance,
-    PsdMapStageCovariance, PsdMapStageRecord, SensorSize, Software, StdDevs, ValidRegionRecord,
-    CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
+    PsdMapScanRecord, PsdMapStageCovariance, PsdMapStageRecord, ScanResidualCells, SensorSize,
+    Software, StdDevs, ValidRegionRecord, CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
 };
 pub use camera_model_file::{float_text, write_camera_model, CameraFormat, CameraModelFile};
 pub use corners::{Corner, Corners};

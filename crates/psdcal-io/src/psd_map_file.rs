@@ -13,7 +13,8 @@
 //! terms); `fit` (points, rejected lines, folds, the cross-validated and
 //! residual RMS, the noise and the map's own error in µm, the candidates
 //! with their cross-validated RMS); `residuals` (per scan point: `x_mm`,
-//! `y_mm` measured, `dx_um`, `dy_um` stage minus corrected point);
+//! `y_mm` measured, `dx_um`, `dy_um` stage minus corrected point, and
+//! `rejected`: the indices of the points rejected as outliers);
 //! `provenance` (as in calibration.json).
 
 use std::path::Path;
@@ -93,6 +94,10 @@ pub struct MapFitRecord {
 /// Residuals per scan point.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MapResidualsRecord {
+    /// Indices (from 0, into these arrays) of the points the fit rejected
+    /// as outliers (absent in files of older psdcal: none known).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub rejected: Vec<usize>,
     /// Measured x, mm.
     pub x_mm: Vec<f64>,
     /// Measured y, mm.
@@ -101,6 +106,33 @@ pub struct MapResidualsRecord {
     pub dx_um: Vec<f64>,
     /// Residual along y, µm.
     pub dy_um: Vec<f64>,
+}
+
+impl MapResidualsRecord {
+    /// The arrays are of one length, their numbers finite, the rejected
+    /// indices among the points.
+    pub fn check(&self) -> Result<(), String> {
+        let n = self.x_mm.len();
+        if [&self.y_mm, &self.dx_um, &self.dy_um]
+            .iter()
+            .any(|v| v.len() != n)
+        {
+            return Err(
+                "residuals.x_mm, y_mm, dx_um and dy_um must hold one value per scan point each"
+                    .into(),
+            );
+        }
+        let values = [&self.x_mm, &self.y_mm, &self.dx_um, &self.dy_um];
+        if values.iter().any(|v| v.iter().any(|x| !x.is_finite())) {
+            return Err("the residuals must be finite".into());
+        }
+        if let Some(i) = self.rejected.iter().find(|&&i| i >= n) {
+            return Err(format!(
+                "residuals.rejected: index {i} is beyond the {n} scan points"
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// psd_map.json.
@@ -173,6 +205,7 @@ impl PsdMapFile {
         if cov.unit.len() != k || cov.unit.iter().any(|r| r.len() != k) {
             return Err(bad(format!("covariance.unit must be {k} × {k}")));
         }
+        self.residuals.check().map_err(bad)?;
         let unit = DMatrix::from_fn(k, k, |i, j| cov.unit[i][j]);
         let mut m = DMatrix::zeros(2 * k, 2 * k);
         m.view_mut((0, 0), (k, k))

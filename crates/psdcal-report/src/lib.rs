@@ -17,6 +17,7 @@
 //! | bar charts (per-image RMS) | [`bar_chart_svg`] |
 //! | the template poses relative to the sensor, in 3-D | [`poses_svg`] |
 //! | a positioning evaluation (error CDF, error vectors, error against distance) | [`evaluation_page`] |
+//! | a PSD map fitted to a lensless scan (`psd-map --report`) | [`psd_map_page`] |
 //!
 //! Pages ([`Page`]) are one HTML file with inline SVG, an inline style
 //! sheet, no script and nothing loaded from the network; every text is
@@ -37,6 +38,7 @@ pub mod html;
 pub mod number;
 mod plot;
 pub mod poses;
+pub mod psd_map;
 pub mod residuals;
 pub mod scatter;
 pub mod sensitivity;
@@ -57,6 +59,7 @@ pub use html::{correlation_colour, inline_svg, Block, Page, Table};
 pub use number::{num, unit_text, value_with_digits, value_with_sigma};
 pub use plot::{count_label, tick_label, Arrow, ArrowSet, Frame, PointSet};
 pub use poses::{poses_png, poses_svg, PoseOutline};
+pub use psd_map::{psd_map_page, PsdMapReport};
 pub use residuals::{residuals_png, residuals_svg, OUTLINE_LABEL};
 pub use scatter::{scatter_png, scatter_svg};
 pub use sensitivity::{

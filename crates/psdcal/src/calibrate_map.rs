@@ -127,6 +127,7 @@ pub(crate) fn refined_stage(
             matrix: Some(matrix),
         },
         estimated: true,
+        scan: Some(crate::psd_map::scan_summary(&map.file, stage)),
     })
 }
 
@@ -168,6 +169,7 @@ pub(crate) fn carry(
             matrix: None,
         },
         estimated: false,
+        scan: Some(crate::psd_map::scan_summary(&map.file, stage)),
     })
 }
 

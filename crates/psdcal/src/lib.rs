@@ -49,7 +49,7 @@
 //! | a calibration file (version 1 or 2) as a sensor | [`LoadedSensor`], [`sensor_of`] |
 //! | measured → ideal points, angles of arrival, positions, error maps | [`correct()`], [`aoa_table`], [`locate_table`], [`map_table`] |
 //! | electrical gains | [`estimate_gains`] |
-//! | the PSD's non-linearity map from a lensless scan | [`psd_map_from_scan`], [`simulate_scan_file`] |
+//! | the PSD's non-linearity map from a lensless scan (and its report page) | [`psd_map_from_scan`], [`PsdMapOutcome::write`], [`simulate_scan_file`] |
 //! | positions (and angles) against a surveyed truth: the standard metrics | [`evaluate()`] |
 //! | raw recordings → signals.csv (band-pass, lock-in, SNR) | [`demodulate()`] |
 //! | a live stream of samples → angles per window and LED | [`track()`] |
@@ -91,6 +91,7 @@ mod plan;
 mod point_rows;
 mod provenance;
 mod psd_map;
+mod psd_map_report;
 mod report;
 mod report_tables;
 mod report_views;
@@ -139,7 +140,9 @@ pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
 pub use psd_map::{
     parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, RESIDUAL_MAP_CELLS,
+    SCAN_SUMMARY_CELLS,
 };
+pub use psd_map_report::PSD_MAP_PAGE;
 pub use psdcal_io::RawFormat;
 pub use psdcal_psdmap::ModelChoice as PsdMapModel;
 pub use psdcal_signal::DemodConfig;

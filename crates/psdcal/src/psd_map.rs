@@ -1,18 +1,22 @@
 //! `psdcal psd-map`: the PSD's non-linearity map from a lensless scan
 //! (docs/model.md §8.3, scan.csv and psd_map.json in docs/formats.md):
 //! read the scan, fit the map (psdcal-psdmap), build psd_map.json, its text
-//! summary with a residual map, and write it.
+//! summary with a residual map, and write it (with, on request, its report:
+//! `psd_map_report`); the scan's residuals per cell, for the reports and
+//! calibration.json's `scan` summary.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use nalgebra::Vector2;
 use psdcal_io::{
     write_psd_map, MapCandidateRecord, MapCoefficients, MapCovarianceRecord, MapFitRecord,
-    MapResidualsRecord, PsdMapFile, Scan, SensorSize, PSD_MAP_FORMAT, PSD_MAP_VERSION,
+    MapResidualsRecord, PsdMapFile, PsdMapScanRecord, Scan, ScanResidualCells, SensorSize,
+    PSD_MAP_FORMAT, PSD_MAP_VERSION,
 };
-use psdcal_model::stages::MapBasis;
+use psdcal_model::stages::{MapBasis, PsdMap};
 use psdcal_model::{ChannelGains, PsdGeometry, Stage};
-use psdcal_psdmap::{fit_psd_map, residual_map, FitOptions, ModelChoice, PsdMapFit};
+use psdcal_psdmap::{fit_psd_map, residual_map, FitOptions, ModelChoice, PsdMapFit, ResidualCell};
 
 use crate::provenance::{provenance, InputHashes};
 use crate::{Error, Result};
@@ -48,6 +52,8 @@ pub struct PsdMapRequest {
     pub seed: u64,
     /// The command line, for the provenance.
     pub command: String,
+    /// Folder for the report (psd_map.html with its figures), if asked.
+    pub report: Option<PathBuf>,
 }
 
 /// A fitted map as a file and its summary.
@@ -59,12 +65,72 @@ pub struct PsdMapOutcome {
     pub fit: PsdMapFit,
     /// The text summary (with the residual map).
     pub text: String,
+    /// The scan read (an input the report must not overwrite).
+    pub scan: PathBuf,
+    /// Folder for the report, if asked.
+    pub report: Option<PathBuf>,
 }
 
 impl PsdMapOutcome {
-    /// Writes psd_map.json atomically.
+    /// Writes psd_map.json atomically and, when asked, the report into its
+    /// folder (`crate::psd_map_report`); refuses, before writing anything,
+    /// a report file that is the scan or `path`.
     pub fn write(&self, path: &Path) -> Result<()> {
-        Ok(write_psd_map(path, &self.file)?)
+        let report = match &self.report {
+            Some(dir) => Some(crate::psd_map_report::prepare(self, dir, path)?),
+            None => None,
+        };
+        write_psd_map(path, &self.file)?;
+        if let Some(report) = report {
+            report.write()?;
+        }
+        Ok(())
+    }
+}
+
+/// Cells per side of the scan's residual summary (the report's heat map,
+/// calibration.json's `scan.residual_cells`).
+pub const SCAN_SUMMARY_CELLS: usize = 10;
+
+/// The residuals of psd_map.json's scan points, outliers left out, per
+/// cell of `stage`'s frame ([`SCAN_SUMMARY_CELLS`] per side): the
+/// non-empty cells.
+pub(crate) fn residual_cells(file: &PsdMapFile, stage: &PsdMap) -> Vec<ResidualCell> {
+    let r = &file.residuals;
+    let kept: Vec<usize> = (0..r.x_mm.len())
+        .filter(|i| !r.rejected.contains(i))
+        .collect();
+    let measured: Vec<Vector2<f64>> = kept
+        .iter()
+        .map(|&i| Vector2::new(r.x_mm[i], r.y_mm[i]))
+        .collect();
+    let residuals: Vec<Vector2<f64>> = kept
+        .iter()
+        .map(|&i| Vector2::new(r.dx_um[i], r.dy_um[i]) * 1e-3)
+        .collect();
+    residual_map(&stage.frame(), &measured, &residuals, SCAN_SUMMARY_CELLS)
+        .into_iter()
+        .filter(|c| c.points > 0)
+        .collect()
+}
+
+/// calibration.json's summary of the scan a map was fitted to (its `fit`
+/// and the residuals per cell).
+pub(crate) fn scan_summary(file: &PsdMapFile, stage: &PsdMap) -> PsdMapScanRecord {
+    let cells = residual_cells(file, stage);
+    let column = |f: &dyn Fn(&ResidualCell) -> f64| cells.iter().map(f).collect::<Vec<f64>>();
+    PsdMapScanRecord {
+        model: file.model.clone(),
+        fit: file.fit.clone(),
+        residual_cells: ScanResidualCells {
+            cells: SCAN_SUMMARY_CELLS,
+            x_mm: column(&|c| c.centre.x),
+            y_mm: column(&|c| c.centre.y),
+            points: cells.iter().map(|c| c.points).collect(),
+            dx_um: column(&|c| 1e3 * c.mean_mm.x),
+            dy_um: column(&|c| 1e3 * c.mean_mm.y),
+            rms_um: column(&|c| 1e3 * c.rms_mm),
+        },
     }
 }
 
@@ -124,6 +190,7 @@ pub fn psd_map_from_scan(request: &PsdMapRequest) -> Result<PsdMapOutcome> {
                 .collect(),
         },
         residuals: MapResidualsRecord {
+            rejected: fit.rejected.clone(),
             x_mm: points.measured.iter().map(|p| p.x).collect(),
             y_mm: points.measured.iter().map(|p| p.y).collect(),
             dx_um: fit.residuals.iter().map(|r| um(r.x)).collect(),
@@ -135,8 +202,23 @@ pub fn psd_map_from_scan(request: &PsdMapRequest) -> Result<PsdMapOutcome> {
             &inputs,
         ),
     };
-    let text = summary_text(&file, &fit, &points.measured, &points.source);
-    Ok(PsdMapOutcome { file, fit, text })
+    let mut text = summary_text(&file, &fit, &points.measured, &points.source);
+    if let Some(dir) = &request.report {
+        let page = dir.join(crate::psd_map_report::PSD_MAP_PAGE);
+        let _ = writeln!(
+            text,
+            "  report: {} with its figures (SVG and PNG) in {}",
+            page.display(),
+            dir.display()
+        );
+    }
+    Ok(PsdMapOutcome {
+        file,
+        fit,
+        text,
+        scan: request.scan.clone(),
+        report: request.report.clone(),
+    })
 }
 
 fn model_text(model: &ModelChoice) -> String {

@@ -2,7 +2,7 @@
 //! a calibration and, optionally, its data; psdcal-report draws it; the
 //! page and every plot (SVG and PNG) are written into one folder.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use nalgebra::Vector2;
 use psdcal_io::{write_atomic_bytes, Warning};
@@ -104,25 +104,41 @@ pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
     let html = request.out.join("report.html");
     write_atomic_bytes(&html, page.render().as_bytes())?;
     let mut files = vec![html.clone()];
-    for (plot, svg) in content.plots.iter().zip(&svgs) {
-        let svg_path = request.out.join(format!("{}.svg", plot.name));
-        write_atomic_bytes(&svg_path, svg.as_bytes())?;
-        let png_path = request.out.join(format!("{}.png", plot.name));
-        let tmp = request.out.join(format!(".{}.tmp.png", plot.name));
-        plot.png(&tmp)?;
-        std::fs::rename(&tmp, &png_path).map_err(|e| Error::OutputFolder {
-            path: request.out.clone(),
-            message: format!("cannot write {}: {e}", png_path.display()),
-        })?;
-        files.push(svg_path);
-        files.push(png_path);
-    }
+    files.extend(write_plots(&request.out, &content.plots, &svgs)?);
     Ok(ReportFiles {
         html,
         plots: content.plots.iter().map(|p| p.name).collect(),
         files,
         warnings: data.map(|d| d.validated.warnings).unwrap_or_default(),
     })
+}
+
+/// Writes each plot into `dir` as `NAME.svg` (its SVG text from `svgs`,
+/// in order) and `NAME.png`, both atomically; the files written.
+pub(crate) fn write_plots(dir: &Path, plots: &[Plot], svgs: &[String]) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for (plot, svg) in plots.iter().zip(svgs) {
+        let svg_path = dir.join(format!("{}.svg", plot.name));
+        write_atomic_bytes(&svg_path, svg.as_bytes())?;
+        let png_path = dir.join(format!("{}.png", plot.name));
+        let tmp = dir.join(format!(".{}.tmp.png", plot.name));
+        plot.png(&tmp)?;
+        std::fs::rename(&tmp, &png_path).map_err(|e| Error::OutputFolder {
+            path: dir.to_path_buf(),
+            message: format!("cannot write {}: {e}", png_path.display()),
+        })?;
+        files.push(svg_path);
+        files.push(png_path);
+    }
+    Ok(files)
+}
+
+/// The files [`write_plots`] writes for `plots` into `dir`.
+pub(crate) fn plot_files(dir: &Path, plots: &[Plot]) -> Vec<PathBuf> {
+    plots
+        .iter()
+        .flat_map(|p| ["svg", "png"].map(|e| dir.join(format!("{}.{e}", p.name))))
+        .collect()
 }
 
 /// The report's content.
@@ -160,7 +176,11 @@ pub fn report_content(
         }
     }
     model_plots(&mut plots, model, region, lx, ly);
-    plots.extend(crate::report_views::map_plots(&loaded.sensor));
+    let psd_map = calibration.psd_map.as_ref();
+    plots.extend(crate::report_views::map_plots(
+        &loaded.sensor,
+        psd_map.and_then(|m| m.scan.as_ref()),
+    ));
     if !loaded.sensor.covariance.is_empty() {
         let map = error_map(
             model,
@@ -229,6 +249,9 @@ pub fn report_content(
         warnings,
     );
     report.sources.push(region_text(region));
+    report
+        .sources
+        .extend(psd_map.map(crate::report_views::map_text));
     Ok(report)
 }
 

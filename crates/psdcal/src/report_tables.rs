@@ -83,7 +83,11 @@ pub(crate) fn worst_points(table: &ResidualTable, template: &Template) -> Table 
 
 /// The provenance table of a version-2 calibration.
 fn provenance(calibration: &Calibration) -> Option<Table> {
-    let p = calibration.provenance.as_ref()?;
+    calibration.provenance.as_ref().map(provenance_table)
+}
+
+/// A provenance record (calibration.json's, psd_map.json's) as a table.
+pub(crate) fn provenance_table(p: &psdcal_io::Provenance) -> Table {
     let mut rows = vec![
         vec!["psdcal version".into(), p.psdcal_version.clone()],
         vec!["command".into(), p.command.clone()],
@@ -95,11 +99,11 @@ fn provenance(calibration: &Calibration) -> Option<Table> {
             format!("SHA-256 {}", input.sha256),
         ]);
     }
-    Some(Table {
+    Table {
         caption: "Provenance".into(),
         headers: vec!["".into(), "".into()],
         rows,
-    })
+    }
 }
 
 /// The correlation matrix of the calibration's covariance.

@@ -9,11 +9,17 @@
 //!   arrows on an 11 × 11 grid and `|d|` in µm as a heat map on a 21 × 21
 //!   grid over the active area, only inside the map's domain (its scan's
 //!   hull), and the map's own 1σ uncertainty `√(tr J_a C_m J_aᵀ)` in µm
-//!   when the calibration stores its covariance.
+//!   when the calibration stores its covariance; and, when the calibration
+//!   stores its scan's summary (the stage's `scan`), the scan's residuals
+//!   (stage position − corrected point, outliers left out) per cell of the
+//!   map's frame: the mean residual as an arrow from the cell's centre, the
+//!   scan's hull drawn, and the RMS residual as a heat map, with the fit's
+//!   numbers in one line of the report's list (`map_text`).
 
 use nalgebra::{Vector2, Vector3};
-use psdcal_io::{Calibration, Template};
+use psdcal_io::{Calibration, PsdMapScanRecord, PsdMapStageRecord, Template};
 use psdcal_locate::CalibratedSensor;
+use psdcal_model::stages::PsdMap;
 use psdcal_model::ConvexHull;
 use psdcal_report::{Arrow, Frame, HeatCell, Plot, PlotData, PoseOutline};
 
@@ -94,9 +100,9 @@ fn grid(lx: f64, ly: f64, n: usize) -> impl Iterator<Item = Vector2<f64>> {
     })
 }
 
-/// The PSD map's plots (field, magnitude, its own uncertainty), empty
-/// without a map. `sigma_um` maps a point to the map's 1σ, µm, if known.
-pub(crate) fn map_plots(sensor: &CalibratedSensor) -> Vec<Plot> {
+/// The PSD map's plots (field, magnitude, its own uncertainty, and its
+/// scan's residuals when `scan` is given), empty without a map.
+pub(crate) fn map_plots(sensor: &CalibratedSensor, scan: Option<&PsdMapScanRecord>) -> Vec<Plot> {
     let Some(map) = &sensor.psd_map else {
         return Vec::new();
     };
@@ -180,7 +186,125 @@ pub(crate) fn map_plots(sensor: &CalibratedSensor) -> Vec<Plot> {
             },
         });
     }
+    if let Some(scan) = scan {
+        plots.extend(scan_plots(&map.stage, scan, lx, ly));
+    }
     plots
+}
+
+/// The scan's residuals per cell: mean residual arrows and RMS heat map.
+fn scan_plots(stage: &PsdMap, scan: &PsdMapScanRecord, lx: f64, ly: f64) -> Vec<Plot> {
+    let c = &scan.residual_cells;
+    if c.x_mm.is_empty() {
+        return Vec::new();
+    }
+    let arrows: Vec<Arrow> = (0..c.x_mm.len())
+        .map(|i| Arrow {
+            at: (c.x_mm[i], c.y_mm[i]),
+            delta: (1e-3 * c.dx_um[i], 1e-3 * c.dy_um[i]),
+        })
+        .collect();
+    let longest = arrows
+        .iter()
+        .map(|a| a.delta.0.hypot(a.delta.1))
+        .fold(0.0, f64::max);
+    let scale = crate::report::arrow_scale_for(longest, 1.1 * lx.max(ly));
+    let boundary: Vec<Vec<(f64, f64)>> = stage
+        .hull()
+        .map(|h| {
+            let v = h.vertices();
+            vec![(0..=v.len())
+                .map(|i| (v[i % v.len()].x, v[i % v.len()].y))
+                .collect()]
+        })
+        .unwrap_or_default();
+    let frame = stage.frame();
+    let n = c.cells as f64;
+    let step = (
+        (frame.max.x - frame.min.x) / n,
+        (frame.max.y - frame.min.y) / n,
+    );
+    let worst = c.rms_um.iter().copied().fold(0.0, f64::max);
+    let noise = scan.fit.sigma_x_um.hypot(scan.fit.sigma_y_um);
+    vec![
+        Plot {
+            name: "psd_map_scan_residuals",
+            caption: format!(
+                "The map's scan residuals (stage position − corrected point), mean per cell of a \
+                 {0} × {0} grid, arrows scaled × {1}, largest {2} µm; black: the scan's hull \
+                 (the map's valid region)",
+                c.cells,
+                crate::report::scale_text(scale),
+                psdcal_report::num(1e3 * longest)
+            ),
+            data: PlotData::DistortionField {
+                arrows,
+                scale,
+                boundary,
+                frame: Frame::sensor(
+                    &format!(
+                        "PSD map scan residuals × {}",
+                        crate::report::scale_text(scale)
+                    ),
+                    lx,
+                    ly,
+                ),
+            },
+        },
+        Plot {
+            name: "psd_map_scan_rms",
+            caption: format!(
+                "The map's scan residuals, RMS per cell, largest {} µm, against the scan noise \
+                 √(σx² + σy²) = {} µm",
+                psdcal_report::num(worst),
+                psdcal_report::num(noise)
+            ),
+            data: PlotData::HeatMap {
+                cells: (0..c.x_mm.len())
+                    .map(|i| HeatCell {
+                        x: c.x_mm[i],
+                        y: c.y_mm[i],
+                        value: c.rms_um[i],
+                    })
+                    .collect(),
+                step,
+                frame: Frame::sensor("PSD map scan residual RMS", lx, ly),
+                label: "RMS residual (µm)".into(),
+            },
+        },
+    ]
+}
+
+/// The map in one line of the report's list: its model and its scan's fit,
+/// or that the calibration does not store them.
+pub(crate) fn map_text(map: &PsdMapStageRecord) -> String {
+    let how = if map.estimated {
+        "refined by the calibration"
+    } else {
+        "held fixed"
+    };
+    match &map.scan {
+        Some(s) => {
+            let f = &s.fit;
+            format!(
+                "PSD map ({how}): {} from a scan of {} points ({} rejected as outliers); \
+                 cross-validated RMS error {:.3} µm, residual RMS {:.3} µm, scan noise σx {:.3} \
+                 µm, σy {:.3} µm, the map's own error {:.3} µm RMS",
+                s.model,
+                f.points,
+                f.rejected_lines.len(),
+                f.cv_rms_um,
+                f.rms_um,
+                f.sigma_x_um,
+                f.sigma_y_um,
+                f.map_sigma_um
+            )
+        }
+        None => format!(
+            "PSD map ({how}): this calibration does not store its scan's residuals (written \
+             by an older psdcal); `psdcal psd-map --scan SCAN --report DIR` shows them"
+        ),
+    }
 }
 
 /// The map's 1σ at each heat-map point, `√(tr J_a C_m J_aᵀ)` µm, from the

@@ -132,6 +132,7 @@ pub fn psd_map_seed(dir: &Path, seed: u64, amplitudes: bool) -> Result<SeedError
         geometry: PsdGeometry::default(),
         seed,
         command: String::new(),
+        report: None,
     })?;
     assert_eq!(fitted.file.fit.from_amplitudes, amplitudes);
     let map_path = dir.join(format!("psd_map{seed}.json"));
@@ -262,6 +263,7 @@ pub fn refine_seed(dir: &Path, seed: u64, scan: &ScanSpec) -> Result<RefineError
         geometry: PsdGeometry::default(),
         seed,
         command: String::new(),
+        report: None,
     })?;
     let map_path = dir.join(format!("psd_map{seed}.json"));
     fitted.write(&map_path)?;

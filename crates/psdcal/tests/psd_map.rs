@@ -80,6 +80,7 @@ fn a_map_of_another_sensor_or_a_scan_that_misses_the_data_is_refused() {
         geometry: PsdGeometry::default(),
         seed: 0,
         command: String::new(),
+        report: None,
     })
     .unwrap();
     let half_map = dir.path().join("half.json");

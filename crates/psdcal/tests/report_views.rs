@@ -1,8 +1,9 @@
 //! The calibration report's views beyond the fit (issues 14 and 18): a
 //! calibration that carries a PSD map shows its field, its size and its own
 //! uncertainty (the size's largest value against the map evaluated here
-//! independently through the fitted stage), and every report with data
-//! shows the template poses in 3-D.
+//! independently through the fitted stage) and its scan's residuals (the
+//! stage's stored summary against psd_map.json, recomputed here), and every
+//! report with data shows the template poses in 3-D.
 
 use psdcal::{
     calibrate, psd_map_from_scan, report_content, simulate_files, simulate_scan_file, write_report,
@@ -32,6 +33,7 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
         geometry: PsdGeometry::default(),
         seed: 0,
         command: String::new(),
+        report: None,
     })
     .unwrap();
     let map_path = dir.path().join("psd_map.json");
@@ -59,7 +61,7 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
     let calibrated = calibrate(
         &set,
         &CalibrationOptions {
-            psd_map: Some(map_path),
+            psd_map: Some(map_path.clone()),
             ..CalibrationOptions::default()
         },
     )
@@ -78,10 +80,13 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
         "psd_map_field",
         "psd_map_magnitude",
         "psd_map_uncertainty",
+        "psd_map_scan_residuals",
+        "psd_map_scan_rms",
         "template_poses",
     ] {
         assert!(names.contains(&name), "{name} missing from {names:?}");
     }
+    scan_summary_matches_the_map_file(&map_path, &cal, &content);
     // The size map's largest value: the fitted stage evaluated here over
     // the same 21 × 21 grid inside the scan's hull.
     let magnitude = content
@@ -130,6 +135,100 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
     assert!(written.plots.contains(&"psd_map_field"));
     let html = std::fs::read_to_string(written.html).unwrap();
     assert!(html.contains("PSD map") && !html.contains("<script"));
+}
+
+/// calibration.json's `scan` summary of the map's stage against psd_map.json
+/// read here as plain JSON: the same fit, and the residuals per cell
+/// recomputed (outliers left out, 10 × 10 cells of the stage's frame); the
+/// report's RMS heat map shows those cells, its list the CV RMS.
+fn scan_summary_matches_the_map_file(
+    map_path: &std::path::Path,
+    cal: &std::path::Path,
+    content: &psdcal_report::CalibrationReport,
+) {
+    let read = |p: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let (map, cal) = (read(map_path), read(cal));
+    let stage = cal["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["kind"] == "psd_map")
+        .unwrap();
+    let scan = &stage["scan"];
+    assert_eq!(scan["fit"], map["fit"]);
+    assert_eq!(scan["model"], map["model"]);
+    let column = |v: &serde_json::Value, k: &str| -> Vec<f64> {
+        v[k].as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let r = &map["residuals"];
+    let (x, y, dx, dy) = (
+        column(r, "x_mm"),
+        column(r, "y_mm"),
+        column(r, "dx_um"),
+        column(r, "dy_um"),
+    );
+    let rejected: Vec<usize> = r
+        .get("rejected")
+        .and_then(|v| v.as_array())
+        .map(|a| a.iter().map(|v| v.as_u64().unwrap() as usize).collect())
+        .unwrap_or_default();
+    let frame = column(&map["stage"], "frame_mm");
+    let n = 10usize;
+    // Per cell: points, Σ dx, Σ dy, Σ |r|².
+    let mut sums = vec![(0usize, 0.0, 0.0, 0.0); n * n];
+    let cell = |t: f64| ((t * n as f64).floor().max(0.0) as usize).min(n - 1);
+    for i in (0..x.len()).filter(|i| !rejected.contains(i)) {
+        let c = cell((x[i] - frame[0]) / (frame[2] - frame[0]))
+            + n * cell((y[i] - frame[1]) / (frame[3] - frame[1]));
+        let s = &mut sums[c];
+        *s = (
+            s.0 + 1,
+            s.1 + dx[i],
+            s.2 + dy[i],
+            s.3 + dx[i] * dx[i] + dy[i] * dy[i],
+        );
+    }
+    let expected: Vec<_> = sums.iter().filter(|s| s.0 > 0).collect();
+    let cells = &scan["residual_cells"];
+    assert_eq!(cells["cells"], 10);
+    let (points, mx, my, rms) = (
+        cells["points"].as_array().unwrap(),
+        column(cells, "dx_um"),
+        column(cells, "dy_um"),
+        column(cells, "rms_um"),
+    );
+    assert_eq!(points.len(), expected.len());
+    for (k, s) in expected.iter().enumerate() {
+        let m = s.0 as f64;
+        assert_eq!(points[k].as_u64().unwrap() as usize, s.0);
+        assert!((mx[k] - s.1 / m).abs() < 1e-9 && (my[k] - s.2 / m).abs() < 1e-9);
+        assert!((rms[k] - (s.3 / m).sqrt()).abs() < 1e-9);
+    }
+    let heat = content
+        .plots
+        .iter()
+        .find(|p| p.name == "psd_map_scan_rms")
+        .unwrap();
+    let PlotData::HeatMap { cells, .. } = &heat.data else {
+        panic!("the scan's RMS per cell is a heat map");
+    };
+    let shown: Vec<f64> = cells.iter().map(|c| c.value).collect();
+    assert_eq!(shown, rms);
+    let cv = format!(
+        "cross-validated RMS error {:.3} µm",
+        map["fit"]["cv_rms_um"].as_f64().unwrap()
+    );
+    assert!(
+        content.sources.iter().any(|s| s.contains(&cv)),
+        "{cv} not in {:?}",
+        content.sources
+    );
 }
 
 /// Issue 12's folding calibration (k1 = −0.02 mm⁻² about (0.5, −0.7): the

@@ -18,11 +18,20 @@
 //! data and the scan (`sigma_x_mm`, `sigma_y_mm`, `unit` stay the scan's,
 //! the prior); `cross` is then the refined coefficients' covariance with the
 //! other estimated parameters.
+//!
+//! `scan` (optional; calibrations of older psdcal lack it, and older
+//! readers ignore it) summarises the scan the map was fitted to, for the
+//! report: `model`, `fit` (psd_map.json's `fit`), and `residual_cells`: the
+//! scan's residuals (stage position minus corrected point, outliers left
+//! out) on `cells × cells` cells of the stage's `frame_mm`, per non-empty
+//! cell its centre, point count, mean residual and RMS residual in µm.
 
 use nalgebra::DMatrix;
 use psdcal_model::stages::PsdMap;
 use psdcal_model::{ParameterCovariance, Stage};
 use serde::{Deserialize, Serialize};
+
+use crate::MapFitRecord;
 
 /// The map's covariance as stored in its stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -43,6 +52,80 @@ pub struct PsdMapStageCovariance {
     pub matrix: Option<Vec<Vec<f64>>>,
 }
 
+/// The scan's residuals per cell (columns, one entry per non-empty cell).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScanResidualCells {
+    /// Cells per side over the stage's frame.
+    pub cells: usize,
+    /// Cell centres, mm.
+    pub x_mm: Vec<f64>,
+    /// Cell centres, mm.
+    pub y_mm: Vec<f64>,
+    /// Scan points in each cell.
+    pub points: Vec<usize>,
+    /// Mean residual along x, µm.
+    pub dx_um: Vec<f64>,
+    /// Mean residual along y, µm.
+    pub dy_um: Vec<f64>,
+    /// RMS residual (of `|r|`), µm.
+    pub rms_um: Vec<f64>,
+}
+
+/// The summary of the scan a calibration's map was fitted to.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PsdMapScanRecord {
+    /// The map's model (`poly:N`, `spline:N`).
+    pub model: String,
+    /// The fit's summary, as psd_map.json's `fit`.
+    pub fit: MapFitRecord,
+    /// The residuals per cell.
+    pub residual_cells: ScanResidualCells,
+}
+
+impl PsdMapScanRecord {
+    /// One value per cell in every column, finite numbers, non-empty cells.
+    pub fn check(&self) -> Result<(), String> {
+        let c = &self.residual_cells;
+        let n = c.x_mm.len();
+        let columns = [&c.y_mm, &c.dx_um, &c.dy_um, &c.rms_um];
+        if c.cells == 0
+            || c.points.len() != n
+            || columns.iter().any(|v| v.len() != n)
+            || n > c.cells * c.cells
+        {
+            return Err(
+                "the psd_map stage's scan.residual_cells: 'cells' must be at least 1 and x_mm, \
+                 y_mm, points, dx_um, dy_um, rms_um hold one value per cell (at most cells²)"
+                    .into(),
+            );
+        }
+        let f = &self.fit;
+        let finite = columns
+            .iter()
+            .chain([&&c.x_mm])
+            .all(|v| v.iter().all(|x| x.is_finite()))
+            && c.rms_um.iter().all(|v| *v >= 0.0)
+            && c.points.iter().all(|p| *p > 0)
+            && [
+                f.cv_rms_um,
+                f.rms_um,
+                f.sigma_x_um,
+                f.sigma_y_um,
+                f.map_sigma_um,
+            ]
+            .iter()
+            .all(|v| v.is_finite() && *v >= 0.0);
+        if !finite {
+            return Err(
+                "the psd_map stage's scan: its numbers must be finite, RMS values and sigmas \
+                 not negative, every cell with points"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
+}
+
 /// A calibration's PSD map.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PsdMapStageRecord {
@@ -55,6 +138,8 @@ pub struct PsdMapStageRecord {
     /// Whether the calibration refined the coefficients (then
     /// `covariance.matrix` is theirs).
     pub estimated: bool,
+    /// The scan's summary, when the calibration stored it.
+    pub scan: Option<PsdMapScanRecord>,
 }
 
 impl PsdMapStageRecord {
@@ -90,7 +175,8 @@ impl PsdMapStageRecord {
         };
         if self.estimated != c.matrix.is_some() {
             return Err(
-                "the psd_map stage's covariance: a refined map (its parameters in                  'estimated') carries 'matrix', a fixed one does not"
+                "the psd_map stage's covariance: a refined map (its parameters in \
+                 'estimated') carries 'matrix', a fixed one does not"
                     .into(),
             );
         }

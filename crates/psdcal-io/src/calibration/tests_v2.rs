@@ -274,6 +274,7 @@ fn with_map(refined: bool) -> Calibration {
             matrix: refined.then_some(matrix),
         },
         estimated: refined,
+        scan: None,
     });
     cal
 }
@@ -388,6 +389,38 @@ fn reordered(value: &serde_json::Value) -> String {
     }
 }
 
+/// A scan summary for [`with_map`]'s stage: two cells.
+fn scan_summary() -> crate::PsdMapScanRecord {
+    crate::PsdMapScanRecord {
+        model: "poly:1".into(),
+        fit: crate::MapFitRecord {
+            points: 9,
+            from_amplitudes: false,
+            rejected_lines: vec![4],
+            folds: 5,
+            cv_rms_um: 0.41,
+            rms_um: 0.38,
+            sigma_x_um: 0.3,
+            sigma_y_um: 0.4,
+            map_sigma_um: 0.1,
+            effective_terms: 3.0,
+            candidates: vec![crate::MapCandidateRecord {
+                model: "poly:1".into(),
+                cv_rms_um: 0.41,
+            }],
+        },
+        residual_cells: crate::ScanResidualCells {
+            cells: 2,
+            x_mm: vec![-2.25, 2.25],
+            y_mm: vec![-2.25, 2.25],
+            points: vec![5, 3],
+            dx_um: vec![0.1, -0.2],
+            dy_um: vec![0.0, 0.05],
+            rms_um: vec![0.4, 0.35],
+        },
+    }
+}
+
 #[test]
 fn key_order_carries_no_meaning() {
     // A tool that sorts or shuffles an object's keys (jq -S, Python's
@@ -403,4 +436,47 @@ fn key_order_carries_no_meaning() {
     );
     let read = Calibration::from_json_str("sorted.json", &text).expect("reads");
     assert_eq!(read, cal);
+}
+
+#[test]
+fn a_psd_map_stage_carries_its_scan_summary_and_files_without_it_still_read() {
+    let mut cal = with_map(false);
+    let without = cal.to_json_string("c.json").unwrap();
+    assert!(!without.contains("\"scan\""));
+    cal.psd_map.as_mut().unwrap().scan = Some(scan_summary());
+    let text = cal.to_json_string("c.json").unwrap();
+    let back = Calibration::from_json_str("c.json", &text).unwrap();
+    assert_eq!(back, cal);
+    let stage = json(&cal)["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["kind"] == "psd_map")
+        .unwrap()
+        .clone();
+    assert_eq!(stage["scan"]["fit"]["cv_rms_um"], 0.41);
+    assert_eq!(stage["scan"]["residual_cells"]["points"][1], 3);
+    // A file without it (older psdcal) reads, with no summary.
+    let old = Calibration::from_json_str("c.json", &without).unwrap();
+    assert!(old.psd_map.unwrap().scan.is_none());
+    // A column of another length, or a summary on another stage: refused.
+    let mut bad = cal.clone();
+    let scan = bad.psd_map.as_mut().unwrap().scan.as_mut().unwrap();
+    scan.residual_cells.rms_um.pop();
+    let err = Calibration::from_json_str("c.json", &bad.to_json_string("c.json").unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("c.json") && err.contains("residual_cells"),
+        "{err}"
+    );
+    let mut value = json(&cal);
+    let stages = value["stages"].as_array_mut().unwrap();
+    let lens = stages.iter().position(|s| s["kind"] == "lens").unwrap();
+    stages[lens]["scan"] = stage["scan"].clone();
+    let misplaced = serde_json::to_string(&value).unwrap();
+    let err = Calibration::from_json_str("c.json", &misplaced)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("'scan' belongs to a psd_map stage"), "{err}");
 }

@@ -18,7 +18,7 @@ use serde::ser::Serializer;
 use serde::{Deserialize, Serialize};
 
 use super::provenance::{Diagnostic, Provenance};
-use super::psd_map_stage::{PsdMapStageCovariance, PsdMapStageRecord};
+use super::psd_map_stage::{PsdMapScanRecord, PsdMapStageCovariance, PsdMapStageRecord};
 use super::records::{
     Covariance, FitSummary, GainsRecord, ImageFit, SensorSize, Software, StdDevs,
 };
@@ -123,6 +123,9 @@ struct Stage {
     /// A fixed stage's own covariance (`psd_map`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     covariance: Option<PsdMapStageCovariance>,
+    /// The summary of the scan a `psd_map` stage was fitted to.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    scan: Option<PsdMapScanRecord>,
 }
 
 /// The version 2 file, field by field.
@@ -190,6 +193,7 @@ impl FileV2 {
                     },
                     configuration: Some(map.configuration.clone()),
                     covariance: Some(map.covariance.clone()),
+                    scan: map.scan.clone(),
                 }),
                 _ => Some(Stage {
                     kind,
@@ -207,6 +211,7 @@ impl FileV2 {
                         .collect(),
                     configuration: None,
                     covariance: None,
+                    scan: None,
                 }),
             })
             .collect();
@@ -290,7 +295,11 @@ impl FileV2 {
                     parameters,
                     covariance: covariance.clone(),
                     estimated: !s.estimated.is_empty(),
+                    scan: s.scan.clone(),
                 };
+                if let Some(scan) = &map.scan {
+                    scan.check()?;
+                }
                 map.to_stage(self.covariance.parameters.len())?;
                 Some(map)
             }
@@ -380,6 +389,11 @@ fn check_stage(i: usize, stage: &Stage) -> Result<(), String> {
     }
     let names = stage.kind.names();
     let kind = stage.kind.name();
+    if stage.scan.is_some() {
+        return Err(format!(
+            "stages[{i}]: 'scan' belongs to a psd_map stage, not to a '{kind}' stage"
+        ));
+    }
     for (name, _) in &stage.parameters.0 {
         if !names.contains(&name.as_str()) {
             return Err(format!(
