@@ -92,11 +92,8 @@ impl NumericLine {
                 while blank(*bytes.get(i)?) {
                     i += 1;
                 }
-                let start = i;
-                while number_byte(*bytes.get(i)?) {
-                    i += 1;
-                }
-                let value = finite_number(&bytes[start..i])?;
+                let (value, end) = number_at(bytes, i)?;
+                i = end;
                 while blank(*bytes.get(i)?) {
                     i += 1;
                 }
@@ -131,60 +128,66 @@ fn number_byte(b: u8) -> bool {
 
 /// The finite value of a number token, as `str::parse::<f64>` reads it;
 /// `None` for anything else (empty, not a number, not finite).
-#[inline]
-pub(crate) fn finite_number(token: &[u8]) -> Option<f64> {
-    if let Some(value) = exact_decimal(token) {
-        return Some(value);
-    }
-    let value = std::str::from_utf8(token).ok()?.parse::<f64>().ok()?;
-    value.is_finite().then_some(value)
+#[cfg(test)]
+fn finite_number(token: &[u8]) -> Option<f64> {
+    number_at(token, 0)
+        .filter(|&(_, end)| end == token.len())
+        .map(|(value, _)| value)
 }
 
-/// The value of `[+-]digits[.digits][(e|E)[+-]digits]` when Clinger's fast
-/// path gives it exactly rounded (significant digits `w ≤ 2^53`, value
-/// `w × 10^q` with `|q| ≤ 22`); `None` otherwise.
+/// The number token at `bytes[start..]` (the longest run of
+/// [`number_byte`]s): its value as `str::parse::<f64>` reads the token, and
+/// the index after it; `None` when it is not a finite number.
 #[inline]
-fn exact_decimal(s: &[u8]) -> Option<f64> {
-    let (negative, mut i) = match s.first()? {
-        b'-' => (true, 1),
-        b'+' => (false, 1),
-        _ => (false, 0),
+fn number_at(bytes: &[u8], start: usize) -> Option<(f64, usize)> {
+    if let Some((value, end)) = exact_prefix(bytes, start) {
+        if !bytes.get(end).is_some_and(|&b| number_byte(b)) {
+            return Some((value, end));
+        }
+    }
+    let mut end = start;
+    while bytes.get(end).is_some_and(|&b| number_byte(b)) {
+        end += 1;
+    }
+    let value = std::str::from_utf8(&bytes[start..end])
+        .ok()?
+        .parse::<f64>()
+        .ok()?;
+    value.is_finite().then_some((value, end))
+}
+
+/// The value of `[+-]digits[.digits][(e|E)[+-]digits]` at `s[start..]`
+/// and the index after it, when Clinger's fast path gives it exactly
+/// rounded (significant digits `w ≤ 2^53`, value `w × 10^q` with
+/// `|q| ≤ 22`, at most 4 exponent digits); `None` otherwise.
+#[inline]
+fn exact_prefix(s: &[u8], start: usize) -> Option<(f64, usize)> {
+    let mut i = start;
+    let negative = match s.get(i) {
+        Some(b'-') => {
+            i += 1;
+            true
+        }
+        Some(b'+') => {
+            i += 1;
+            false
+        }
+        _ => false,
     };
     let mut w: u64 = 0;
-    // Significant digits so far (leading zeros do not count), and digits
-    // of any kind.
     let mut significant = 0u32;
-    let mut digits = 0usize;
+    let integer_digits = digits(s, &mut i, &mut w, &mut significant)?;
     let mut scale: i64 = 0;
-    let mut fraction = false;
-    while let Some(&b) = s.get(i) {
-        if b.is_ascii_digit() {
-            let d = u64::from(b - b'0');
-            if w != 0 || d != 0 {
-                significant += 1;
-                if significant > 19 {
-                    return None;
-                }
-            }
-            w = w * 10 + d;
-            digits += 1;
-            if fraction {
-                scale -= 1;
-            }
-        } else if b == b'.' && !fraction {
-            fraction = true;
-        } else {
-            break;
-        }
+    let mut fraction_digits = 0;
+    if s.get(i) == Some(&b'.') {
         i += 1;
+        fraction_digits = digits(s, &mut i, &mut w, &mut significant)?;
+        scale = -i64::try_from(fraction_digits).ok()?;
     }
-    if digits == 0 {
+    if integer_digits + fraction_digits == 0 {
         return None;
     }
-    if let Some(&b) = s.get(i) {
-        if b != b'e' && b != b'E' {
-            return None;
-        }
+    if matches!(s.get(i), Some(b'e' | b'E')) {
         i += 1;
         let exponent_negative = match s.get(i) {
             Some(b'-') => {
@@ -197,16 +200,18 @@ fn exact_decimal(s: &[u8]) -> Option<f64> {
             }
             _ => false,
         };
-        let exponent_digits = &s[i..];
-        if exponent_digits.is_empty()
-            || exponent_digits.len() > 4
-            || !exponent_digits.iter().all(u8::is_ascii_digit)
-        {
+        let mut exponent = 0i64;
+        let first = i;
+        while let Some(&b) = s.get(i).filter(|b| b.is_ascii_digit()) {
+            if i - first == 4 {
+                return None;
+            }
+            exponent = exponent * 10 + i64::from(b - b'0');
+            i += 1;
+        }
+        if i == first {
             return None;
         }
-        let exponent = exponent_digits
-            .iter()
-            .fold(0i64, |e, &b| e * 10 + i64::from(b - b'0'));
         scale += if exponent_negative {
             -exponent
         } else {
@@ -223,7 +228,65 @@ fn exact_decimal(s: &[u8]) -> Option<f64> {
         -22..=-1 => magnitude / POW10[(-scale) as usize],
         _ => return None,
     };
-    Some(if negative { -value } else { value })
+    Some((if negative { -value } else { value }, i))
+}
+
+/// Reads the decimal digits at `s[*i..]` into `w` (`w · 10 + d` each),
+/// counting the significant ones (leading zeros do not count); returns how
+/// many digits, or `None` past 19 significant digits (`w` would overflow).
+#[inline(always)]
+fn digits(s: &[u8], i: &mut usize, w: &mut u64, significant: &mut u32) -> Option<usize> {
+    let start = *i;
+    loop {
+        // Eight at a time once the significant digits have begun.
+        if *w != 0 && *significant <= 11 {
+            if let Some(v) = s.get(*i..*i + 8).and_then(eight_digits) {
+                *w = *w * 100_000_000 + v;
+                *significant += 8;
+                *i += 8;
+                continue;
+            }
+        }
+        match s.get(*i) {
+            Some(&b) if b.is_ascii_digit() => {
+                let d = u64::from(b - b'0');
+                if *w != 0 || d != 0 {
+                    *significant += 1;
+                    if *significant > 19 {
+                        return None;
+                    }
+                }
+                *w = *w * 10 + d;
+                *i += 1;
+            }
+            _ => return Some(*i - start),
+        }
+    }
+}
+
+/// The value of eight ASCII decimal digits (the first the most
+/// significant), or `None` when one of the bytes is not a digit: the digits
+/// combined pairwise in one 64-bit word (SWAR: two, then four, then eight).
+#[inline(always)]
+fn eight_digits(bytes: &[u8]) -> Option<u64> {
+    let word = u64::from_le_bytes(bytes.try_into().ok()?);
+    // Every byte 0x30..=0x39: its high half is 3, and still 3 after adding 6.
+    let high = 0xF0F0_F0F0_F0F0_F0F0_u64;
+    let threes = 0x3333_3333_3333_3333_u64;
+    let sixes = 0x0606_0606_0606_0606_u64;
+    if (word & high) | ((word.wrapping_add(sixes) & high) >> 4) != threes {
+        return None;
+    }
+    // Bytes d0..d7 (d0 first in the text, in the lowest byte).
+    let d = word - 0x3030_3030_3030_3030;
+    // Byte 2k: 10 d_2k + d_2k+1.
+    let pairs = d.wrapping_mul(10).wrapping_add(d >> 8);
+    // Bytes 0 and 4 weighted 10^6 and 100, bytes 2 and 6 10^4 and 1: the
+    // sum lands in the upper half.
+    let mask = 0x0000_00FF_0000_00FF_u64;
+    let a = (pairs & mask).wrapping_mul(100 + (1_000_000 << 32));
+    let b = ((pairs >> 16) & mask).wrapping_mul(1 + (10_000 << 32));
+    Some(a.wrapping_add(b) >> 32)
 }
 
 #[cfg(test)]
@@ -313,8 +376,10 @@ mod tests {
         let std = token.parse::<f64>().ok().filter(|v| v.is_finite());
         let fast = finite_number(token.as_bytes());
         assert_eq!(fast.map(f64::to_bits), std.map(f64::to_bits), "{token:?}");
-        if let Some(v) = exact_decimal(token.as_bytes()) {
-            assert_eq!(Some(v.to_bits()), std.map(f64::to_bits), "{token:?}");
+        if let Some((v, end)) = exact_prefix(token.as_bytes(), 0) {
+            if end == token.len() {
+                assert_eq!(Some(v.to_bits()), std.map(f64::to_bits), "{token:?}");
+            }
         }
     }
 
@@ -339,12 +404,30 @@ mod tests {
             if state & 2 == 2 {
                 text += &format!("e{}", ((state >> 50) % 15) as i64 - 7);
             }
-            if exact_decimal(text.as_bytes()).is_some() {
+            if exact_prefix(text.as_bytes(), 0).is_some_and(|(_, end)| end == text.len()) {
                 taken += 1;
             }
             check(&text);
         }
         assert!(taken > 150_000, "{taken}");
+    }
+
+    #[test]
+    fn eight_digits_at_once() {
+        let mut state = 0x853c_49e6_748f_ea9b_u64;
+        for _ in 0..100_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let text = format!("{:08}", state % 100_000_000);
+            assert_eq!(eight_digits(text.as_bytes()), Some(state % 100_000_000));
+            let mut bad = text.into_bytes();
+            bad[(state >> 40) as usize % 8] =
+                [b'/', b':', b'.', b'e', 0x80, 0xfa][(state >> 50) as usize % 6];
+            assert_eq!(eight_digits(&bad), None, "{bad:?}");
+        }
+        assert_eq!(eight_digits(b"99999999"), Some(99_999_999));
+        assert_eq!(eight_digits(b"00000000"), Some(0));
     }
 
     #[test]
