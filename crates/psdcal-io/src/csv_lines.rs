@@ -4,6 +4,9 @@
 //! [`MAX_LINE_BYTES`](crate::limits::MAX_LINE_BYTES) long, the whole input
 //! optionally at most a number of bytes. Line ends are `\n` or `\r\n`; a
 //! carriage return alone (old Mac line ends) is refused as such.
+//! A reader of plain lines (raw.csv's numeric fast path) may take whole
+//! lines straight from the buffer (`buffered`, `consume_lines`); the line
+//! numbers and the byte count stay those of every line read.
 
 use std::io::{BufRead, Read};
 

@@ -22,12 +22,14 @@
 //!
 //! **Numbers.** A token `[+-]digits[.digits][(e|E)[+-]digits]` whose
 //! significant digits form an integer `w ≤ 2^53` and whose value is
-//! `w × 10^q` with `|q| ≤ 22` is computed as one IEEE multiplication or
-//! division of two exactly representable `f64` (`w` and `10^|q|`), hence
-//! correctly rounded (Clinger's fast path); `str::parse::<f64>` returns the
-//! correctly rounded value too, so both agree to the bit. Every other token
-//! (more digits, larger exponents) goes to `str::parse::<f64>` itself. A
-//! value that is not finite leaves the line to the general reader.
+//! `w × 10^q` with `|q| ≤ 22` (at most four exponent digits) is computed
+//! as one IEEE multiplication or division of two exactly representable
+//! `f64` (`w` and `10^|q|`), hence correctly rounded (Clinger's fast
+//! path); `str::parse::<f64>` returns the correctly rounded value too, so
+//! both agree to the bit. The digits are read eight at a time once the
+//! significant ones have begun. Every other token (more digits, larger
+//! exponents) goes to `str::parse::<f64>` itself. A value that is not
+//! finite leaves the line to the general reader.
 
 use crate::limits::MAX_LINE_BYTES;
 
