@@ -4,6 +4,9 @@
 //! [`MAX_LINE_BYTES`](crate::limits::MAX_LINE_BYTES) long, the whole input
 //! optionally at most a number of bytes. Line ends are `\n` or `\r\n`; a
 //! carriage return alone (old Mac line ends) is refused as such.
+//! A reader of plain lines (raw.csv's numeric fast path) may take whole
+//! lines straight from the buffer (`buffered`, `consume_lines`); the line
+//! numbers and the byte count stay those of every line read.
 
 use std::io::{BufRead, Read};
 
@@ -35,6 +38,53 @@ impl<R: BufRead> LineReader<R> {
             limit,
             buf: Vec::new(),
         }
+    }
+
+    /// The number of the last line read (0 before the first).
+    pub fn line(&self) -> usize {
+        self.line
+    }
+
+    /// The input's bytes that are already buffered after the last line read
+    /// (reading more only when none are), at most up to the size limit, for
+    /// a caller that reads whole plain lines itself and then
+    /// [`consume_lines`](Self::consume_lines) them; empty before the first
+    /// line (whose byte-order mark only [`next_line`](Self::next_line)
+    /// handles); `None` at the end of the input.
+    pub fn buffered(&mut self) -> Result<Option<&[u8]>, IoError> {
+        if self.line == 0 {
+            return Ok(Some(&[]));
+        }
+        let room = self.limit.map_or(usize::MAX, |limit| {
+            usize::try_from(limit.saturating_sub(self.offset)).unwrap_or(usize::MAX)
+        });
+        let read_error = |source: &str, e| IoError::Read {
+            file: source.to_string(),
+            source: e,
+        };
+        // Filled once, retried when interrupted; the second call only
+        // hands out what the first one buffered.
+        loop {
+            match self.reader.fill_buf() {
+                Ok([]) => return Ok(None),
+                Ok(_) => break,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(read_error(&self.source, e)),
+            }
+        }
+        let bytes = self
+            .reader
+            .fill_buf()
+            .map_err(|e| read_error(&self.source, e))?;
+        Ok(Some(&bytes[..bytes.len().min(room)]))
+    }
+
+    /// Marks the first `bytes` bytes of [`buffered`](Self::buffered), which
+    /// hold `lines` whole lines with their ends, as read.
+    pub fn consume_lines(&mut self, bytes: usize, lines: usize) {
+        self.reader.consume(bytes);
+        self.offset += bytes as u64;
+        self.line += lines;
     }
 
     /// The next line (its number and its text without the line end), or

@@ -282,6 +282,12 @@ impl<R: BufRead> CsvStream<R> {
         }
     }
 
+    /// The underlying lines, for a reader that takes plain lines itself
+    /// (`csv_numeric`) and leaves the others to [`next_row`](Self::next_row).
+    pub fn lines(&mut self) -> &mut LineReader<R> {
+        &mut self.lines
+    }
+
     /// Every remaining record, as a table.
     pub fn collect_rows(mut self) -> Result<CsvTable, IoError> {
         while let Some(row) = self.next_row()? {

@@ -27,9 +27,9 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
-use crate::csv_table::{Col, CsvStream};
 use crate::error::{IoError, Location};
 use crate::limits::excerpt;
+use crate::raw_csv::CsvFrames;
 use crate::tdms::TdmsReader;
 
 /// A header excerpt for a one-line message (control characters shown as `?`).
@@ -47,8 +47,12 @@ pub type Frame = [f64; 4];
 /// agreement of `t_s` with `--rate`).
 pub const RATE_TOLERANCE: f64 = 1e-3;
 
-const CHANNELS: [&str; 4] = ["vx1", "vx2", "vy1", "vy2"];
-const EXPECTED_COLUMNS: &str = "vx1, vx2, vy1, vy2 (and optionally t_s)";
+/// The read buffer of a recording opened by path, bytes: large blocks, so
+/// that raw.csv's fast path rarely meets a line cut by the buffer's end.
+const READ_BUFFER_BYTES: usize = 1 << 18;
+
+pub(crate) const CHANNELS: [&str; 4] = ["vx1", "vx2", "vy1", "vy2"];
+pub(crate) const EXPECTED_COLUMNS: &str = "vx1, vx2, vy1, vy2 (and optionally t_s)";
 
 /// The layout of a raw recording, from its file name's extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -140,7 +144,12 @@ impl RawReader {
             file: source.clone(),
             source: e,
         })?;
-        Self::from_reader(&source, format, BufReader::new(file), rate_hz)
+        Self::from_reader(
+            &source,
+            format,
+            BufReader::with_capacity(READ_BUFFER_BYTES, file),
+            rate_hz,
+        )
     }
 
     /// Reads a recording of `format` from `reader`; `source` names it in
@@ -248,6 +257,16 @@ impl RawReader {
         self.frames
     }
 
+    /// Rows of a raw.csv read by the numeric fast path (plain lines of
+    /// numbers read straight from the buffer); the other rows went through
+    /// the general CSV reader. 0 for the other formats.
+    pub fn fast_rows(&self) -> u64 {
+        match &self.inner {
+            Inner::Csv(csv) => csv.fast_rows,
+            _ => 0,
+        }
+    }
+
     /// Appends up to `max` frames to `out`; returns how many (0 at the end).
     pub fn read_frames(&mut self, out: &mut Vec<Frame>, max: usize) -> Result<usize, IoError> {
         let n = match &mut self.inner {
@@ -275,148 +294,6 @@ fn check_rate(source: &str, rate_hz: Option<f64>) -> Result<(), IoError> {
             ),
         }),
         _ => Ok(()),
-    }
-}
-
-/// raw.csv, row by row.
-struct CsvFrames<R> {
-    stream: CsvStream<R>,
-    cols: [Col; 4],
-    time: Option<Col>,
-    rate_hz: f64,
-    /// The first row, read ahead to find the rate from `t_s`.
-    pending: Vec<Frame>,
-    /// The last time and its line.
-    last_time: Option<(f64, usize)>,
-}
-
-impl<R: BufRead> CsvFrames<R> {
-    fn new(source: &str, reader: R, rate_hz: Option<f64>) -> Result<Self, IoError> {
-        let stream = CsvStream::new(source, reader, EXPECTED_COLUMNS, None)?;
-        let head = &stream.head;
-        let cols = [
-            head.column(CHANNELS[0])?,
-            head.column(CHANNELS[1])?,
-            head.column(CHANNELS[2])?,
-            head.column(CHANNELS[3])?,
-        ];
-        let time = head.find_column("t_s")?;
-        let header_line = head.header_line;
-        let mut frames = Self {
-            stream,
-            cols,
-            time,
-            rate_hz: rate_hz.unwrap_or(f64::NAN),
-            pending: Vec::new(),
-            last_time: None,
-        };
-        let structure = |line: usize, message: String| IoError::Structure {
-            at: Location::line(source, line),
-            message,
-        };
-        match (rate_hz, frames.time.is_some()) {
-            (None, false) => {
-                return Err(structure(
-                    header_line,
-                    "no t_s column and no --rate: expected a t_s column (seconds) or the \
-                     sample rate as --rate HZ"
-                        .to_string(),
-                ))
-            }
-            (None, true) => {
-                // The rate from the first step.
-                let mut rows = Vec::new();
-                for _ in 0..2 {
-                    if let Some(row) = frames.stream.next_row()? {
-                        let frame = frames.frame(&row)?;
-                        rows.push((frame, frames.time_of(&row)?, row.line));
-                    }
-                }
-                let [(f0, t0, _), (f1, t1, line1)] = rows.as_slice() else {
-                    return Err(structure(
-                        header_line,
-                        "fewer than two rows: the sample rate cannot come from t_s; expected \
-                         more rows or --rate HZ"
-                            .to_string(),
-                    ));
-                };
-                let step = t1 - t0;
-                if !(step > 0.0 && (1.0 / step).is_finite()) {
-                    return Err(structure(
-                        *line1,
-                        format!(
-                            "t_s does not increase ({t0} then {t1}); expected uniformly \
-                             increasing times"
-                        ),
-                    ));
-                }
-                frames.rate_hz = 1.0 / step;
-                frames.last_time = Some((*t1, *line1));
-                frames.pending = vec![*f1, *f0];
-            }
-            (Some(_), _) => {}
-        }
-        Ok(frames)
-    }
-
-    fn frame(&self, row: &crate::csv_table::CsvRow) -> Result<Frame, IoError> {
-        let head = &self.stream.head;
-        Ok([
-            head.number(row, &self.cols[0])?,
-            head.number(row, &self.cols[1])?,
-            head.number(row, &self.cols[2])?,
-            head.number(row, &self.cols[3])?,
-        ])
-    }
-
-    fn time_of(&self, row: &crate::csv_table::CsvRow) -> Result<f64, IoError> {
-        match &self.time {
-            Some(col) => self.stream.head.number(row, col),
-            None => Ok(f64::NAN),
-        }
-    }
-
-    /// Checks the step from the previous time to `t` (line `line`).
-    fn check_time(&mut self, t: f64, line: usize) -> Result<(), IoError> {
-        if let Some((previous, previous_line)) = self.last_time {
-            let step = t - previous;
-            let expected = 1.0 / self.rate_hz;
-            let within = (step - expected).abs() <= RATE_TOLERANCE * expected;
-            if !within {
-                return Err(IoError::Structure {
-                    at: Location::line(&self.stream.head.source, line),
-                    message: format!(
-                        "t_s steps from {previous} (line {previous_line}) to {t}; expected a \
-                         step of {expected} s (a uniform sample rate of {} Hz)",
-                        self.rate_hz
-                    ),
-                });
-            }
-        }
-        self.last_time = Some((t, line));
-        Ok(())
-    }
-
-    fn read(&mut self, out: &mut Vec<Frame>, max: usize) -> Result<usize, IoError> {
-        let mut n = 0;
-        while n < max {
-            if let Some(frame) = self.pending.pop() {
-                out.push(frame);
-                n += 1;
-                continue;
-            }
-            let Some(row) = self.stream.next_row()? else {
-                break;
-            };
-            let frame = self.frame(&row)?;
-            if self.time.is_some() {
-                let t = self.time_of(&row)?;
-                self.check_time(t, row.line)?;
-            }
-            out.push(frame);
-            n += 1;
-        }
-        Ok(n)
     }
 }
 
