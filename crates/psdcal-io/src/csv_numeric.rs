@@ -158,6 +158,22 @@ fn number_at(bytes: &[u8], start: usize) -> Option<(f64, usize)> {
     value.is_finite().then_some((value, end))
 }
 
+/// An optional sign at `s[*i]`, stepped over: whether it is `-`.
+#[inline]
+fn sign(s: &[u8], i: &mut usize) -> bool {
+    match s.get(*i) {
+        Some(b'-') => {
+            *i += 1;
+            true
+        }
+        Some(b'+') => {
+            *i += 1;
+            false
+        }
+        _ => false,
+    }
+}
+
 /// The value of `[+-]digits[.digits][(e|E)[+-]digits]` at `s[start..]`
 /// and the index after it, when Clinger's fast path gives it exactly
 /// rounded (significant digits `w ≤ 2^53`, value `w × 10^q` with
@@ -165,17 +181,7 @@ fn number_at(bytes: &[u8], start: usize) -> Option<(f64, usize)> {
 #[inline]
 fn exact_prefix(s: &[u8], start: usize) -> Option<(f64, usize)> {
     let mut i = start;
-    let negative = match s.get(i) {
-        Some(b'-') => {
-            i += 1;
-            true
-        }
-        Some(b'+') => {
-            i += 1;
-            false
-        }
-        _ => false,
-    };
+    let negative = sign(s, &mut i);
     let mut w: u64 = 0;
     let mut significant = 0u32;
     let integer_digits = digits(s, &mut i, &mut w, &mut significant)?;
@@ -191,17 +197,7 @@ fn exact_prefix(s: &[u8], start: usize) -> Option<(f64, usize)> {
     }
     if matches!(s.get(i), Some(b'e' | b'E')) {
         i += 1;
-        let exponent_negative = match s.get(i) {
-            Some(b'-') => {
-                i += 1;
-                true
-            }
-            Some(b'+') => {
-                i += 1;
-                false
-            }
-            _ => false,
-        };
+        let exponent_negative = sign(s, &mut i);
         let mut exponent = 0i64;
         let first = i;
         while let Some(&b) = s.get(i).filter(|b| b.is_ascii_digit()) {
