@@ -2,6 +2,7 @@
 //! labels (escaped) and one data mark per datum.
 
 use psdcal_report::*;
+use psdcal_testkit::svg::polylines;
 
 fn count(svg: &str, tag: &str) -> usize {
     svg.matches(tag).count()
@@ -202,26 +203,6 @@ fn legend_swatches_are_drawn_beside_the_data() {
         assert_eq!(swatches, 1, "{fill}: {swatches} swatches");
     }
     assert!(svg.contains("first") && svg.contains("second"));
-}
-
-/// The `points` of every `<polyline>` of an SVG, in pixels.
-fn polylines(svg: &str) -> Vec<(String, Vec<(f64, f64)>)> {
-    svg.split("<polyline")
-        .skip(1)
-        .map(|rest| {
-            let tag = &rest[..rest.find("/>").unwrap()];
-            let start = tag.find("points=\"").unwrap() + 8;
-            let text = &tag[start..start + tag[start..].find('"').unwrap()];
-            let points = text
-                .split_whitespace()
-                .map(|p| {
-                    let (x, y) = p.split_once(',').unwrap();
-                    (x.parse().unwrap(), y.parse().unwrap())
-                })
-                .collect();
-            (tag.to_string(), points)
-        })
-        .collect()
 }
 
 #[test]

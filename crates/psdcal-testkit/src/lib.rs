@@ -23,12 +23,14 @@
 //! - [`wide`]: [`WideScenario`], scenarios drawn far wider than the
 //!   simulator's defaults (both lenses jittered, PSD distortion of either
 //!   sign, 9–20 images tilted 5°–45°, partial coverage, noise-free to
-//!   beyond 30 dB), for judging the calibration's search.
+//!   beyond 30 dB), for judging the calibration's search;
+//! - [`svg`]: the polylines of a report's SVG, read back.
 #![warn(missing_docs)]
 
 pub mod observe;
 pub mod poly_stage;
 pub mod poses;
+pub mod svg;
 pub mod templates;
 pub mod wide;
 

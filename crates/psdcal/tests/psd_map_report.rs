@@ -8,6 +8,7 @@
 //! or psd_map.json, or whose folder cannot be made, refused before anything
 //! is written.
 
+use psdcal_testkit::svg::polylines;
 use std::path::Path;
 
 use psdcal::{
@@ -97,26 +98,6 @@ fn well_formed(text: &str) -> Result<(), String> {
     } else {
         Err(format!("unclosed {open:?}"))
     }
-}
-
-/// The `points` of every `<polyline>` of an SVG, in pixels, with its tag.
-fn polylines(svg: &str) -> Vec<(String, Vec<(f64, f64)>)> {
-    svg.split("<polyline")
-        .skip(1)
-        .map(|rest| {
-            let tag = &rest[..rest.find("/>").unwrap()];
-            let start = tag.find("points=\"").unwrap() + 8;
-            let text = &tag[start..start + tag[start..].find('"').unwrap()];
-            let points = text
-                .split_whitespace()
-                .map(|p| {
-                    let (x, y) = p.split_once(',').unwrap();
-                    (x.parse().unwrap(), y.parse().unwrap())
-                })
-                .collect();
-            (tag.to_string(), points)
-        })
-        .collect()
 }
 
 /// The number printed after `prefix` in `text` (up to a space, a quote or
