@@ -12,17 +12,11 @@ fn json(output: &std::process::Output) -> serde_json::Value {
     serde_json::from_str(&stdout(output)).expect("JSON on stdout")
 }
 
-#[test]
-fn plan_simulate_calibrate_next_and_focal_check() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = |name: &str| dir.path().join(name).display().to_string();
-    assert!(
-        psdcal(["simulate", "--snr", "40", "-q", "--out", &d("sim")])
-            .status
-            .success()
-    );
-    let template = d("sim/template.csv");
-    let planned = json(&psdcal([
+/// `psdcal plan --json` for lens 2's nominal model (f = 8 mm, the paper's
+/// k1, k2 and centre), 9 poses of `template` at 40 dB with a 0.3 mm
+/// margin, then `extra`.
+fn plan_lens2(template: &str, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
         "plan",
         "--json",
         "--f",
@@ -38,16 +32,30 @@ fn plan_simulate_calibrate_next_and_focal_check() {
         "--margin",
         "0.3",
         "--template",
-        &template,
+        template,
         "--snr",
         "40",
         "--images",
         "9",
-        "--out",
-        &d("poses.csv"),
-        "--report",
-        &d("rep"),
-    ]));
+    ];
+    args.extend_from_slice(extra);
+    json(&psdcal(args))
+}
+
+#[test]
+fn plan_simulate_calibrate_next_and_focal_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |name: &str| dir.path().join(name).display().to_string();
+    assert!(
+        psdcal(["simulate", "--snr", "40", "-q", "--out", &d("sim")])
+            .status
+            .success()
+    );
+    let template = d("sim/template.csv");
+    let planned = plan_lens2(
+        &template,
+        &["--out", &d("poses.csv"), "--report", &d("rep")],
+    );
     assert_eq!(planned["poses"].as_array().unwrap().len(), 9);
     let rms = planned["aoa_sigma_deg"]["rms"].as_f64().unwrap();
     assert!(rms > 0.0 && rms <= planned["aoa_sigma_deg"]["max"].as_f64().unwrap());
@@ -208,34 +216,7 @@ fn plan_with_the_gains_freed_and_next_from_a_calibration_that_fitted_them() {
             .success()
     );
     let template = &d("sim0/template.csv");
-    let plan = |fit: &str, out: &str| {
-        json(&psdcal([
-            "plan",
-            "--json",
-            "--f",
-            "8",
-            "--set",
-            "k1=1e-2",
-            "--set",
-            "k2=3e-5",
-            "--set",
-            "cx=0.5",
-            "--set",
-            "cy=-0.7",
-            "--margin",
-            "0.3",
-            "--template",
-            template,
-            "--snr",
-            "40",
-            "--images",
-            "9",
-            "--fit",
-            fit,
-            "--out",
-            out,
-        ]))
-    };
+    let plan = |fit: &str, out: &str| plan_lens2(template, &["--fit", fit, "--out", out]);
     let planned = plan("f,cx,cy,k1,k2,gains", &d("poses.csv"));
     let plain = plan("f,cx,cy,k1,k2", &d("plain.csv"));
     for name in ["f", "g_x2", "g_y1", "g_y2"] {
