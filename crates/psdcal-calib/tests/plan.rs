@@ -5,13 +5,14 @@
 //! the AoA metric against the angle between perturbed rays, the selection
 //! against exhaustive search, and the refusals.
 
-#[path = "support/spread.rs"]
-mod spread;
+#[path = "support/planning.rs"]
+mod planning;
 
 use nalgebra::{DMatrix, DVector, Vector2};
+use planning::some_poses;
 use psdcal_calib::plan::{
-    cell_centres, draw_candidates, plan, plan_next, pose_information, predict, AoaMetric,
-    Objective, PlanOptions, PlanSetup, PoseRanges, Scorer,
+    cell_centres, plan, plan_next, pose_information, predict, AoaMetric, Objective, PlanOptions,
+    PlanSetup, PoseRanges, Scorer,
 };
 use psdcal_calib::{
     refine, CalibError, CalibrationData, CalibrationProblem, FitState, RefineOptions,
@@ -30,14 +31,6 @@ fn setup(relative_noise: f64) -> PlanSetup {
         cost: CostKind::Template,
         relative_noise,
     }
-}
-
-fn some_poses(setup: &PlanSetup, n: usize, seed: u64) -> Vec<Pose> {
-    draw_candidates(setup, &PoseRanges::default(), n, seed)
-        .unwrap()
-        .into_iter()
-        .map(|c| c.pose)
-        .collect()
 }
 
 #[test]
@@ -105,7 +98,7 @@ fn predicted_covariance_matches_the_spread_of_refinements() {
             DVector::from_iterator(5, s.free.iter().map(|name| r.model.get(name).unwrap()))
         })
         .collect();
-    spread::assert_variances_match(&estimates, &s.free, predicted.covariance.matrix());
+    planning::assert_variances_match(&estimates, &s.free, predicted.covariance.matrix());
 }
 
 #[test]

@@ -6,14 +6,13 @@
 //! freed on amplitude noise, and the prediction with the gains never below
 //! the one without.
 
-#[path = "support/spread.rs"]
-mod spread;
+#[path = "support/planning.rs"]
+mod planning;
 
 use nalgebra::{DMatrix, DVector, Vector2, Vector3};
+use planning::some_poses;
 use psdcal_calib::plan::information::{point_jacobians, pose_points};
-use psdcal_calib::plan::{
-    cell_centres, draw_candidates, predict, AoaMetric, PlanSetup, PoseRanges,
-};
+use psdcal_calib::plan::{cell_centres, predict, AoaMetric, PlanSetup};
 use psdcal_calib::{refine, CalibrationData, RefineOptions};
 use psdcal_model::sensor::{electrode_currents, impact_point_with_gains};
 use psdcal_model::{Amplitudes, ChannelGains, CostKind, Model, Pose, PsdGeometry, SensorModel};
@@ -53,14 +52,6 @@ fn setup(with_gains: bool) -> PlanSetup {
         cost: CostKind::Template,
         relative_noise: 1e-3,
     }
-}
-
-fn some_poses(setup: &PlanSetup, n: usize, seed: u64) -> Vec<Pose> {
-    draw_candidates(setup, &PoseRanges::default(), n, seed)
-        .unwrap()
-        .into_iter()
-        .map(|c| c.pose)
-        .collect()
 }
 
 /// What the PSD gives for a spot at `m` (the simulator's currents through
@@ -277,5 +268,5 @@ fn predicted_covariance_with_gains_matches_the_spread_of_refinements() {
             DVector::from_iterator(p, s.free.iter().map(|name| r.model.get(name).unwrap()))
         })
         .collect();
-    spread::assert_variances_match(&estimates, &s.free, predicted.covariance.matrix());
+    planning::assert_variances_match(&estimates, &s.free, predicted.covariance.matrix());
 }

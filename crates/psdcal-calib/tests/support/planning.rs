@@ -1,7 +1,20 @@
-//! The spread of repeated estimates against a predicted covariance (the
-//! Monte Carlo checks of the planner's prediction).
+//! What the planner's tests share: seeded candidate poses, and the spread
+//! of repeated estimates against a predicted covariance (the Monte Carlo
+//! checks of the planner's prediction).
 
 use nalgebra::{DMatrix, DVector};
+use psdcal_calib::plan::{draw_candidates, PlanSetup, PoseRanges};
+use psdcal_model::Pose;
+
+/// `n` of the planner's candidate poses for `setup` (default ranges), drawn
+/// from `seed`.
+pub fn some_poses(setup: &PlanSetup, n: usize, seed: u64) -> Vec<Pose> {
+    draw_candidates(setup, &PoseRanges::default(), n, seed)
+        .unwrap()
+        .into_iter()
+        .map(|c| c.pose)
+        .collect()
+}
 
 /// Asserts that each parameter's sample variance over `estimates` (one
 /// vector per trial, in the order of `names`) is within `4·√(2/n)`
