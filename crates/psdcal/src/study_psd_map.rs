@@ -22,7 +22,7 @@ use crate::calibrate::calibrate;
 use crate::dataset::{DataSet, DataSetFiles, LoadOptions, PointSource};
 use crate::error::{Error, Result};
 use crate::options::CalibrationOptions;
-use crate::psd_map::{psd_map_from_scan, PsdMapRequest};
+use crate::psd_map::{psd_map_from_scan, PsdMapOutcome, PsdMapRequest};
 use crate::sensor::sensor_of;
 use crate::simulate::{simulate_files, SimulateRequest, DEFAULT_RECORD_CYCLES};
 use crate::simulate_scan::{simulate_scan_file, ScanRequest};
@@ -49,6 +49,26 @@ pub struct SeedErrors {
     pub refined_map_error_mm: f64,
     /// The scan's noise per axis (√(σx² + σy²)/√2), mm.
     pub scan_noise_mm: f64,
+}
+
+/// The map of `scan` with the model chosen by cross-validation (folds from
+/// `seed`), written to `dir/psd_map{seed}.json`.
+fn fit_and_write_map(
+    dir: &Path,
+    scan: &Path,
+    seed: u64,
+) -> Result<(PsdMapOutcome, std::path::PathBuf)> {
+    let fitted = psd_map_from_scan(&PsdMapRequest {
+        scan: scan.to_path_buf(),
+        model: PsdMapModel::Auto,
+        geometry: PsdGeometry::default(),
+        seed,
+        command: String::new(),
+        report: None,
+    })?;
+    let map_path = dir.join(format!("psd_map{seed}.json"));
+    fitted.write(&map_path)?;
+    Ok((fitted, map_path))
 }
 
 fn data_set(dir: &Path, seed: u64, nonlinearity: bool) -> Result<DataSet> {
@@ -126,17 +146,8 @@ pub fn psd_map_seed(dir: &Path, seed: u64, amplitudes: bool) -> Result<SeedError
         let amps: Vec<_> = scanned.samples.iter().map(|s| s.amplitudes).collect();
         psdcal_io::write_scan(&scan, &stage, None, Some(&amps))?;
     }
-    let fitted = psd_map_from_scan(&PsdMapRequest {
-        scan: scan.clone(),
-        model: PsdMapModel::Auto,
-        geometry: PsdGeometry::default(),
-        seed,
-        command: String::new(),
-        report: None,
-    })?;
+    let (fitted, map_path) = fit_and_write_map(dir, &scan, seed)?;
     assert_eq!(fitted.file.fit.from_amplitudes, amplitudes);
-    let map_path = dir.join(format!("psd_map{seed}.json"));
-    fitted.write(&map_path)?;
     // The map against the true field (measured → spot) inside the scan.
     let map_error_mm = map_error(&fitted.fit.map, &fitted.fit.block)?;
 
@@ -257,16 +268,7 @@ pub fn refine_seed(dir: &Path, seed: u64, scan: &ScanSpec) -> Result<RefineError
         seed: 1000 + seed,
         out: scan_path.clone(),
     })?;
-    let fitted = psd_map_from_scan(&PsdMapRequest {
-        scan: scan_path,
-        model: PsdMapModel::Auto,
-        geometry: PsdGeometry::default(),
-        seed,
-        command: String::new(),
-        report: None,
-    })?;
-    let map_path = dir.join(format!("psd_map{seed}.json"));
-    fitted.write(&map_path)?;
+    let (fitted, map_path) = fit_and_write_map(dir, &scan_path, seed)?;
     let noisy = data_set(&dir.join(format!("nl{seed}")), seed, true)?;
     let held_options = CalibrationOptions {
         psd_map: Some(map_path),
