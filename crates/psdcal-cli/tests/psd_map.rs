@@ -98,18 +98,27 @@ fn scan_map_calibrate_and_answer() {
     ])
     .status
     .success());
-    let run = psdcal([
-        "-q",
-        "calibrate",
-        "-t",
-        &format!("{sim}/template.csv"),
-        "-o",
-        &format!("{sim}/observations.csv"),
-        "--psd-map",
-        &p("map.json"),
-        "--out",
-        &p("cal.json"),
-    ]);
+    // `calibrate` of the simulated set with the map, then `extra`.
+    let (template, observations) = (
+        format!("{sim}/template.csv"),
+        format!("{sim}/observations.csv"),
+    );
+    let map = p("map.json");
+    let calibrate = |extra: &[&str]| {
+        let mut args = vec![
+            "-q",
+            "calibrate",
+            "-t",
+            &template,
+            "-o",
+            &observations,
+            "--psd-map",
+            &map,
+        ];
+        args.extend_from_slice(extra);
+        psdcal(args)
+    };
+    let run = calibrate(&["--out", &p("cal.json")]);
     assert!(run.status.success(), "{}", stderr(&run));
     std::fs::write(p("pts.csv"), "x_mm,y_mm\n0.5,0.5\n6,0\n").unwrap();
     let run = psdcal([
@@ -128,19 +137,7 @@ fn scan_map_calibrate_and_answer() {
 
     // The map refined: its stage lists its coefficients as estimated and
     // carries their covariance; aoa answers from it alone.
-    let run = psdcal([
-        "-q",
-        "calibrate",
-        "-t",
-        &format!("{sim}/template.csv"),
-        "-o",
-        &format!("{sim}/observations.csv"),
-        "--psd-map",
-        &p("map.json"),
-        "--refine-psd-map",
-        "--out",
-        &p("refined.json"),
-    ]);
+    let run = calibrate(&["--refine-psd-map", "--out", &p("refined.json")]);
     assert!(run.status.success(), "{}", stderr(&run));
     let cal: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(p("refined.json")).unwrap()).unwrap();
