@@ -41,7 +41,8 @@
 //!    then starts from that minimum, each other image's pose from the
 //!    homography of its points corrected by the subset's model, with little
 //!    damping ([`NEAR_LAMBDA`]): on 12 images of lens 2 at 40 dB, 11–23
-//!    subset iterations and 3 on the whole set, against 10–17 on the whole
+//!    subset iterations (measured when the subset started at damping 1e-3)
+//!    and 3 on the whole set, against 10–17 on the whole
 //!    set from the closed form (the damping of the strongly correlated
 //!    directions decays by a factor 3 an iteration, which near the minimum
 //!    cost 5–6 of them). The subset's descent itself starts with little
