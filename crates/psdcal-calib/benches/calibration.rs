@@ -133,13 +133,7 @@ fn start_solve_calibrate(c: &mut Criterion) {
     });
     group.finish();
     let r = calibrate(&s.data, &options).unwrap();
-    let refined = psdcal_calib::Refined {
-        model: r.model.clone(),
-        poses: r.poses.clone(),
-        cost: r.cost,
-        weights: None,
-        report: r.refine.clone(),
-    };
+    let refined = r.refined();
     let mut group = c.benchmark_group("diagnose");
     group.bench_function("12x14", |b| {
         b.iter(|| {

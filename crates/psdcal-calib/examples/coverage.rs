@@ -101,14 +101,7 @@ fn report(name: &str, trials: &[Trial], same_geometry: bool) {
             );
         }
     }
-    let reliable: Vec<&&Trial> = ok
-        .iter()
-        .filter(|t| {
-            t.result
-                .as_ref()
-                .is_ok_and(|r| r.linearity.verdict.is_reliable())
-        })
-        .collect();
+    let reliable: Vec<&&Trial> = ok.iter().filter(|t| !t.flagged()).collect();
     let z: Vec<f64> = reliable.iter().flat_map(|t| t.z()).collect();
     println!(
         "  flagged unreliable: {} of {}; coverage of the others ≤3σ {:.3} ({} pairs)",

@@ -39,9 +39,10 @@ use crate::data::CalibrationData;
 use crate::diagnostics::{diagnose_structure, diagnose_uncertainty, DiagnosticOptions};
 use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
-use crate::linearity::{check_linearity_at, LinearityCheck};
+use crate::linearity::{check_linearity_at, LinearityCheck, UncertaintyVerdict};
 use crate::misplaced::misplaced_led;
 use crate::prior::Prior;
+use crate::profile::profile_at_three_sigma;
 use crate::refine::{
     refine, AtSolution, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
 };
@@ -318,12 +319,34 @@ fn calibrate_as_given(
             (c, Some(report))
         }
     };
+    // Where the walk finds the cost not quadratic at ±3σ, the profile
+    // decides whether the reported σ understates the uncertainty.
+    let linearity = if linearity.verdict.is_reliable() {
+        linearity
+    } else {
+        let std: Vec<f64> = free
+            .iter()
+            .map(|n| covariance.std(n).unwrap_or(f64::NAN))
+            .collect();
+        linearity.with_profile(profile_at_three_sigma(data, &refined, refine_options, &std))
+    };
     let mut warnings = covariance.warnings.clone();
     if let Some(note) = &init.report.preliminary_note {
         warnings.push(note.clone());
     }
     diagnose_uncertainty(&mut diagnosed, &covariance, global.as_ref());
     let mut diagnostics = diagnosed.diagnostics;
+    if let UncertaintyVerdict::Unreliable { reason } = &linearity.verdict {
+        if !diagnostics
+            .iter()
+            .any(|d| d.code == DiagnosticCode::UncertaintyUnreliable)
+        {
+            diagnostics.push(Diagnostic::warning(
+                DiagnosticCode::UncertaintyUnreliable,
+                reason.clone(),
+            ));
+        }
+    }
     if statistics.unprojectable > 0 {
         diagnostics.push(Diagnostic::warning(
             DiagnosticCode::OutsideValidRegion,
@@ -511,6 +534,19 @@ pub struct CalibrationSummary {
 }
 
 impl CalibrationResult {
+    /// The fit's solution as a [`Refined`] (model, poses, cost and the
+    /// solver's report; the point weights are not kept), for the
+    /// post-fit functions that take one (covariance, diagnostics, profile).
+    pub fn refined(&self) -> Refined {
+        Refined {
+            model: self.model.clone(),
+            poses: self.poses.clone(),
+            cost: self.cost,
+            weights: None,
+            report: self.refine.clone(),
+        }
+    }
+
     /// The serialisable summary.
     pub fn summary(&self) -> CalibrationSummary {
         let rows = |m: &nalgebra::DMatrix<f64>| -> Vec<Vec<f64>> {

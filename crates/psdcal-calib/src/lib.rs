@@ -31,6 +31,7 @@ pub mod linearity;
 pub mod misplaced;
 pub mod plan;
 pub mod prior;
+pub mod profile;
 pub mod refine;
 pub mod report;
 pub mod surveyed;

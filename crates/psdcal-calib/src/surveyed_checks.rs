@@ -101,6 +101,7 @@ pub fn check_surveyed(
         })
         .unwrap_or_else(|e| LinearityCheck {
             parameters: Vec::new(),
+            profile: Vec::new(),
             verdict: UncertaintyVerdict::Unreliable {
                 reason: format!("the cost could not be evaluated around the solution: {e}"),
             },

@@ -2,16 +2,21 @@
 //! in wide conditions (`tests/support/coverage.rs`: wide scenarios as drawn,
 //! noisy, l1 known; and the hard condition, lens 1 and lens 2 at 0.05 mm
 //! point noise on 10–11 images), |error| ≤ 3σ for at least 97 % of the
-//! (parameter, trial) pairs of the trials the linearity check does not flag
-//! (`CalibrationResult::linearity`, the diagnostics' `uncertainty_unreliable`).
+//! (parameter, trial) pairs of the trials the calibration does not flag
+//! (`Trial::flagged`: the diagnostics `uncertainty_unreliable`, whose
+//! curvature part is the ±3σ walk confirmed by the profile, or
+//! `model_misfit`).
 //!
 //! Derived bounds: at exact Gaussian coverage a pair misses 3σ with
-//! probability 0.27 %; the test asks 97 %, which the measured figure (99.7 %
-//! on 775 pairs, EXPERIMENTS.md) clears with room for the sample here. The
-//! check must not flag its way to a pass: at most 5 % of the wide trials
-//! (measured 2 of 158: two wrong minima) may be flagged,
-//! and every hard lens-1 trial, whose 3σ coverage is 0.905 (k1 0.675), must
-//! be. Release mode: `cargo test --release -p psdcal-calib --test coverage`.
+//! probability 0.27 %; the test asks 97 %, which the measured figure (99.2 %
+//! on 1 085 pairs, EXPERIMENTS.md) clears with room for the sample here.
+//! The check must not flag its way to a pass: at most 5 % of the wide
+//! trials (measured 1 of 158: a wrong minimum, `model_misfit`) and of the
+//! hard lens-2 trials (σ covers: measured 0 of 40) may be flagged; and it
+//! must see the hard lens-1 condition, whose 3σ coverage is 0.905 (k1
+//! 0.70): at least a quarter of its trials (measured 20 of 40; coverage of
+//! the others 0.94). Release mode: `cargo test --release -p psdcal-calib
+//! --test coverage`.
 //!
 //! Also: the bootstrap σ against the linear σ on a well-conditioned case,
 //! and the bootstrap's independence of the thread count.
@@ -19,6 +24,8 @@
 #[path = "support/mod.rs"]
 mod support;
 
+use psdcal_calib::covariance::{covariance_with, CovarianceMethod};
+use psdcal_calib::profile::profile_at_three_sigma;
 use psdcal_calib::{calibrate, BootstrapOptions, Uncertainty};
 use psdcal_testkit::wide::Lens;
 use psdcal_testkit::WideScenario;
@@ -33,12 +40,6 @@ fn trials(release: u64) -> u64 {
     }
 }
 
-fn reliable(t: &Trial) -> bool {
-    t.result
-        .as_ref()
-        .is_ok_and(|r| r.linearity.verdict.is_reliable())
-}
-
 #[test]
 fn reported_sigma_covers_the_truth_or_is_flagged() {
     let mut all = Vec::new();
@@ -51,7 +52,7 @@ fn reported_sigma_covers_the_truth_or_is_flagged() {
         .collect();
     let failed = wide.iter().filter(|t| t.result.is_err()).count();
     assert_eq!(failed, 0, "every wide trial calibrates");
-    let flagged = wide.iter().filter(|t| !reliable(t)).count();
+    let flagged = wide.iter().filter(|t| t.flagged()).count();
     assert!(
         flagged * 20 <= wide.len(),
         "{flagged} of {} wide trials flagged: the check flags too much to mean anything",
@@ -63,17 +64,28 @@ fn reported_sigma_covers_the_truth_or_is_flagged() {
         let hard: Vec<Trial> = (0..trials(40))
             .map(|t| Trial::run(t, &s, 0.05, &renoised(&s, 0.05, HARD_SEED_BASE + t), |_| {}))
             .collect();
-        if lens == Lens::One {
-            assert!(
-                hard.iter().all(|t| t.result.is_err() || !reliable(t)),
-                "lens 1 at 0.05 mm: the linearisation fails and must be flagged"
-            );
+        let flagged = hard.iter().filter(|t| t.flagged()).count();
+        match lens {
+            // Far outside the quadratic regime (σ(f)/f ≈ 6 %, k1 biased):
+            // the profile finds σ understated on about half the trials
+            // (measured 20 of 40).
+            Lens::One => assert!(
+                flagged * 4 >= hard.len(),
+                "lens 1 at 0.05 mm: {flagged} of {} trials flagged; the check must see it",
+                hard.len()
+            ),
+            // σ covers (0.995): nothing to flag (measured 0 of 40).
+            Lens::Two => assert!(
+                flagged * 20 <= hard.len(),
+                "lens 2 at 0.05 mm: {flagged} of {} trials flagged, its σ covers",
+                hard.len()
+            ),
         }
         all.extend(hard);
     }
     let z: Vec<f64> = all
         .iter()
-        .filter(|t| reliable(t))
+        .filter(|t| t.result.is_ok() && !t.flagged())
         .flat_map(Trial::z)
         .collect();
     assert!(z.len() >= 5 * 50, "{} pairs judged", z.len());
@@ -189,5 +201,33 @@ fn sandwich_reduces_to_the_linear_covariance_when_every_point_is_equally_noisy()
                 assert!((p[(i, j)] - q[(i, j)]).abs() <= 1e-7 * scale);
             }
         }
+    }
+}
+
+/// The profile at ±3σ (docs/model.md §4.6) of a nearly linear fit rises
+/// by the quadratic model's 9 s² at 3σ_lin: lens 2, 11 images, 1e-4 mm of noise.
+/// The departure from a quadratic cost at 3σ scales with the noise (lens 2
+/// at 0.05 mm: |ρ − 1| ≤ 0.43), so here it is below 0.001; the tolerance
+/// 0.02 leaves a factor 20.
+#[test]
+fn profile_of_a_nearly_linear_fit_rises_as_the_quadratic() {
+    let s = WideScenario::draw(hard_geometry(Lens::Two));
+    let data = renoised(&s, 1e-4, HARD_SEED_BASE + 2);
+    let options = support::coverage::options(&s.truth);
+    let r = calibrate(&data, &options).expect("calibrates");
+    let refined = r.refined();
+    // The quadratic model's own σ (σ² S⁻¹; the reported sandwich σ differs
+    // from it by a few per cent, and r by its square).
+    let linear = covariance_with(&data, &refined, &options.refine, CovarianceMethod::Linear)
+        .expect("covariance");
+    let names = options.refine.free_names();
+    let std: Vec<f64> = names.iter().map(|n| linear.std(n).expect("σ")).collect();
+    let profile = profile_at_three_sigma(&data, &refined, &options.refine, &std);
+    assert_eq!(profile.len(), FREE.len());
+    for p in &profile {
+        for rise in [p.minus, p.plus] {
+            assert!((rise - 1.0).abs() < 0.02, "{p:?}");
+        }
+        assert!(!p.understated());
     }
 }

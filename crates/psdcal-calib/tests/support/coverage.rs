@@ -13,8 +13,8 @@
 
 use nalgebra::Vector2;
 use psdcal_calib::covariance::{covariance_with, CovarianceMethod};
-use psdcal_calib::{calibrate, CalibrateOptions, CalibrationData, CalibrationResult, Refined};
-use psdcal_model::{Model, Param, SensorModel};
+use psdcal_calib::{calibrate, CalibrateOptions, CalibrationData, CalibrationResult};
+use psdcal_model::{DiagnosticCode, Model, Param, SensorModel};
 use psdcal_testkit::wide::Lens;
 use psdcal_testkit::WideScenario;
 use rand::{Rng, SeedableRng};
@@ -119,13 +119,7 @@ impl Trial {
         };
         let std_linear = match &result {
             Ok(r) => {
-                let refined = Refined {
-                    model: r.model.clone(),
-                    poses: r.poses.clone(),
-                    cost: r.cost,
-                    weights: None,
-                    report: r.refine.clone(),
-                };
+                let refined = r.refined();
                 covariance_with(data, &refined, &o.refine, CovarianceMethod::Linear).map_or_else(
                     |_| vec![f64::NAN; FREE.len()],
                     |c| {
@@ -156,6 +150,22 @@ impl Trial {
             .zip(&self.std)
             .map(|(e, s)| (e / s).abs())
             .collect()
+    }
+
+    /// Whether the calibration says its σ is not to be taken as a 3σ
+    /// statement: `uncertainty_unreliable` (conditioning, or the ±3σ
+    /// curvature confirmed by the profile), or `model_misfit` (the model
+    /// does not explain the data, e.g. a wrong minimum: its σ says nothing
+    /// of the truth). A failed calibration is not flagged (no σ to judge).
+    pub fn flagged(&self) -> bool {
+        self.result.as_ref().is_ok_and(|r| {
+            r.diagnostics.iter().any(|d| {
+                matches!(
+                    d.code,
+                    DiagnosticCode::UncertaintyUnreliable | DiagnosticCode::ModelMisfit
+                )
+            })
+        })
     }
 
     /// |error| / σ_linear per freed parameter.
