@@ -274,7 +274,6 @@ pub(crate) fn correlation_warnings(estimated: &ParameterCovariance) -> Vec<Strin
 /// Jacobian with the pose eliminated), `P = ∂r/∂pose` and `C̃ = B Bᵀ`
 /// (the residual's covariance per unit of point variance).
 struct PointTerm {
-    a_tilde: DMatrix<f64>,
     p: SMatrix<f64, 2, 6>,
     c: Matrix2<f64>,
 }
@@ -302,6 +301,8 @@ fn sandwich(
     let mut a = vec![0.0; 2 * p];
     let mut weighted_sum = 0.0;
     let mut images: Vec<Vec<PointTerm>> = Vec::with_capacity(data.images.len());
+    // Every point's `Ã_j` (2 × p, column-major), one after the other.
+    let mut a_tilde: Vec<f64> = Vec::with_capacity(2 * p * data.point_count());
     let singular = || CalibError::Degenerate {
         reason: "a pose is not determined by its image's points".into(),
     };
@@ -324,37 +325,63 @@ fn sandwich(
                 ),
             })?;
             weighted_sum += (r.transpose() * c_inv * r)[(0, 0)];
-            let a_mat = DMatrix::from_column_slice(2, p, &a);
-            let pd = DMatrix::from_column_slice(2, 6, pj.as_slice());
-            let a_tilde = a_mat - pd * &wvt;
-            terms.push(PointTerm { a_tilde, p: pj, c });
+            // Ã = A − P V⁻¹ Wᵀ.
+            for col in 0..p {
+                for row in 0..2 {
+                    let mut v = a[2 * col + row];
+                    for q in 0..6 {
+                        v -= pj[(row, q)] * wvt[(q, col)];
+                    }
+                    a_tilde.push(v);
+                }
+            }
+            terms.push(PointTerm { p: pj, c });
         }
         images.push(terms);
         v_inv.push(vi);
     }
     let sigma2 = weighted_sum / dof;
     // K = Σ g C̃ gᵀ with g = S⁻¹ Ãᵀ, i.e. S⁻¹ (Σ Ãᵀ C̃ Ã) S⁻¹; a prior's
-    // gradient adds s⁴ Σ⁻¹ = s² P to the meat (in units of σ_m²).
+    // gradient adds s⁴ Σ⁻¹ = s² P to the meat (in units of σ_m²). Per
+    // image, X_i = S⁻¹ Σ_{j∈i} Ãᵀ C̃ P_j.
     let mut meat = match problem.prior() {
         Some(_) if sigma2 > 0.0 => problem
             .embed_prior(|q| q.meat())
             .map_or_else(|| DMatrix::zeros(p, p), |m| m / sigma2),
         _ => DMatrix::zeros(p, p),
     };
-    for t in images.iter().flatten() {
-        let c = DMatrix::from_column_slice(2, 2, t.c.as_slice());
-        meat += t.a_tilde.transpose() * c * &t.a_tilde;
+    let mut ac = vec![0.0; 2 * p]; // C̃ Ã (2 × p, column-major)
+    let mut sums: Vec<DMatrix<f64>> = Vec::with_capacity(images.len());
+    let mut points = a_tilde.chunks_exact(2 * p);
+    for terms in &images {
+        let mut u = DMatrix::<f64>::zeros(p, 6); // Σ Ãᵀ C̃ P
+        for t in terms {
+            let at = points.next().expect("one Ã per point");
+            for col in 0..p {
+                let (x, y) = (at[2 * col], at[2 * col + 1]);
+                ac[2 * col] = t.c[(0, 0)] * x + t.c[(0, 1)] * y;
+                ac[2 * col + 1] = t.c[(1, 0)] * x + t.c[(1, 1)] * y;
+            }
+            for j in 0..p {
+                for i in 0..p {
+                    meat[(i, j)] += at[2 * i] * ac[2 * j] + at[2 * i + 1] * ac[2 * j + 1];
+                }
+            }
+            let cp = t.c * t.p; // 2 × 6
+            for q in 0..6 {
+                for i in 0..p {
+                    u[(i, q)] += at[2 * i] * cp[(0, q)] + at[2 * i + 1] * cp[(1, q)];
+                }
+            }
+        }
+        sums.push(u);
     }
     let k = s_inv * meat * s_inv;
     let mut blocks = Vec::with_capacity(images.len());
-    for (i, terms) in images.iter().enumerate() {
-        let mut x = DMatrix::zeros(p, 6);
+    for (i, (terms, u)) in images.iter().zip(&sums).enumerate() {
+        let x = s_inv * u;
         let mut y = Matrix6::zeros();
         for t in terms {
-            let c = DMatrix::from_column_slice(2, 2, t.c.as_slice());
-            let pd = DMatrix::from_column_slice(2, 6, t.p.as_slice());
-            let g = s_inv * t.a_tilde.transpose();
-            x += g * &c * &pd;
             y += t.p.transpose() * t.c * t.p;
         }
         let w = &ne.w[i];

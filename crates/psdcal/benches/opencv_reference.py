@@ -15,7 +15,8 @@ tenth of OpenCV's calibrateCamera on the same points. This script times:
   from here with subprocess (the fork and exec of Python count against
   psdcal: unfavourable to it).
 
-Each is run REPEATS times; the median and the minimum are printed, and the
+Each is run REPEATS times, the two alternating (so that the VM's drifting
+load falls on both alike); the median and the minimum are printed, and the
 ratio of the medians.
 
 Run (from the repository root, after `cargo build --release`):
@@ -35,7 +36,7 @@ import time
 import cv2
 import numpy as np
 
-REPEATS = 20
+REPEATS = 60
 PIXELS_PER_MM = 1000.0
 SENSOR_MM = 9.0
 
@@ -61,13 +62,15 @@ def points(folder):
     return object_points, image_points
 
 
-def timed(run):
-    times = []
+def timed(first, second):
+    """Median and minimum of each of two runs, alternated REPEATS times."""
+    times = ([], [])
     for _ in range(REPEATS):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), min(times)
+        for run, out in ((first, times[0]), (second, times[1])):
+            start = time.perf_counter()
+            run()
+            out.append(time.perf_counter() - start)
+    return [(statistics.median(t), min(t)) for t in times]
 
 
 def main():
@@ -84,7 +87,6 @@ def main():
 
     rms, k, dist, _, _ = cv2.calibrateCamera(object_points, image_points, size, camera.copy(), None, flags=flags)
     print(f"OpenCV {cv2.__version__}: f = {k[0, 0] / PIXELS_PER_MM:.4f} mm, RMS {rms / PIXELS_PER_MM * 1000:.3f} µm")
-    cv_median, cv_min = timed(opencv)
     with tempfile.TemporaryDirectory() as out:
         command = [
             binary, "-q", "calibrate",
@@ -92,7 +94,9 @@ def main():
             "-o", os.path.join(folder, "observations.csv"),
             "--out", os.path.join(out, "calibration.json"),
         ]
-        ps_median, ps_min = timed(lambda: subprocess.run(command, check=True))
+        (cv_median, cv_min), (ps_median, ps_min) = timed(
+            opencv, lambda: subprocess.run(command, check=True)
+        )
     print(f"OpenCV calibrateCamera: median {cv_median * 1e3:.2f} ms, min {cv_min * 1e3:.2f} ms")
     print(f"psdcal calibrate (whole process): median {ps_median * 1e3:.2f} ms, min {ps_min * 1e3:.2f} ms")
     print(f"psdcal / OpenCV (medians): {ps_median / cv_median:.3f}")
