@@ -32,8 +32,9 @@ pub struct Cli {
     pub command: Command,
 }
 
-/// The subcommands.
+/// The subcommands (each one's arguments built only when it is invoked).
 #[derive(Debug, Subcommand)]
+#[command(defer = true)]
 pub enum Command {
     /// Validate a calibration data set and summarise images, points and sensor coverage
     #[command(after_help = include_str!("../help/check.txt"))]
@@ -103,8 +104,8 @@ pub enum Command {
     FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
 }
 
-/// A calibration data set's files and options (`check`, `calibrate`,
-/// `calibrate-in-situ`).
+// Also the data-set arguments of `calibrate` and `calibrate-in-situ`.
+/// Validate a calibration data set and summarise images, points and sensor coverage
 #[derive(Debug, Clone, PartialEq, Args)]
 #[command(group(ArgGroup::new("input").required(true).args(["observations", "signals"])))]
 pub struct DataSetArgs {
@@ -128,7 +129,7 @@ pub struct DataSetArgs {
     pub strict: bool,
 }
 
-/// Arguments of `psdcal calibrate`.
+/// Calibrate a sensor from images of an LED template (adapted Zhang method + Levenberg-Marquardt)
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
     #[command(flatten)]
@@ -191,7 +192,7 @@ pub struct CalibrateArgs {
     pub residuals: Option<PathBuf>,
 }
 
-/// Arguments of `psdcal correct`.
+/// Correct measured points (or electrode amplitudes) to ideal points with a calibration
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct CorrectArgs {
     /// Calibration written by psdcal (calibration.json)

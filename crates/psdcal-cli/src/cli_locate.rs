@@ -14,7 +14,7 @@ pub use psdcal::{LocateTarget, MapModel, MapSource};
 use crate::choice::LensArg;
 use crate::cli::{Cli, Output};
 
-/// Arguments of `psdcal aoa`.
+/// Angles of arrival of measured points (or amplitudes) with their uncertainty
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct AoaArgs {
     /// Calibration written by psdcal (calibration.json)
@@ -31,7 +31,7 @@ pub struct AoaArgs {
     pub point_sigma: Option<f64>,
 }
 
-/// Arguments of `psdcal locate`.
+/// Emitter positions on a plane, or from a rig of sensors, with their 3-D covariance
 #[derive(Debug, Args)]
 #[command(group(ArgGroup::new("target").required(true).args(["distance", "plane", "rig"])))]
 pub struct LocateArgs {
@@ -73,7 +73,7 @@ pub struct LocateArgs {
     pub unweighted: bool,
 }
 
-/// Arguments of `psdcal map`.
+/// Maps of the AoA and position errors over the sensor area (the paper's Figure 9)
 #[derive(Debug, Args)]
 #[command(group(ArgGroup::new("model").required(true).args(["calibration", "lens"])))]
 #[command(group(ArgGroup::new("source").required(true).args(["errors", "k_sigma"])))]

@@ -11,7 +11,7 @@ use psdcal::StudyRequest;
 
 use crate::choice::{choice, name, LensArg, TableArg, TemplateArg};
 
-/// Arguments of `psdcal simulate`.
+/// Simulate a calibration data set through the whole signal chain
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct SimulateArgs {
     /// The paper's lens: 1 (f = 25 mm) or 2 (f = 8 mm)
@@ -63,7 +63,7 @@ pub struct SimulateArgs {
     pub impairments: Vec<crate::choice::ImpairmentArg>,
 }
 
-/// Arguments of `psdcal study`.
+/// Run the paper's Monte Carlo evaluation (Tables 1-10, Figure 9) next to the paper's numbers
 #[derive(Debug, Args)]
 pub struct StudyArgs {
     /// Tables to run: table1 ... table10, fig9, psdmap (the PSD map's condition), or all
@@ -92,7 +92,7 @@ pub struct StudyArgs {
     pub report: Option<PathBuf>,
 }
 
-/// Arguments of `psdcal demo`.
+/// Simulate, calibrate and compare with the truth in a few seconds (start here)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct DemoArgs {
     /// Seed of the simulation

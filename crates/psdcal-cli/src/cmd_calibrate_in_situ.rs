@@ -11,7 +11,7 @@ use psdcal::DataSet;
 
 use crate::cli::Output;
 
-/// Arguments of `psdcal calibrate-in-situ`.
+/// Calibrate a mounted sensor in situ from emitters at surveyed 3-D positions (its pose in the room too)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct InSituArgs {
     /// The surveyed emitters (template.csv with Z_mm, room frame) and the

@@ -7,7 +7,7 @@ use clap::Args;
 
 use crate::cli::Output;
 
-/// Arguments of `psdcal demodulate`.
+/// Demodulate a raw recording (raw.csv, raw.npy) into signals.csv with a per-record SNR
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct DemodulateArgs {
     /// The raw recording: raw.csv (vx1, vx2, vy1, vy2, optional t_s), raw.npy (N×4) or raw.tdms

@@ -7,7 +7,7 @@ use clap::Args;
 
 use crate::cli::Output;
 
-/// Arguments of `psdcal diff`.
+/// Two calibrations of one sensor compared in angles over the active area (did it drift?)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct DiffArgs {
     /// Calibration A, the reference (calibration.json)

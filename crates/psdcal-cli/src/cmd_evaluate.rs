@@ -7,7 +7,7 @@ use clap::Args;
 
 use crate::cli::Output;
 
-/// Arguments of `psdcal evaluate`.
+/// Judge estimated positions against a surveyed truth (mean, RMS, 75th/95th percentiles, CE95, SE95, honest error bars)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct EvaluateArgs {
     /// Surveyed truth: emitter, x_mm, y_mm, z_mm (and/or alpha_x_deg, alpha_y_deg)

@@ -8,7 +8,7 @@ use clap::Args;
 use crate::choice::ExportTo;
 use crate::cli::Output;
 
-/// Arguments of `psdcal export`.
+/// A calibration as an OpenCV, mrcal or ROS camera model (fitted, with its error)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct ExportArgs {
     /// Calibration written by psdcal (calibration.json)

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::Args;
 use psdcal::option_text::{parse_sides_mm, positive_mm};
 
-/// Arguments of `psdcal focal-check`.
+/// Check the focal length against a square of known size at a known distance (Eq. 44)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct FocalCheckArgs {
     /// The calibration to check (calibration.json)

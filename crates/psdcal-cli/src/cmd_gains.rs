@@ -5,7 +5,7 @@ use crate::cli::Output;
 use clap::Args;
 use std::path::PathBuf;
 
-/// Arguments of `psdcal gains`.
+/// Estimate the amplifier gains from equal-current records (electrical calibration)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct GainsArgs {
     /// Equal-current records: vx1, vx2, vy1, vy2

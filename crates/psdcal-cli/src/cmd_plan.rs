@@ -9,7 +9,7 @@ use psdcal::option_text::{
     positive_mm, FitList,
 };
 
-/// Arguments of `psdcal plan`.
+/// Plan template poses that minimise the predicted angle-of-arrival uncertainty (poses.csv)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct PlanArgs {
     /// Nominal focal length, mm (not with --next)

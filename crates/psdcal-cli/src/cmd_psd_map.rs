@@ -9,7 +9,7 @@ use psdcal::{PsdGeometry, PsdMapModel, PsdMapRequest};
 use crate::cli::Output;
 use psdcal::option_text::side_mm;
 
-/// Arguments of `psdcal psd-map`.
+/// The PSD's own non-linearity map from a lensless scan (psd_map.json for calibrate --psd-map)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct PsdMapArgs {
     /// The scan: x_stage_mm, y_stage_mm, and x_mm, y_mm or vx1, vx2, vy1, vy2

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use crate::cli::Output;
 
-/// Arguments of `psdcal report`.
+/// A self-contained HTML report of a calibration with its plots (SVG and PNG)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct ReportArgs {
     /// Calibration written by psdcal (calibration.json)

@@ -11,7 +11,7 @@ use crate::cli::Output;
 use psdcal::option_text::positive_mm;
 use psdcal::option_text::{parse_images, parse_snr};
 
-/// Arguments of `psdcal simulate-positioning`.
+/// Simulate a calibrated rig of sensors and emitters at known positions (rig.json, rig_points.csv, truth.csv)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct PositioningArgs {
     /// The paper's lens of every sensor: 1 (f = 25 mm) or 2 (f = 8 mm)

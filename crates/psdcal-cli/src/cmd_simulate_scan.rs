@@ -9,7 +9,7 @@ use psdcal::{PsdGeometry, ScanRequest};
 use crate::cli::Output;
 use psdcal::option_text::side_mm;
 
-/// Arguments of `psdcal simulate-scan`.
+/// Simulate a lensless raster scan of the PSD (scan.csv for psd-map)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct SimulateScanArgs {
     /// Raster step, mm (0.25 on a 9 mm PSD: 37 × 37 positions)

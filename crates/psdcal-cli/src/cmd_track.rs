@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-/// Arguments of `psdcal track`.
+/// Angles of arrival per window and LED from raw samples on standard input (live)
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct TrackArgs {
     /// The sensor's calibration.json (angles of arrival)
