@@ -579,11 +579,15 @@ mod tests {
         }
     }
 
-    #[test]
-    fn fast_homography_equals_the_svd_fit() {
-        // Exact pairs: both recover the true homography. Perturbed pairs
-        // (±0.05 mm, deterministic): both are the least-squares null vector
-        // of the same normalised system, so they agree far below the noise.
+    /// A known homography, 14 template points in general position, their
+    /// exact images and the images perturbed by ±0.05 mm (deterministic).
+    type Pairs = (
+        Homography,
+        Vec<Vector2<f64>>,
+        Vec<Vector2<f64>>,
+        Vec<Vector2<f64>>,
+    );
+    fn pairs() -> Pairs {
         let h = Matrix3::new(1.2, 0.15, 0.4, -0.1, 0.9, -0.3, 0.02, -0.015, 1.0);
         let hom = Homography::from_matrix(h).unwrap();
         let tpl: Vec<_> = (0..14)
@@ -593,18 +597,27 @@ mod tests {
             })
             .collect();
         let exact: Vec<_> = tpl.iter().map(|p| hom.apply(p).unwrap()).collect();
-        let fast = fast_homography(&tpl, &exact).unwrap();
-        assert!((fast.matrix() - hom.matrix()).norm() < 1e-10);
         let noisy: Vec<_> = exact
             .iter()
             .enumerate()
             .map(|(k, q)| q + 0.05 * Vector2::new((2.1 * k as f64).sin(), (3.7 * k as f64).cos()))
             .collect();
+        (hom, tpl, exact, noisy)
+    }
+
+    #[test]
+    fn fast_homography_equals_the_full_fit() {
+        // Exact pairs: both recover the true homography. Perturbed pairs:
+        // both are the least-squares null vector of the same normalised
+        // system, so they agree far below the noise.
+        let (hom, tpl, exact, noisy) = pairs();
+        let fast = fast_homography(&tpl, &exact).unwrap();
+        assert!((fast.matrix() - hom.matrix()).norm() < 1e-10);
         let fast = fast_homography(&tpl, &noisy).unwrap();
-        let svd = fit_homography(&tpl, &noisy, &HomographyOptions { normalize: true }).unwrap();
-        let moved = (svd.homography.matrix() - hom.matrix()).norm();
+        let full = fit_homography(&tpl, &noisy, &HomographyOptions { normalize: true }).unwrap();
+        let moved = (full.homography.matrix() - hom.matrix()).norm();
         assert!(moved > 1e-4, "the perturbation moves the fit ({moved:e})");
-        assert!((fast.matrix() - svd.homography.matrix()).norm() < 1e-9 * moved.max(1.0));
+        assert!((fast.matrix() - full.homography.matrix()).norm() < 1e-9 * moved.max(1.0));
     }
 
     #[test]
@@ -614,22 +627,7 @@ mod tests {
         // agree to rounding amplified by the squared condition (σ₁²/σ₂² is
         // below 1e3 here, so 1e-12); the smallest, √λ₉ of a noise-level λ₉,
         // to its absolute error √(ε λ₁).
-        let h = Matrix3::new(1.2, 0.15, 0.4, -0.1, 0.9, -0.3, 0.02, -0.015, 1.0);
-        let hom = Homography::from_matrix(h).unwrap();
-        let tpl: Vec<_> = (0..14)
-            .map(|k| {
-                let t = k as f64;
-                Vector2::new(40.0 * (1.3 * t).sin(), 35.0 * (0.7 * t + 0.4).cos())
-            })
-            .collect();
-        let img: Vec<_> = tpl
-            .iter()
-            .enumerate()
-            .map(|(k, p)| {
-                hom.apply(p).unwrap()
-                    + 0.05 * Vector2::new((2.1 * k as f64).sin(), (3.7 * k as f64).cos())
-            })
-            .collect();
+        let (_, tpl, _, img) = pairs();
         let p_n = transform_points(&normalizing_transform(&tpl).unwrap(), &tpl);
         let q_n = transform_points(&normalizing_transform(&img).unwrap(), &img);
         let eigen = normal_null_vector(&p_n, &q_n).expect("well conditioned");
