@@ -75,24 +75,22 @@ pub struct DataSet {
 impl DataSet {
     /// Reads and validates the files.
     pub fn from_files(files: &DataSetFiles, options: &LoadOptions) -> Result<Self> {
+        // Each file is read once; its hash is of the bytes parsed.
         let mut inputs = InputHashes::default();
-        let template = Template::read(&files.template)?;
-        inputs.add(&files.template);
+        let template = inputs.read(&files.template, |s, r| Template::from_reader(s, r))?;
         let known: Option<GainsFile> = files.gains.as_ref().map(read_gains).transpose()?;
         if let Some(path) = &files.gains {
             inputs.add(path);
         }
         let points = match &files.points {
-            PointSource::Observations(path) => {
-                MemoryPoints::Observations(Observations::read(path)?)
-            }
-            PointSource::Signals(path) => {
-                MemoryPoints::Signals(Signals::read(path)?, known.map(|g| g.gains()))
-            }
+            PointSource::Observations(path) => MemoryPoints::Observations(
+                inputs.read(path, |s, r| Observations::from_reader(s, r))?,
+            ),
+            PointSource::Signals(path) => MemoryPoints::Signals(
+                inputs.read(path, |s, r| Signals::from_reader(s, r))?,
+                known.map(|g| g.gains()),
+            ),
         };
-        inputs.add(match &files.points {
-            PointSource::Observations(p) | PointSource::Signals(p) => p,
-        });
         let mut set = Self::from_memory(template, points, options)?;
         set.inputs = inputs;
         Ok(set)

@@ -12,6 +12,38 @@ use sha2::{Digest, Sha256};
 pub struct InputHashes(pub Vec<InputFile>);
 
 impl InputHashes {
+    /// Reads `path` once through `parse` (given the path as the source
+    /// name for messages and a reader), hashing exactly the bytes the
+    /// parser consumed, and adds the file with that hash: what the
+    /// provenance records is what was read, even if the file changes later.
+    pub fn read<T, E>(
+        &mut self,
+        path: &Path,
+        parse: impl FnOnce(&str, &mut HashingReader<std::fs::File>) -> Result<T, E>,
+    ) -> Result<T, E>
+    where
+        E: From<psdcal_io::IoError>,
+    {
+        let source = path.display().to_string();
+        let file = std::fs::File::open(path).map_err(|e| psdcal_io::IoError::Read {
+            file: source.clone(),
+            source: e,
+        })?;
+        let mut reader = HashingReader {
+            inner: file,
+            hasher: Sha256::new(),
+        };
+        let parsed = parse(&source, &mut reader)?;
+        // Whatever the parser left unread (nothing, for a whole-file
+        // parser) still belongs to the file's hash.
+        let _ = std::io::copy(&mut reader, &mut std::io::sink());
+        self.0.push(InputFile {
+            path: source,
+            sha256: hex(&reader.hasher.finalize()),
+        });
+        Ok(parsed)
+    }
+
     /// Hashes `path` and adds it (a file that cannot be read again is
     /// listed with an empty hash: it was read once already, so this only
     /// happens when it changed under us).
@@ -24,12 +56,28 @@ impl InputHashes {
     }
 }
 
+/// A reader that hashes (SHA-256) the bytes read through it
+/// ([`InputHashes::read`]).
+pub struct HashingReader<R> {
+    inner: R,
+    hasher: Sha256,
+}
+
+impl<R: std::io::Read> std::io::Read for HashingReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.hasher.update(&buf[..n]);
+        Ok(n)
+    }
+}
+
 /// SHA-256 of `bytes`, lower-case hexadecimal.
 pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+    hex(&Sha256::digest(bytes))
+}
+
+fn hex(digest: &[u8]) -> String {
+    digest.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// The provenance of a result made now by `command` with `options`.
