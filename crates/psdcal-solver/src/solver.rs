@@ -224,13 +224,25 @@ pub fn normal_equations<P: Problem>(
     state: &P::State,
     robust: Option<RobustLoss>,
 ) -> Result<NormalEquations, P::Error> {
+    normal_equations_and_cost(problem, state, robust).map(|(ne, _)| ne)
+}
+
+/// [`normal_equations`] with the cost of the same residuals (summed as
+/// [`cost`] sums them), from one evaluation.
+fn normal_equations_and_cost<P: Problem>(
+    problem: &P,
+    state: &P::State,
+    robust: Option<RobustLoss>,
+) -> Result<(NormalEquations, f64), P::Error> {
     let mut ne = NormalEquations::zeros(problem.global_len(), problem.block_count());
+    let mut total = 0.0;
     problem.evaluate(state, true, &mut |term| {
         let s: f64 = term.r.iter().map(|r| r * r).sum();
+        total += robust.map_or(s, |l| l.rho(s));
         ne.add(robust.map_or(1.0, |l| l.weight(s)), term);
     })?;
     ne.finish();
-    Ok(ne)
+    Ok((ne, total))
 }
 
 /// Minimises the problem's cost from `start` (module documentation). Fails
@@ -242,7 +254,8 @@ pub fn solve<P: Problem>(
 ) -> Result<Solution<P::State>, P::Error> {
     let robust = options.robust;
     let mut state = start;
-    let mut cost_now = cost(problem, &state, robust)?;
+    // The start's cost comes with its linearisation (one evaluation).
+    let (mut ne, mut cost_now) = normal_equations_and_cost(problem, &state, robust)?;
     let mut history = vec![cost_now];
     let (mut lambda, mut nu) = (options.initial_lambda, 2.0);
     let (mut iterations, mut accepted) = (0, 0);
@@ -250,7 +263,6 @@ pub fn solve<P: Problem>(
     // of itself (the iteration is near a minimum, where the linear model's
     // prediction is to be trusted).
     let mut settled = false;
-    let mut ne = normal_equations(problem, &state, robust)?;
     let termination = loop {
         if cost_now <= options.exact_cost {
             break Termination::ExactFit;
