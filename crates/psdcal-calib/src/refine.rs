@@ -360,7 +360,7 @@ impl<'a> CalibrationProblem<'a> {
         let pose = &state.poses[i];
         Ok(match self.cost {
             CostKind::Template => state.model.back_project_using(rotation, &pose.t, &m)? - xy,
-            CostKind::Image => state.model.project(pose, &xy)? - m,
+            CostKind::Image => state.model.project_near(pose, &xy, Some(&m))? - m,
         })
     }
 
@@ -390,9 +390,10 @@ impl<'a> CalibrationProblem<'a> {
                 (p - xy, j.wrt_pose, j.wrt_point)
             }
             CostKind::Image => {
-                let (p, j) = state
-                    .model
-                    .project_with_jacobians(pose, rotation, &xy, jac)?;
+                let (p, j) =
+                    state
+                        .model
+                        .project_with_jacobians_near(pose, rotation, &xy, Some(&m), jac)?;
                 (p - m, j.wrt_pose, -Matrix2::identity())
             }
         };

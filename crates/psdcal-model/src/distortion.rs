@@ -142,6 +142,19 @@ pub fn invert_newton(
     jacobian: &dyn Fn(&Vector2<f64>) -> Matrix2<f64>,
     polish: bool,
 ) -> Result<Vector2<f64>, ModelError> {
+    invert_newton_from(target, target, map, jacobian, polish)
+}
+
+/// [`invert_newton`] started from `start` instead of from `target` (a
+/// point known to be near the solution, such as the measured point whose
+/// model prediction is sought: Newton then needs one or two steps).
+pub fn invert_newton_from(
+    target: &Vector2<f64>,
+    start: &Vector2<f64>,
+    map: &dyn Fn(&Vector2<f64>) -> Vector2<f64>,
+    jacobian: &dyn Fn(&Vector2<f64>) -> Matrix2<f64>,
+    polish: bool,
+) -> Result<Vector2<f64>, ModelError> {
     let valid = |m: Vector2<f64>| -> Result<Vector2<f64>, ModelError> {
         let det = jacobian(&m).determinant();
         if det > 1e-12 {
@@ -165,7 +178,11 @@ pub fn invert_newton(
             .unwrap_or(m);
         valid(polished)
     };
-    let mut m = *target;
+    let mut m = if start.x.is_finite() && start.y.is_finite() {
+        *start
+    } else {
+        *target
+    };
     let mut residual = map(&m) - target;
     let mut last_step = f64::INFINITY;
     for iteration in 0..INVERSE_MAX_ITERATIONS {

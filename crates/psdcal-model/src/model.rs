@@ -25,7 +25,7 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix2, Vector2};
 
-use crate::distortion::invert_newton;
+use crate::distortion::invert_newton_from;
 use crate::params::{Param, SensorModel};
 use crate::stage::{ParameterInfo, Stage, StageJacobian};
 use crate::stages::gains::GAIN_NAMES;
@@ -566,6 +566,17 @@ impl Model {
 
     /// The measured point whose ideal point is `ideal` (Newton, 1e-12 mm).
     pub fn measured_from_ideal(&self, ideal: &Vector2<f64>) -> Result<Vector2<f64>, ModelError> {
+        self.measured_from_ideal_near(ideal, ideal)
+    }
+
+    /// [`Self::measured_from_ideal`] with Newton started at `near` (a point
+    /// close to the answer, e.g. the measured point a prediction is compared
+    /// with); the same answer to the inverse's tolerance.
+    pub fn measured_from_ideal_near(
+        &self,
+        ideal: &Vector2<f64>,
+        near: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
         if !(ideal.x.is_finite() && ideal.y.is_finite()) {
             return Err(ModelError::NonFinite {
                 what: "ideal point",
@@ -574,8 +585,9 @@ impl Model {
         if self.distortion_is_identity() {
             return Ok(*ideal);
         }
-        invert_newton(
+        invert_newton_from(
             ideal,
+            near,
             &|m| self.ideal(m),
             &|m| self.ideal_point_jacobian(m),
             true,

@@ -85,9 +85,22 @@ impl Model {
         sensor_from_template: &Pose,
         template_xy: &Vector2<f64>,
     ) -> Result<Vector2<f64>, ModelError> {
+        self.project_near(sensor_from_template, template_xy, None)
+    }
+
+    /// [`Self::project`] with the inversion of the distortion started at
+    /// `near` when given (the measured point the prediction is compared
+    /// with: [`Self::measured_from_ideal_near`]).
+    pub fn project_near(
+        &self,
+        sensor_from_template: &Pose,
+        template_xy: &Vector2<f64>,
+        near: Option<&Vector2<f64>>,
+    ) -> Result<Vector2<f64>, ModelError> {
         let p_c = sensor_from_template.transform(&Vector3::new(template_xy.x, template_xy.y, 0.0));
         let ab = normalised(&p_c)?;
-        self.measured_from_ideal(&self.ideal_of_ray(&ab))
+        let ideal = self.ideal_of_ray(&ab);
+        self.measured_from_ideal_near(&ideal, near.unwrap_or(&ideal))
     }
 
     /// Projection with its Jacobians: `jac.wrt_params` becomes `∂m/∂θ` (2×P).
@@ -98,11 +111,25 @@ impl Model {
         template_xy: &Vector2<f64>,
         jac: &mut ChainJacobian,
     ) -> Result<(Vector2<f64>, PoseJacobians), ModelError> {
+        self.project_with_jacobians_near(sensor_from_template, rotation, template_xy, None, jac)
+    }
+
+    /// [`Self::project_with_jacobians`] with the inversion started at
+    /// `near` when given ([`Self::project_near`]).
+    pub fn project_with_jacobians_near(
+        &self,
+        sensor_from_template: &Pose,
+        rotation: &RotationJacobian,
+        template_xy: &Vector2<f64>,
+        near: Option<&Vector2<f64>>,
+        jac: &mut ChainJacobian,
+    ) -> Result<(Vector2<f64>, PoseJacobians), ModelError> {
         let p_t = Vector3::new(template_xy.x, template_xy.y, 0.0);
         let (p_c, dpc_dpose, rot) =
             sensor_from_template.transform_with_jacobians_using(rotation, &p_t);
         let ab = normalised(&p_c)?;
-        let measured = self.measured_from_ideal(&self.ideal_of_ray(&ab))?;
+        let ideal = self.ideal_of_ray(&ab);
+        let measured = self.measured_from_ideal_near(&ideal, near.unwrap_or(&ideal))?;
         self.ray_with_jacobians(&measured, jac);
         let r_m = jac.wrt_point;
         let inv = r_m.try_inverse().ok_or(ModelError::SingularDistortion {
