@@ -109,7 +109,8 @@ impl<R: BufRead> LineReader<R> {
                 return Err(too_large(&self.source, limit));
             }
         }
-        let at = Location::line(&self.source, self.line);
+        // Built only for an error (a String per line otherwise).
+        let at = || Location::line(&self.source, self.line);
         let bom = if self.line == 1 && self.buf.starts_with(b"\xEF\xBB\xBF") {
             3
         } else {
@@ -130,7 +131,7 @@ impl<R: BufRead> LineReader<R> {
                 ""
             };
             return Err(IoError::Structure {
-                at,
+                at: at(),
                 message: format!(
                     "the line is longer than {}; expected CSV lines of at most that length{hint}",
                     bytes_text(MAX_LINE_BYTES as u64)
@@ -143,7 +144,7 @@ impl<R: BufRead> LineReader<R> {
         {
             let byte = content[pos];
             return Err(IoError::Encoding {
-                at,
+                at: at(),
                 message: format!(
                     "binary data (control byte 0x{byte:02x} at byte offset {}); expected a \
                      UTF-8 CSV text file",
@@ -153,7 +154,7 @@ impl<R: BufRead> LineReader<R> {
         }
         if content.contains(&b'\r') {
             return Err(IoError::Structure {
-                at,
+                at: at(),
                 message: "a carriage return alone ends a line (old Mac line ends); expected \
                           LF or CRLF line ends: save the file with them"
                     .to_string(),
@@ -165,7 +166,7 @@ impl<R: BufRead> LineReader<R> {
                 let pos = e.valid_up_to();
                 let byte = content.get(pos).copied().unwrap_or(0);
                 Err(IoError::Encoding {
-                    at,
+                    at: at(),
                     message: format!(
                         "byte 0x{byte:02x} at byte offset {} is not UTF-8; expected UTF-8 text",
                         base + pos as u64
