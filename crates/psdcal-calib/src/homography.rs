@@ -366,14 +366,7 @@ const NORMAL_EIGEN_FLOOR: f64 = 1e-8;
 /// to rounding (measured against the SVD in this module's tests). `None`
 /// when the system is nearly degenerate (the SVD then decides).
 fn normal_null_vector(template: &[Vector2<f64>], image: &[Vector2<f64>]) -> Option<NullVector> {
-    let mut m = SMatrix::<f64, 9, 9>::zeros();
-    for (p, q) in template.iter().zip(image) {
-        let (xx, yy, x, y) = (p.x, p.y, q.x, q.y);
-        let r0 = SVector::<f64, 9>::from([xx, yy, 1.0, 0.0, 0.0, 0.0, -x * xx, -x * yy, -x]);
-        let r1 = SVector::<f64, 9>::from([0.0, 0.0, 0.0, xx, yy, 1.0, -y * xx, -y * yy, -y]);
-        m.ger(1.0, &r0, &r0, 1.0);
-        m.ger(1.0, &r1, &r1, 1.0);
-    }
+    let m = normal_matrix(template.iter().copied().zip(image.iter().copied()));
     if !m.iter().all(|v| v.is_finite()) {
         return None;
     }
@@ -393,6 +386,20 @@ fn normal_null_vector(template: &[Vector2<f64>], image: &[Vector2<f64>]) -> Opti
         vector,
         singular_values,
     })
+}
+
+/// `M = AᵀA` of the DLT system (P17)–(P18) of normalised pairs
+/// `(template, image)`, accumulated row by row without forming `A`.
+fn normal_matrix(pairs: impl Iterator<Item = (Vector2<f64>, Vector2<f64>)>) -> SMatrix<f64, 9, 9> {
+    let mut m = SMatrix::<f64, 9, 9>::zeros();
+    for (p, q) in pairs {
+        let (xx, yy, x, y) = (p.x, p.y, q.x, q.y);
+        let r0 = SVector::<f64, 9>::from([xx, yy, 1.0, 0.0, 0.0, 0.0, -x * xx, -x * yy, -x]);
+        let r1 = SVector::<f64, 9>::from([0.0, 0.0, 0.0, xx, yy, 1.0, -y * xx, -y * yy, -y]);
+        m.ger(1.0, &r0, &r0, 1.0);
+        m.ger(1.0, &r1, &r1, 1.0);
+    }
+    m
 }
 
 fn matrix_of(h: &DVector<f64>) -> Matrix3<f64> {
@@ -487,22 +494,17 @@ pub(crate) fn fast_homography(
     check_pairs(template, image, 4)?;
     let t_p = normalizing_transform(template)?;
     let t_q = normalizing_transform(image)?;
-    let mut m = SMatrix::<f64, 9, 9>::zeros();
-    // The normalising transforms scale and translate (transform_points).
-    for (p, q) in template.iter().zip(image) {
-        let (xx, yy) = (
-            t_p[(0, 0)] * p.x + t_p[(0, 2)],
-            t_p[(1, 1)] * p.y + t_p[(1, 2)],
-        );
-        let (x, y) = (
-            t_q[(0, 0)] * q.x + t_q[(0, 2)],
-            t_q[(1, 1)] * q.y + t_q[(1, 2)],
-        );
-        let r0 = SVector::<f64, 9>::from([xx, yy, 1.0, 0.0, 0.0, 0.0, -x * xx, -x * yy, -x]);
-        let r1 = SVector::<f64, 9>::from([0.0, 0.0, 0.0, xx, yy, 1.0, -y * xx, -y * yy, -y]);
-        m.ger(1.0, &r0, &r0, 1.0);
-        m.ger(1.0, &r1, &r1, 1.0);
-    }
+    // The normalising transforms scale and translate (transform_points),
+    // applied on the fly.
+    let normalised = |t: &Matrix3<f64>, p: &Vector2<f64>| {
+        Vector2::new(t[(0, 0)] * p.x + t[(0, 2)], t[(1, 1)] * p.y + t[(1, 2)])
+    };
+    let mut m = normal_matrix(
+        template
+            .iter()
+            .zip(image)
+            .map(|(p, q)| (normalised(&t_p, p), normalised(&t_q, q))),
+    );
     let ridge = 1e-14 * m.trace().max(f64::MIN_POSITIVE);
     for k in 0..9 {
         m[(k, k)] += ridge;
