@@ -287,11 +287,19 @@ pub(crate) fn json_error(source: &str, e: &serde_json::Error) -> IoError {
 /// A file read whole (within the size limit) as UTF-8 text.
 pub(crate) fn read_text(path: &std::path::Path) -> Result<String, IoError> {
     let source = path.display().to_string();
-    let bytes = crate::limits::read_bounded(path)?;
+    utf8_text(&source, crate::limits::read_bounded(path)?)
+}
+
+/// [`read_text`] from a reader; `source` names it in messages.
+pub(crate) fn read_text_from(source: &str, reader: impl std::io::Read) -> Result<String, IoError> {
+    utf8_text(source, crate::limits::read_all_bounded(source, reader)?)
+}
+
+fn utf8_text(source: &str, bytes: Vec<u8>) -> Result<String, IoError> {
     String::from_utf8(bytes).map_err(|e| {
         let offset = e.utf8_error().valid_up_to();
         IoError::Encoding {
-            at: Location::file(&source),
+            at: Location::file(source),
             message: format!(
                 "the byte at offset {offset} is not UTF-8; expected a UTF-8 JSON file"
             ),

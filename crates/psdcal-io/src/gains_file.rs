@@ -89,12 +89,28 @@ pub fn write_gains(path: impl AsRef<Path>, file: &GainsFile) -> Result<(), IoErr
 pub fn read_gains(path: impl AsRef<Path>) -> Result<GainsFile, IoError> {
     let path = path.as_ref();
     let source = path.display().to_string();
-    let text = crate::error::read_text(path)?;
+    GainsFile::from_json_str(&source, &crate::error::read_text(path)?)
+}
+
+impl GainsFile {
+    /// Reads and checks gains.json from a reader; `source` names it in
+    /// messages.
+    pub fn from_reader(source: &str, reader: impl std::io::Read) -> Result<Self, IoError> {
+        Self::from_json_str(source, &crate::error::read_text_from(source, reader)?)
+    }
+
+    /// Checks gains.json text; `source` names it in messages.
+    pub fn from_json_str(source: &str, text: &str) -> Result<Self, IoError> {
+        check_gains(source, text)
+    }
+}
+
+fn check_gains(source: &str, text: &str) -> Result<GainsFile, IoError> {
     let file: GainsFile =
-        serde_json::from_str(&text).map_err(|e| crate::error::json_error(&source, &e))?;
+        serde_json::from_str(text).map_err(|e| crate::error::json_error(source, &e))?;
     if file.format != GAINS_FORMAT {
         return Err(IoError::Invalid {
-            at: Location::file(&source),
+            at: Location::file(source),
             message: format!(
                 "expected format \"{GAINS_FORMAT}\", found \"{}\"",
                 file.format
@@ -103,7 +119,7 @@ pub fn read_gains(path: impl AsRef<Path>) -> Result<GainsFile, IoError> {
     }
     if file.version > 1 {
         return Err(IoError::Invalid {
-            at: Location::file(&source),
+            at: Location::file(source),
             message: format!(
                 "gains file version {} was written by a newer psdcal; upgrade psdcal",
                 file.version
@@ -111,7 +127,7 @@ pub fn read_gains(path: impl AsRef<Path>) -> Result<GainsFile, IoError> {
         });
     }
     file.gains().validate().map_err(|e| IoError::Invalid {
-        at: Location::file(&source),
+        at: Location::file(source),
         message: e.to_string(),
     })?;
     Ok(file)

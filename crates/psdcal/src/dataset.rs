@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use psdcal_io::{
-    read_gains, validate_data_set, DataSetSummary, GainsFile, Observations, Signals, Template,
+    validate_data_set, DataSetSummary, GainsFile, Observations, Signals, Template,
     ValidatedDataSet, ValidationOptions, Warning,
 };
 use psdcal_model::{ChannelGains, PsdGeometry};
@@ -78,10 +78,10 @@ impl DataSet {
         // Each file is read once; its hash is of the bytes parsed.
         let mut inputs = InputHashes::default();
         let template = inputs.read(&files.template, |s, r| Template::from_reader(s, r))?;
-        let known: Option<GainsFile> = files.gains.as_ref().map(read_gains).transpose()?;
-        if let Some(path) = &files.gains {
-            inputs.add(path);
-        }
+        let known: Option<GainsFile> = match &files.gains {
+            Some(path) => Some(inputs.read(path, |s, r| GainsFile::from_reader(s, r))?),
+            None => None,
+        };
         let points = match &files.points {
             PointSource::Observations(path) => MemoryPoints::Observations(
                 inputs.read(path, |s, r| Observations::from_reader(s, r))?,
