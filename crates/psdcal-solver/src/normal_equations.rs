@@ -70,7 +70,19 @@ impl NormalEquations {
     pub fn add(&mut self, weight: f64, term: &ResidualTerm<'_>) {
         let d = term.r.len();
         if d == 2 {
-            return self.add_pair(weight, term);
+            // Calibration's usual sizes, unrolled at compile time (the
+            // preliminary correction's 2, the default fit's 5, with gains 8).
+            return match self.g_a.len() {
+                1 => self.add_pair_fixed::<1>(weight, term),
+                2 => self.add_pair_fixed::<2>(weight, term),
+                3 => self.add_pair_fixed::<3>(weight, term),
+                4 => self.add_pair_fixed::<4>(weight, term),
+                5 => self.add_pair_fixed::<5>(weight, term),
+                6 => self.add_pair_fixed::<6>(weight, term),
+                7 => self.add_pair_fixed::<7>(weight, term),
+                8 => self.add_pair_fixed::<8>(weight, term),
+                _ => self.add_pair(weight, term),
+            };
         }
         let p = self.g_a.len();
         let (a, r) = (&term.a[..d * p], term.r);
@@ -162,6 +174,46 @@ impl NormalEquations {
                     for (slot, aj) in column.iter_mut().zip(a.chunks_exact(2)) {
                         *slot += aj[0] * y0 + aj[1] * y1;
                     }
+                }
+            }
+        }
+    }
+
+    /// [`Self::add_pair`] for `P` global parameters known at compile time:
+    /// the same expression for every entry, in the same order (the sums are
+    /// the same to the bit), with the loops' bounds constant.
+    fn add_pair_fixed<const P: usize>(&mut self, weight: f64, term: &ResidualTerm<'_>) {
+        let (r0, r1) = (term.r[0], term.r[1]);
+        let a = &term.a[..2 * P];
+        let (mut a0, mut a1) = ([0.0; P], [0.0; P]);
+        for j in 0..P {
+            a0[j] = a[2 * j];
+            a1[j] = a[2 * j + 1];
+        }
+        let u = &mut self.u.as_mut_slice()[..P * P];
+        let g_a = &mut self.g_a.as_mut_slice()[..P];
+        for j in 0..P {
+            let (x0, x1) = (weight * a0[j], weight * a1[j]);
+            g_a[j] += x0 * r0 + x1 * r1;
+            let column = &mut u[P * j..P * j + j + 1];
+            for (k, slot) in column.iter_mut().enumerate() {
+                *slot += x0 * a0[k] + x1 * a1[k];
+            }
+        }
+        if let Some((i, b)) = term.block {
+            let b: [f64; 12] = b[..12].try_into().expect("a 2 × 6 block Jacobian");
+            let w_i = &mut self.w[i].as_mut_slice()[..6 * P];
+            let v_i = self.v[i].as_mut_slice();
+            let g_i = &mut self.g_b[i];
+            for c in 0..6 {
+                let (y0, y1) = (weight * b[2 * c], weight * b[2 * c + 1]);
+                g_i[c] += y0 * r0 + y1 * r1;
+                for k in 0..6 {
+                    v_i[6 * c + k] += y0 * b[2 * k] + y1 * b[2 * k + 1];
+                }
+                let column = &mut w_i[c * P..c * P + P];
+                for j in 0..P {
+                    column[j] += a0[j] * y0 + a1[j] * y1;
                 }
             }
         }
@@ -406,7 +458,17 @@ mod tests {
     #[test]
     fn blocks_equal_the_dense_normal_equations() {
         let mut seed = 11;
-        for (p, n, d) in [(5, 4, 2), (1, 3, 1), (0, 2, 2), (12, 2, 2), (3, 1, 1)] {
+        for (p, n, d) in [
+            (5, 4, 2),
+            (1, 3, 1),
+            (0, 2, 2),
+            (12, 2, 2),
+            (3, 1, 1),
+            (1, 2, 2),
+            (2, 3, 2),
+            (8, 2, 2),
+            (9, 2, 2),
+        ] {
             let terms = terms(p, n, d, 40, &mut seed);
             let ne = accumulate(p, n, &terms);
             let (j, r, w) = dense(p, n, d, &terms);
