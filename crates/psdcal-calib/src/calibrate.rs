@@ -544,6 +544,7 @@ impl CalibrationResult {
             cost: self.cost,
             weights: None,
             report: self.refine.clone(),
+            linearization: None,
         }
     }
 

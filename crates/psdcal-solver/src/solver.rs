@@ -198,6 +198,11 @@ pub struct Solution<S> {
     pub cost: f64,
     /// What the solver did.
     pub report: SolverReport,
+    /// The undamped normal equations at `state`, when the solver holds
+    /// them: it does unless an accepted step ended the solve (the last
+    /// linearisation is then of the state before it). A caller that needs
+    /// them at the solution (the covariance) saves one evaluation.
+    pub normal_equations: Option<NormalEquations>,
 }
 
 /// Relative cost decrease of an accepted step below which the iteration counts
@@ -263,6 +268,8 @@ pub fn solve<P: Problem>(
     // of itself (the iteration is near a minimum, where the linear model's
     // prediction is to be trusted).
     let mut settled = false;
+    // Whether `ne` is the linearisation at `state`.
+    let mut current = true;
     let termination = loop {
         if cost_now <= options.exact_cost {
             break Termination::ExactFit;
@@ -307,17 +314,22 @@ pub fn solve<P: Problem>(
                 accepted += 1;
                 lambda = (lambda / 3.0).max(1e-15);
                 nu = 2.0;
-                if small_step {
-                    break Termination::StepConverged;
-                }
-                if small_change {
-                    break Termination::CostConverged;
+                if small_step || small_change {
+                    current = false;
+                    break if small_step {
+                        Termination::StepConverged
+                    } else {
+                        Termination::CostConverged
+                    };
                 }
                 match normal_equations(problem, &state, robust) {
                     Ok(next_ne) => ne = next_ne,
                     // The accepted state evaluates (its cost is finite), so
                     // this cannot happen; stop on the state reached.
-                    Err(_) => break Termination::DampingSaturated,
+                    Err(_) => {
+                        current = false;
+                        break Termination::DampingSaturated;
+                    }
                 }
             }
             _ => {
@@ -336,6 +348,7 @@ pub fn solve<P: Problem>(
             cost_history: history,
             final_lambda: lambda,
         },
+        normal_equations: current.then_some(ne),
     })
 }
 
