@@ -15,5 +15,9 @@ pub fn run(config: &CalibrateConfig, output: Output) -> anyhow::Result<()> {
     calibrated.set_command(&argv.join(" "));
     let residuals = config.residuals.as_deref();
     calibrated.write(&set, &config.out, residuals)?;
+    if matches!(output, Output::Quiet) {
+        print_warnings(&calibrated.warnings());
+        return Ok(());
+    }
     emit(output, &calibrated.summary(&config.out, residuals)?)
 }

@@ -215,6 +215,18 @@ impl Calibrated {
         Ok(())
     }
 
+    /// The warnings of [`Self::summary`] alone (the fit's warnings, then
+    /// its diagnostics), without building its text and JSON.
+    pub fn warnings(&self) -> Vec<String> {
+        let diagnostics = self.report.diagnostics.iter().map(|d| &d.message);
+        self.report
+            .warnings
+            .iter()
+            .chain(diagnostics)
+            .cloned()
+            .collect()
+    }
+
     /// The summary after writing to `out` (and `residuals`): the fit's
     /// report as text, the result's summary as JSON, and the fit's warnings
     /// and diagnostics.

@@ -93,3 +93,26 @@ fn options_that_cannot_work_are_typed_errors() {
         Err(psdcal::Error::Options(_))
     ));
 }
+
+#[test]
+fn the_warnings_alone_are_the_summarys() {
+    // Lens terms the regression set cannot separate: warnings and a
+    // diagnostic, which `psdcal -q calibrate` prints without the summary.
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/l1-wrong-minimum");
+    let files = DataSetFiles {
+        template: dir.join("template.csv"),
+        points: PointSource::Observations(dir.join("observations.csv")),
+        gains: None,
+    };
+    let set = DataSet::from_files(&files, &LoadOptions::default()).unwrap();
+    use psdcal_model::Param::*;
+    let options = CalibrationOptions {
+        free: vec![F, Cx, Cy, K1, K2, K3, P1, P2],
+        ..CalibrationOptions::default()
+    };
+    let calibrated = calibrate(&set, &options).unwrap();
+    let out = std::path::Path::new("calibration.json");
+    let summary = calibrated.summary(out, None).unwrap();
+    assert!(summary.warnings.len() >= 2, "{:?}", summary.warnings);
+    assert_eq!(calibrated.warnings(), summary.warnings);
+}
