@@ -82,34 +82,38 @@ pub fn validate_data_set(
         .enumerate()
         .map(|(i, led)| (led.id.as_str(), i))
         .collect();
-    let mut first_line: HashMap<(&str, &str), usize> = HashMap::new();
     let mut images: Vec<ImageRows> = Vec::new();
     let mut image_index: HashMap<&str, usize> = HashMap::new();
+    // Per image (in `images` order), the line of each LED's row.
+    let mut first_line: Vec<Vec<Option<usize>>> = Vec::new();
     for row in &observations.rows {
-        let at = Location::line(&observations.source, row.line_no);
+        let at = || Location::line(&observations.source, row.line_no);
         let Some(&led) = led_index.get(row.led.as_str()) else {
             return Err(IoError::UnknownLed {
-                at,
+                at: at(),
                 led: row.led.clone(),
                 template: template.source.clone(),
             });
         };
-        if let Some(&first) = first_line.get(&(row.image.as_str(), row.led.as_str())) {
-            return Err(IoError::Duplicate {
-                at,
-                first_line: first,
-                what: format!("image '{}', LED '{}'", row.image, row.led),
-            });
-        }
-        first_line.insert((&row.image, &row.led), row.line_no);
         let slot = *image_index.entry(&row.image).or_insert_with(|| {
             images.push(ImageRows {
                 id: row.image.clone(),
                 first_line: row.line_no,
                 points: Vec::new(),
             });
+            first_line.push(vec![None; template.leds.len()]);
             images.len() - 1
         });
+        match first_line[slot][led] {
+            None => first_line[slot][led] = Some(row.line_no),
+            Some(first) => {
+                return Err(IoError::Duplicate {
+                    at: at(),
+                    first_line: first,
+                    what: format!("image '{}', LED '{}'", row.image, row.led),
+                })
+            }
+        }
         let point = Vector2::new(row.x_mm, row.y_mm);
         if !is_on_active_area(geometry, &point) {
             warnings.push(Warning::PointOffSensor {
