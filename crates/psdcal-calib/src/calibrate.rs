@@ -32,6 +32,7 @@ use psdcal_model::{
     ValidRegion,
 };
 use serde::Serialize;
+use std::sync::Arc;
 
 use crate::bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
 use crate::covariance::{analytic_method, covariance_at, Covariance};
@@ -273,34 +274,37 @@ fn calibrate_as_given(
     let refine_options = &refine_options;
     let free = refine_options.free_names();
     let fitted_gains = refined.model.gains();
-    // What the finished fit is asked runs on two threads (the results do
-    // not depend on it), in two shares of about equal work: one
-    // linearisation at the solution serves the covariance and the linearity
-    // check, with the fit statistics (the second thread, on its own copy of
-    // the solution); the residual structure tests and the valid region need
-    // no covariance (this thread, which has no start-up latency and takes
-    // the larger share).
+    // What the finished fit is asked is four independent jobs
+    // ([`crate::helper`]): the covariance and the linearity check (from the
+    // refinement's last linearisation), the valid region and the fit
+    // statistics are posted for the second thread, on a copy of the data and
+    // the solution; this thread runs the residual-structure tests, the
+    // largest, then takes back what the other has not started, last first.
+    let shared = Arc::new((data.clone(), refined.clone(), refine_options.clone()));
     let after_fit = helper.run({
-        let (data, refined) = (data.clone(), refined.clone());
-        let refine_options = refine_options.clone();
+        let shared = shared.clone();
         move || -> Result<_, CalibError> {
-            let at = AtSolution::new(&data, &refined, &refine_options)?;
-            let method = analytic_method(&refined, &refine_options);
+            let (data, refined, refine_options) = &*shared;
+            let at = AtSolution::new(data, refined, refine_options)?;
+            let method = analytic_method(refined, refine_options);
             Ok((
-                covariance_at(&at, &data, &refined, &refine_options, method)?,
-                check_linearity_at(&at, &data, &refine_options)?,
+                covariance_at(&at, data, refined, refine_options, method)?,
+                check_linearity_at(&at, data, refine_options)?,
             ))
         }
     });
+    let valid_region = helper.run({
+        let shared = shared.clone();
+        move || ValidRegion::of_model(&shared.1.model, &shared.0.geometry)
+    });
+    let (cost, robust) = (options.refine.cost, options.refine.robust);
+    let statistics = helper.run(move || {
+        let (data, refined, _) = &*shared;
+        fit_statistics(data, &refined.model, &refined.poses, cost, robust)
+    });
     let mut diagnosed = diagnose_structure(data, &refined, &options.refine, &options.diagnostics);
-    let valid_region = ValidRegion::of_model(&refined.model, &data.geometry);
-    let statistics = fit_statistics(
-        data,
-        &refined.model,
-        &refined.poses,
-        options.refine.cost,
-        options.refine.robust,
-    );
+    let statistics = statistics.wait();
+    let valid_region = valid_region.wait();
     let after_fit = after_fit.wait();
     let (covariance, linearity) = after_fit?;
     if let Some(sd) = covariance.std("f") {

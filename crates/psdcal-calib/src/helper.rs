@@ -1,14 +1,16 @@
 //! A second thread for the work that follows the fit.
 //!
-//! What the finished fit is asked (covariance and linearity check on one
-//! side; residual-structure tests, valid region and statistics on the
-//! other) can run on two threads. The second one is started with the
-//! calibration, not when its work is ready: a new thread takes 0.1–1 ms to
-//! run on a small virtual machine (measured here), which then overlaps the
-//! initialisation. It is detached: the caller hands it a job and never
-//! waits for it to start or to wind down. If it has not taken the job by
-//! the time the caller has done its own share, the caller runs the job
-//! itself, so a late thread costs a clone, not a wait.
+//! What the finished fit is asked (covariance and linearity check,
+//! residual-structure tests, valid region, statistics) is a few independent
+//! jobs. The caller posts them, then works through them itself from the
+//! last one posted while a second thread takes them from the first: the
+//! two meet wherever the work divides, whichever thread is faster, and a
+//! job that neither has taken when the caller gets to it runs on the
+//! caller. The second thread is started with the calibration, not when its
+//! work is ready: a new thread takes 0.1–1 ms to run on a small virtual
+//! machine (measured here), which then overlaps the initialisation. It is
+//! detached: the caller never waits for it to start or to wind down, only
+//! for a job it has taken.
 //!
 //! Inside a rayon worker (a study's parallel fits) every core is busy
 //! already, and no thread is started. The rayon pool itself is not used:
@@ -30,44 +32,54 @@ type Job = Box<dyn FnOnce() + Send>;
 /// Where a job waits for whichever thread takes it first.
 type Slot = Arc<Mutex<Option<Job>>>;
 
+/// The posted jobs, in order.
+type Queue = Arc<Mutex<Vec<Slot>>>;
+
 fn take(slot: &Slot) -> Option<Job> {
     slot.lock().unwrap_or_else(|e| e.into_inner()).take()
 }
 
-/// A started second thread waiting for its one job (or none: inside a
-/// rayon worker, or when the thread could not be started).
+/// The first posted job nobody has taken.
+fn take_first(queue: &Queue) -> Option<Job> {
+    let slots = queue.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    slots.iter().find_map(take)
+}
+
+/// A started second thread waiting for jobs (or none: inside a rayon
+/// worker, or when the thread could not be started).
 pub(crate) struct Helper {
-    slot: Slot,
+    queue: Queue,
     wake: Option<Sender<()>>,
 }
 
 impl Helper {
-    /// Starts the thread (none inside a rayon worker).
+    /// Starts the thread (none inside a rayon worker). Once woken it runs
+    /// the posted jobs nobody has taken, first to last, and ends.
     pub(crate) fn spawn() -> Self {
-        let slot: Slot = Arc::new(Mutex::new(None));
+        let queue: Queue = Arc::new(Mutex::new(Vec::new()));
         if rayon::current_thread_index().is_some() {
-            return Self { slot, wake: None };
+            return Self { queue, wake: None };
         }
         let (wake, woken) = channel::<()>();
-        let theirs = slot.clone();
+        let theirs = queue.clone();
         let started = Builder::new()
             .name("psdcal-fit-helper".into())
             .spawn(move || {
                 if woken.recv().is_ok() {
-                    if let Some(job) = take(&theirs) {
+                    while let Some(job) = take_first(&theirs) {
                         job();
                     }
                 }
             });
         Self {
-            slot,
+            queue,
             wake: started.ok().map(|_| wake),
         }
     }
 
-    /// Hands `f` to the second thread; [`Pending::wait`] runs it on the
-    /// caller's thread when that thread has not taken it (or there is none,
-    /// or it has had its job).
+    /// Posts `f` and wakes the second thread (the first time);
+    /// [`Pending::wait`] runs `f` on the caller's thread when nobody has
+    /// taken it by then.
     pub(crate) fn run<R: Send + 'static>(
         &mut self,
         f: impl FnOnce() -> R + Send + 'static,
@@ -77,13 +89,17 @@ impl Helper {
             // The waiting thread re-raises a panic (Pending::wait).
             let _ = send.send(catch_unwind(AssertUnwindSafe(f)));
         });
-        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(job);
+        let slot: Slot = Arc::new(Mutex::new(Some(job)));
+        self.queue
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(slot.clone());
         if let Some(wake) = self.wake.take() {
-            // A thread that is gone leaves the job to the caller.
+            // A thread that is gone leaves the jobs to the caller.
             let _ = wake.send(());
         }
         Pending {
-            slot: self.slot.clone(),
+            slot,
             result: receive,
         }
     }
@@ -96,10 +112,10 @@ pub(crate) struct Pending<R> {
 }
 
 impl<R> Pending<R> {
-    /// The result: the job runs here when the second thread has not taken
-    /// it; otherwise the wait spins for up to [`SPIN`] before it blocks (a
-    /// blocked thread of a small virtual machine wakes up late: 0.18 ms
-    /// measured here). A panic of the job continues on this thread.
+    /// The result: the job runs here when nobody has taken it; otherwise
+    /// the wait spins for up to [`SPIN`] before it blocks (a blocked thread
+    /// of a small virtual machine wakes up late: 0.18 ms measured here). A
+    /// panic of the job continues on this thread.
     pub(crate) fn wait(self) -> R {
         if let Some(job) = take(&self.slot) {
             job();
@@ -134,16 +150,29 @@ mod tests {
     use super::*;
 
     #[test]
-    fn jobs_run_once_on_the_helper_then_inline() {
+    fn the_helper_takes_jobs_from_the_first_the_caller_from_the_last() {
         let caller = std::thread::current().id();
-        {
+        let mut helper = Helper::spawn();
+        let jobs: Vec<_> = (0..3)
+            .map(|_| helper.run(move || std::thread::current().id()))
+            .collect();
+        // Given time, the thread runs every posted job, first to last.
+        std::thread::sleep(Duration::from_millis(200));
+        for job in jobs {
+            assert_ne!(job.wait(), caller);
+        }
+        // Woken once: a job posted after it ended runs on the caller.
+        let late = helper.run(move || std::thread::current().id());
+        assert_eq!(late.wait(), caller);
+    }
+
+    #[test]
+    fn every_job_runs_once_whoever_takes_it() {
+        for _ in 0..50 {
             let mut helper = Helper::spawn();
-            let first = helper.run(move || std::thread::current().id());
-            // Given time to start, the thread takes the first job.
-            std::thread::sleep(Duration::from_millis(200));
-            assert_ne!(first.wait(), caller, "the first job runs on the helper");
-            let second = helper.run(move || std::thread::current().id());
-            assert_eq!(second.wait(), caller, "a second job runs on the caller");
+            let jobs: Vec<_> = (0..6u64).map(|k| helper.run(move || k * k)).collect();
+            let got: Vec<u64> = jobs.into_iter().rev().map(Pending::wait).collect();
+            assert_eq!(got, [25, 16, 9, 4, 1, 0]);
         }
     }
 
