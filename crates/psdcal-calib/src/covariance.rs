@@ -297,7 +297,7 @@ fn sandwich(
 ) -> Result<Sandwich, CalibError> {
     let p = problem.columns().len();
     let data = problem.data();
-    let mut jac = state.model.jacobian_buffer();
+    let mut jac = problem.jacobian_buffer(&state.model);
     let mut a = vec![0.0; 2 * p];
     let mut weighted_sum = 0.0;
     let mut images: Vec<Vec<PointTerm>> = Vec::with_capacity(data.images.len());

@@ -358,6 +358,14 @@ impl<'a> CalibrationProblem<'a> {
         self.data
     }
 
+    /// A buffer for [`Self::linearize`] that computes the freed columns
+    /// only.
+    pub(crate) fn jacobian_buffer(&self, model: &Model) -> ChainJacobian {
+        let mut jac = model.jacobian_buffer();
+        jac.restrict_to(&self.columns);
+        jac
+    }
+
     fn point_error(&self, image: usize, k: usize, e: ModelError) -> CalibError {
         point_error(self.data, image, self.data.images[image].points[k].led, e)
     }
@@ -513,7 +521,7 @@ impl Problem for CalibrationProblem<'_> {
         visit: &mut dyn FnMut(&ResidualTerm<'_>),
     ) -> Result<(), CalibError> {
         let p = self.columns.len();
-        let mut jac = state.model.jacobian_buffer();
+        let mut jac = self.jacobian_buffer(&state.model);
         let mut a = vec![0.0; 2 * p];
         for (i, image) in self.data.images.iter().enumerate() {
             let rotation = jacobians.then(|| state.poses[i].rotation_jacobian());

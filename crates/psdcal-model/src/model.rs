@@ -69,12 +69,40 @@ pub struct ChainJacobian {
     stage_input: Vec<Matrix2<f64>>,
     stage_params: Vec<Vec<f64>>,
     pinhole_params: [f64; 8],
+    /// Per flat column, whether it is computed ([`Self::restrict_to`]).
+    active: Vec<bool>,
 }
 
 impl ChainJacobian {
     /// Column `k` of `∂output/∂θ`.
     pub fn column(&self, k: usize) -> Vector2<f64> {
         Vector2::new(self.wrt_params[2 * k], self.wrt_params[2 * k + 1])
+    }
+
+    /// Computes only the flat columns `columns` of `∂output/∂θ` from now on
+    /// (a fit's freed parameters); the others stay zero. Each column is its
+    /// own chain of products, so those computed are the same to the bit.
+    pub fn restrict_to(&mut self, columns: &[usize]) {
+        self.active.iter_mut().for_each(|a| *a = false);
+        for &c in columns {
+            if let Some(a) = self.active.get_mut(c) {
+                *a = true;
+            }
+        }
+    }
+
+    /// Multiplies every computed column of `∂output/∂θ` by `m` from the left.
+    pub(crate) fn left_multiply(&mut self, m: &Matrix2<f64>) {
+        for (column, _) in self
+            .wrt_params
+            .chunks_exact_mut(2)
+            .zip(&self.active)
+            .filter(|(_, a)| **a)
+        {
+            let v = m * Vector2::new(column[0], column[1]);
+            column[0] = v.x;
+            column[1] = v.y;
+        }
     }
 }
 
@@ -379,6 +407,7 @@ impl Model {
             stage_input: vec![Matrix2::identity(); self.stages.len()],
             stage_params: self.blocks.iter().map(|b| vec![0.0; 2 * b.len()]).collect(),
             pinhole_params: [0.0; 8],
+            active: vec![true; self.len()],
         }
     }
 
@@ -455,6 +484,9 @@ impl Model {
         for k in (0..self.stages.len()).rev() {
             let stage_params = &jac.stage_params[k];
             for (j, c) in self.columns[k].iter().enumerate() {
+                if !jac.active[*c] {
+                    continue;
+                }
                 let column = m * Vector2::new(stage_params[2 * j], stage_params[2 * j + 1]);
                 jac.wrt_params[2 * c] += column.x;
                 jac.wrt_params[2 * c + 1] += column.y;
@@ -478,12 +510,11 @@ impl Model {
             &ideal,
             Some((&mut dp, &mut jac.pinhole_params)),
         );
-        for k in 0..self.len() {
-            let column = dp * Vector2::new(jac.wrt_params[2 * k], jac.wrt_params[2 * k + 1]);
-            jac.wrt_params[2 * k] = column.x;
-            jac.wrt_params[2 * k + 1] = column.y;
-        }
+        jac.left_multiply(&dp);
         for (j, c) in self.pinhole_columns.iter().enumerate() {
+            if !jac.active[*c] {
+                continue;
+            }
             jac.wrt_params[2 * c] += jac.pinhole_params[2 * j];
             jac.wrt_params[2 * c + 1] += jac.pinhole_params[2 * j + 1];
         }

@@ -68,7 +68,7 @@ impl Model {
         let ab = self.ray_with_jacobians(measured, jac);
         let (xy, dxy_dab, wrt_pose) =
             plane_intersection_with_jacobians(rotation, &sensor_from_template.t, &ab)?;
-        left_multiply(&dxy_dab, &mut jac.wrt_params);
+        jac.left_multiply(&dxy_dab);
         Ok((
             xy,
             PoseJacobians {
@@ -137,7 +137,7 @@ impl Model {
             y: measured.y,
             det: r_m.determinant(),
         })?;
-        left_multiply(&(-inv), &mut jac.wrt_params);
+        jac.left_multiply(&(-inv));
         let inv_z = 1.0 / p_c.z;
         let dn_dpc = Matrix2x3::new(inv_z, 0.0, -ab.x * inv_z, 0.0, inv_z, -ab.y * inv_z);
         Ok((
@@ -193,7 +193,7 @@ impl Model {
             y: measured.y,
             det: r_m.determinant(),
         })?;
-        left_multiply(&(-inv), &mut jac.wrt_params);
+        jac.left_multiply(&(-inv));
         let inv_z = 1.0 / p_c.z;
         let dn_dpc = Matrix2x3::new(inv_z, 0.0, -ab.x * inv_z, 0.0, inv_z, -ab.y * inv_z);
         let m = inv * dn_dpc;
@@ -213,13 +213,4 @@ fn normalised(p_c: &Vector3<f64>) -> Result<Vector2<f64>, ModelError> {
         return Err(ModelError::BehindSensor { zc: p_c.z });
     }
     Ok(Vector2::new(p_c.x / p_c.z, p_c.y / p_c.z))
-}
-
-/// `J ← M J` for a 2×P column-major `J`.
-fn left_multiply(m: &Matrix2<f64>, jac: &mut [f64]) {
-    for column in jac.chunks_exact_mut(2) {
-        let v = m * Vector2::new(column[0], column[1]);
-        column[0] = v.x;
-        column[1] = v.y;
-    }
 }

@@ -394,3 +394,62 @@ fn a_parameter_shared_by_two_stages_is_one_column() {
     assert_eq!(big.stage_kinds(), ["test_poly_field", "psd_radial", "lens"]);
     assert!(Model::new(vec![Box::new(Pinhole::new())], None, &[]).is_err());
 }
+
+#[test]
+fn restricted_jacobians_are_the_full_ones_column_for_column() {
+    // A fit's buffer computes its freed columns only: those are the full
+    // computation's to the bit (each column is its own chain of products),
+    // the others stay zero; ray, projection and back-projection alike.
+    for (name, model) in example_chains() {
+        let every: Vec<usize> = (0..model.len()).collect();
+        for chosen in [
+            every.clone(),
+            every.iter().copied().step_by(2).collect(),
+            vec![],
+        ] {
+            let mut full = model.jacobian_buffer();
+            let mut part = model.jacobian_buffer();
+            part.restrict_to(&chosen);
+            let same = |full: &psdcal_model::ChainJacobian,
+                        part: &psdcal_model::ChainJacobian,
+                        what: &str| {
+                for k in 0..model.len() {
+                    let expected = if chosen.contains(&k) {
+                        full.column(k)
+                    } else {
+                        Vector2::zeros()
+                    };
+                    assert_eq!(part.column(k), expected, "{name} {what} column {k}");
+                }
+                assert_eq!(part.wrt_point, full.wrt_point, "{name} {what}");
+            };
+            for m in points() {
+                model.ray_with_jacobians(&m, &mut full);
+                model.ray_with_jacobians(&m, &mut part);
+                same(&full, &part, "ray");
+            }
+            for pose in example_poses() {
+                let rotation = pose.rotation_jacobian();
+                for xy in example_template_points() {
+                    let Ok(m) = model.project(&pose, &xy) else {
+                        continue;
+                    };
+                    model
+                        .project_with_jacobians(&pose, &rotation, &xy, &mut full)
+                        .unwrap();
+                    model
+                        .project_with_jacobians(&pose, &rotation, &xy, &mut part)
+                        .unwrap();
+                    same(&full, &part, "projection");
+                    model
+                        .back_project_with_jacobians(&pose, &rotation, &m, &mut full)
+                        .unwrap();
+                    model
+                        .back_project_with_jacobians(&pose, &rotation, &m, &mut part)
+                        .unwrap();
+                    same(&full, &part, "back-projection");
+                }
+            }
+        }
+    }
+}
