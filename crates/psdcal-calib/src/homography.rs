@@ -493,6 +493,18 @@ pub(crate) fn fast_homography(
 ) -> Result<Homography, CalibError> {
     check_pairs(template, image, 4)?;
     let t_p = normalizing_transform(template)?;
+    fast_homography_normalised(template, &t_p, image).map(|(h, _)| h)
+}
+
+/// [`fast_homography`] with the template's normalising transform `t_p`
+/// given (a template fitted again and again, as by the preliminary
+/// correction); also returns the image's normalising transform.
+pub(crate) fn fast_homography_normalised(
+    template: &[Vector2<f64>],
+    t_p: &Matrix3<f64>,
+    image: &[Vector2<f64>],
+) -> Result<(Homography, Matrix3<f64>), CalibError> {
+    check_pairs(template, image, 4)?;
     let t_q = normalizing_transform(image)?;
     // The normalising transforms scale and translate (transform_points),
     // applied on the fly.
@@ -503,7 +515,7 @@ pub(crate) fn fast_homography(
         template
             .iter()
             .zip(image)
-            .map(|(p, q)| (normalised(&t_p, p), normalised(&t_q, q))),
+            .map(|(p, q)| (normalised(t_p, p), normalised(&t_q, q))),
     );
     let ridge = 1e-14 * m.trace().max(f64::MIN_POSITIVE);
     for k in 0..9 {
@@ -529,7 +541,8 @@ pub(crate) fn fast_homography(
         stage: "homography",
         reason: "image normalisation is singular".into(),
     })?;
-    Homography::from_matrix(t_q_inv * Matrix3::from_row_slice(x.as_slice()) * t_p)
+    let h = Homography::from_matrix(t_q_inv * Matrix3::from_row_slice(x.as_slice()) * t_p)?;
+    Ok((h, t_q))
 }
 
 fn rename_degenerate(e: CalibError, what: &str) -> CalibError {

@@ -34,10 +34,10 @@
 //! (analytic Jacobian for straightness, central differences for homography
 //! consistency).
 
-use nalgebra::{DMatrix, DVector, Vector2};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector2};
 use psdcal_solver::{solver, Problem, ResidualTerm, SolverOptions, Step, Termination};
 
-use crate::homography::{fast_homography, normalizing_transform};
+use crate::homography::{fast_homography_normalised, normalizing_transform};
 use crate::{CalibError, CalibrationData};
 
 /// Which preliminary correction to run.
@@ -337,12 +337,14 @@ pub(crate) fn data_radius(data: &CalibrationData, centre: &Vector2<f64>) -> f64 
         .fold(0.0, f64::max)
 }
 
-/// Template points and measured points of one image.
-type ImagePoints = (Vec<Vector2<f64>>, Vec<Vector2<f64>>);
+/// Template points, their normalising transform and measured points of
+/// one image.
+type ImagePoints = (Vec<Vector2<f64>>, Matrix3<f64>, Vec<Vector2<f64>>);
 
 /// Homography-consistency cost (module documentation).
 struct Consistency {
-    /// Per usable image: template points and measured points.
+    /// Per usable image: template points (normalised once) and measured
+    /// points.
     images: Vec<ImagePoints>,
     centre: Vector2<f64>,
     radius: f64,
@@ -351,16 +353,16 @@ struct Consistency {
 impl TwoParameterCost for Consistency {
     fn residuals(&self, u: [f64; 2]) -> Result<DVector<f64>, CalibError> {
         let (k1, k2) = (u[0] / self.radius.powi(2), u[1] / self.radius.powi(4));
-        let n: usize = self.images.iter().map(|(t, _)| 2 * t.len()).sum();
+        let n: usize = self.images.iter().map(|(t, _, _)| 2 * t.len()).sum();
         let mut r = DVector::zeros(n);
         let mut row = 0;
-        for (template, measured) in &self.images {
+        for (template, t_p, measured) in &self.images {
             let corrected: Vec<_> = measured
                 .iter()
                 .map(|m| radial_correct(m, &self.centre, k1, k2))
                 .collect();
-            let homography = fast_homography(template, &corrected)?;
-            let s = normalizing_transform(&corrected)?[(0, 0)];
+            let (homography, t_q) = fast_homography_normalised(template, t_p, &corrected)?;
+            let s = t_q[(0, 0)];
             for (p, q) in template.iter().zip(&corrected) {
                 let e = (homography.apply(p)? - q) * s;
                 r[row] = e.x;
@@ -418,15 +420,12 @@ pub fn estimate_preliminary(
                 .iter()
                 .filter(|im| im.points.len() >= 5)
                 .map(|im| {
-                    (
-                        im.points
-                            .iter()
-                            .map(|o| data.template[o.led])
-                            .collect::<Vec<_>>(),
-                        im.points.iter().map(|o| o.measured).collect::<Vec<_>>(),
-                    )
+                    let template: Vec<_> = im.points.iter().map(|o| data.template[o.led]).collect();
+                    let t_p = normalizing_transform(&template)?;
+                    let measured = im.points.iter().map(|o| o.measured).collect();
+                    Ok((template, t_p, measured))
                 })
-                .collect();
+                .collect::<Result<_, CalibError>>()?;
             if images.is_empty() {
                 return Err(CalibError::Degenerate {
                     reason: "homography-consistency correction needs images of at least 5 points"
