@@ -424,8 +424,9 @@ fn restricted_jacobians_are_the_full_ones_column_for_column() {
                 assert_eq!(part.wrt_point, full.wrt_point, "{name} {what}");
             };
             for m in points() {
-                model.ray_with_jacobians(&m, &mut full);
-                model.ray_with_jacobians(&m, &mut part);
+                for jac in [&mut full, &mut part] {
+                    model.ray_with_jacobians(&m, jac);
+                }
                 same(&full, &part, "ray");
             }
             for pose in example_poses() {
@@ -434,19 +435,17 @@ fn restricted_jacobians_are_the_full_ones_column_for_column() {
                     let Ok(m) = model.project(&pose, &xy) else {
                         continue;
                     };
-                    model
-                        .project_with_jacobians(&pose, &rotation, &xy, &mut full)
-                        .unwrap();
-                    model
-                        .project_with_jacobians(&pose, &rotation, &xy, &mut part)
-                        .unwrap();
+                    for jac in [&mut full, &mut part] {
+                        model
+                            .project_with_jacobians(&pose, &rotation, &xy, jac)
+                            .unwrap();
+                    }
                     same(&full, &part, "projection");
-                    model
-                        .back_project_with_jacobians(&pose, &rotation, &m, &mut full)
-                        .unwrap();
-                    model
-                        .back_project_with_jacobians(&pose, &rotation, &m, &mut part)
-                        .unwrap();
+                    for jac in [&mut full, &mut part] {
+                        model
+                            .back_project_with_jacobians(&pose, &rotation, &m, jac)
+                            .unwrap();
+                    }
                     same(&full, &part, "back-projection");
                 }
             }

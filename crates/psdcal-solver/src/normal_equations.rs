@@ -156,15 +156,10 @@ impl NormalEquations {
         }
         if let Some((i, b)) = term.block {
             let b: [f64; 12] = b[..12].try_into().expect("a 2 × 6 block Jacobian");
+            self.add_pose_pair(i, weight, (r0, r1), &b);
             let w_i = self.w[i].as_mut_slice();
-            let v_i = self.v[i].as_mut_slice();
-            let g_i = &mut self.g_b[i];
             for c in 0..6 {
                 let (y0, y1) = (weight * b[2 * c], weight * b[2 * c + 1]);
-                g_i[c] += y0 * r0 + y1 * r1;
-                for k in 0..6 {
-                    v_i[6 * c + k] += y0 * b[2 * k] + y1 * b[2 * k + 1];
-                }
                 let column = &mut w_i[c * p..c * p + p];
                 if split {
                     for ((slot, x0), x1) in column.iter_mut().zip(a0).zip(a1) {
@@ -202,19 +197,28 @@ impl NormalEquations {
         }
         if let Some((i, b)) = term.block {
             let b: [f64; 12] = b[..12].try_into().expect("a 2 × 6 block Jacobian");
+            self.add_pose_pair(i, weight, (r0, r1), &b);
             let w_i = &mut self.w[i].as_mut_slice()[..6 * P];
-            let v_i = self.v[i].as_mut_slice();
-            let g_i = &mut self.g_b[i];
             for c in 0..6 {
                 let (y0, y1) = (weight * b[2 * c], weight * b[2 * c + 1]);
-                g_i[c] += y0 * r0 + y1 * r1;
-                for k in 0..6 {
-                    v_i[6 * c + k] += y0 * b[2 * k] + y1 * b[2 * k + 1];
-                }
                 let column = &mut w_i[c * P..c * P + P];
                 for j in 0..P {
                     column[j] += a0[j] * y0 + a1[j] * y1;
                 }
+            }
+        }
+    }
+
+    /// The pose block's share of a two-row residual `r` with `∂r/∂b_i = b`
+    /// (column-major): `g_i += w bᵀ r`, `V_i += w bᵀ b`.
+    fn add_pose_pair(&mut self, i: usize, weight: f64, (r0, r1): (f64, f64), b: &[f64; 12]) {
+        let v_i = self.v[i].as_mut_slice();
+        let g_i = &mut self.g_b[i];
+        for c in 0..6 {
+            let (y0, y1) = (weight * b[2 * c], weight * b[2 * c + 1]);
+            g_i[c] += y0 * r0 + y1 * r1;
+            for k in 0..6 {
+                v_i[6 * c + k] += y0 * b[2 * k] + y1 * b[2 * k + 1];
             }
         }
     }
