@@ -29,6 +29,7 @@ pub mod electrical;
 pub mod global;
 mod helper;
 pub mod linearity;
+mod linearization;
 pub mod misplaced;
 pub mod plan;
 pub mod prior;

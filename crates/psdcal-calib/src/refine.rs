@@ -39,6 +39,7 @@ use psdcal_model::stages::Gains;
 use psdcal_model::{ChainJacobian, Model, ModelError, Param, Pose, SensorModel};
 
 use crate::data::CalibrationData;
+use crate::linearization::Linearization;
 use crate::prior::Prior;
 use crate::weighting::{NoiseModel, PointWeights};
 use crate::CalibError;
@@ -133,46 +134,6 @@ pub struct Refined {
     pub report: RefineReport,
     /// The solver's last linearisation, when it is at this solution.
     pub(crate) linearization: Option<Linearization>,
-}
-
-/// The undamped normal equations of a refinement at its solution, with
-/// everything they depend on: [`AtSolution::new`] takes them instead of
-/// linearising again when asked for the same fit (same options, data size,
-/// model, poses and weights). A cache: it takes no part in comparisons.
-#[derive(Debug, Clone)]
-pub(crate) struct Linearization {
-    options: RefineOptions,
-    images: usize,
-    points: usize,
-    model: Model,
-    poses: Vec<Pose>,
-    weights: Option<PointWeights>,
-    ne: NormalEquations,
-}
-
-impl PartialEq for Linearization {
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-impl Linearization {
-    /// The normal equations when they are those of `refined` for `options`
-    /// on `data`.
-    fn of(
-        refined: &Refined,
-        data: &CalibrationData,
-        options: &RefineOptions,
-    ) -> Option<NormalEquations> {
-        let l = refined.linearization.as_ref()?;
-        (l.options == *options
-            && l.images == data.images.len()
-            && l.points == data.point_count()
-            && l.model == refined.model
-            && l.poses == refined.poses
-            && l.weights == refined.weights)
-            .then(|| l.ne.clone())
-    }
 }
 
 impl Refined {
@@ -731,15 +692,9 @@ pub fn refine(
         }
     }
     state = solution.state;
-    let linearization = solution.normal_equations.map(|ne| Linearization {
-        options: options.clone(),
-        images: data.images.len(),
-        points: data.point_count(),
-        model: state.model.clone(),
-        poses: state.poses.clone(),
-        weights: weights.clone(),
-        ne,
-    });
+    let linearization = solution
+        .normal_equations
+        .map(|ne| Linearization::new(ne, options, data, &state, weights.as_ref()));
     Ok(Refined {
         model: state.model,
         poses: state.poses,
@@ -748,100 +703,4 @@ pub fn refine(
         report: solution.report,
         linearization,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    //! The linearisation a refinement keeps against one computed afresh at
-    //! its solution, and its invalidation when the solution is changed.
-
-    use super::*;
-    use psdcal_model::PsdGeometry;
-    use psdcal_testkit::{add_noise, covering_poses, image_points, perturbed, scatter, PointKind};
-    use rand::SeedableRng;
-    use rand_chacha::ChaCha8Rng;
-
-    fn noisy_fit(options: &RefineOptions) -> (CalibrationData, Refined) {
-        let truth = SensorModel::paper_lens2();
-        let template = scatter(14);
-        let mut rng = ChaCha8Rng::seed_from_u64(21);
-        let poses = covering_poses(&truth, &template, 6, &mut rng);
-        let mut points = image_points(&truth, &template, &poses, PointKind::Measured);
-        let noise = rand_distr::Normal::new(0.0, 2e-3).expect("a valid σ");
-        add_noise(&mut points, &noise, &mut rng);
-        let data = CalibrationData::from_points(&template, &[], points, PsdGeometry::default());
-        let (m0, p0) = perturbed(&truth, &poses);
-        let refined = refine(&data, m0, &p0, options).expect("the fit converges");
-        (data, refined)
-    }
-
-    /// The normal equations computed afresh at `refined`'s solution.
-    fn fresh(
-        data: &CalibrationData,
-        refined: &Refined,
-        options: &RefineOptions,
-    ) -> NormalEquations {
-        let problem = CalibrationProblem::new(
-            data,
-            options.cost,
-            &refined.model,
-            &options.free_names(),
-            refined.weights.as_ref(),
-        )
-        .expect("a valid problem");
-        let state = FitState {
-            model: refined.model.clone(),
-            poses: refined.poses.clone(),
-        };
-        solver::normal_equations(&problem, &state, options.robust).expect("it evaluates")
-    }
-
-    fn assert_same(a: &NormalEquations, b: &NormalEquations) {
-        assert_eq!(a.u, b.u);
-        assert_eq!(a.g_a, b.g_a);
-        assert_eq!(a.v, b.v);
-        assert_eq!(a.w, b.w);
-        assert_eq!(a.g_b, b.g_b);
-    }
-
-    #[test]
-    fn kept_linearization_is_the_one_at_the_solution() {
-        for options in [
-            RefineOptions::default(),
-            RefineOptions {
-                cost: CostKind::Image,
-                robust: Some(RobustLoss::Huber { scale: 4e-3 }),
-                ..RefineOptions::default()
-            },
-        ] {
-            let (data, refined) = noisy_fit(&options);
-            // The fit ends on a negligible predicted decrease, linearised at
-            // its solution: the equations are kept, bit for bit those of a
-            // new linearisation.
-            let kept = Linearization::of(&refined, &data, &options).expect("kept");
-            assert_same(&kept, &fresh(&data, &refined, &options));
-            let at = AtSolution::new(&data, &refined, &options).expect("linearises");
-            assert_same(&at.ne, &kept);
-        }
-    }
-
-    #[test]
-    fn kept_linearization_is_not_used_for_another_fit() {
-        let options = RefineOptions::default();
-        let (data, refined) = noisy_fit(&options);
-        // Other options, another solution, another data set: recomputed.
-        let other = RefineOptions {
-            free: vec![Param::F, Param::Cx, Param::Cy, Param::K1],
-            ..options.clone()
-        };
-        assert!(Linearization::of(&refined, &data, &other).is_none());
-        let mut moved = refined.clone();
-        moved.poses[0].t.z += 1e-3;
-        assert!(Linearization::of(&moved, &data, &options).is_none());
-        let at = AtSolution::new(&data, &moved, &options).expect("linearises");
-        assert_same(&at.ne, &fresh(&data, &moved, &options));
-        let mut fewer = data.clone();
-        fewer.images.pop();
-        assert!(Linearization::of(&refined, &fewer, &options).is_none());
-    }
 }

@@ -1,0 +1,173 @@
+//! The linearisation a refinement keeps: the solver's last undamped normal
+//! equations when they are at its solution (`psdcal_solver::Solution::
+//! normal_equations`), with everything they depend on. The covariance and
+//! the linearity check start from the normal equations at the solution
+//! ([`crate::refine::AtSolution`]); they take these instead of linearising
+//! again (one evaluation of every point) when asked for the same fit: the
+//! same options, data size, model, poses and weights. Anything else, or a
+//! refinement whose fields were changed since, is linearised afresh.
+
+use psdcal_model::{Model, Pose};
+use psdcal_solver::normal_equations::NormalEquations;
+
+use crate::refine::{FitState, RefineOptions, Refined};
+use crate::weighting::PointWeights;
+use crate::CalibrationData;
+
+/// The undamped normal equations of a refinement at its solution, with
+/// everything they depend on: [`crate::refine::AtSolution::new`] takes them instead of
+/// linearising again when asked for the same fit (same options, data size,
+/// model, poses and weights). A cache: it takes no part in comparisons.
+#[derive(Debug, Clone)]
+pub(crate) struct Linearization {
+    options: RefineOptions,
+    images: usize,
+    points: usize,
+    model: Model,
+    poses: Vec<Pose>,
+    weights: Option<PointWeights>,
+    ne: NormalEquations,
+}
+
+impl PartialEq for Linearization {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl Linearization {
+    /// The normal equations `ne` of the fit of `data` with `options` at
+    /// `state`, weighted by `weights`.
+    pub(crate) fn new(
+        ne: NormalEquations,
+        options: &RefineOptions,
+        data: &CalibrationData,
+        state: &FitState,
+        weights: Option<&PointWeights>,
+    ) -> Self {
+        Self {
+            options: options.clone(),
+            images: data.images.len(),
+            points: data.point_count(),
+            model: state.model.clone(),
+            poses: state.poses.clone(),
+            weights: weights.cloned(),
+            ne,
+        }
+    }
+
+    /// The normal equations when they are those of `refined` for `options`
+    /// on `data`.
+    pub(crate) fn of(
+        refined: &Refined,
+        data: &CalibrationData,
+        options: &RefineOptions,
+    ) -> Option<NormalEquations> {
+        let l = refined.linearization.as_ref()?;
+        (l.options == *options
+            && l.images == data.images.len()
+            && l.points == data.point_count()
+            && l.model == refined.model
+            && l.poses == refined.poses
+            && l.weights == refined.weights)
+            .then(|| l.ne.clone())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The linearisation a refinement keeps against one computed afresh at
+    //! its solution, and its invalidation when the solution is changed.
+
+    use super::*;
+    use crate::refine::{refine, AtSolution, CalibrationProblem, CostKind, RobustLoss};
+    use psdcal_model::{Param, PsdGeometry, SensorModel};
+    use psdcal_solver::solver;
+    use psdcal_testkit::{add_noise, covering_poses, image_points, perturbed, scatter, PointKind};
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    fn noisy_fit(options: &RefineOptions) -> (CalibrationData, Refined) {
+        let truth = SensorModel::paper_lens2();
+        let template = scatter(14);
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let poses = covering_poses(&truth, &template, 6, &mut rng);
+        let mut points = image_points(&truth, &template, &poses, PointKind::Measured);
+        let noise = rand_distr::Normal::new(0.0, 2e-3).expect("a valid σ");
+        add_noise(&mut points, &noise, &mut rng);
+        let data = CalibrationData::from_points(&template, &[], points, PsdGeometry::default());
+        let (m0, p0) = perturbed(&truth, &poses);
+        let refined = refine(&data, m0, &p0, options).expect("the fit converges");
+        (data, refined)
+    }
+
+    /// The normal equations computed afresh at `refined`'s solution.
+    fn fresh(
+        data: &CalibrationData,
+        refined: &Refined,
+        options: &RefineOptions,
+    ) -> NormalEquations {
+        let problem = CalibrationProblem::new(
+            data,
+            options.cost,
+            &refined.model,
+            &options.free_names(),
+            refined.weights.as_ref(),
+        )
+        .expect("a valid problem");
+        let state = FitState {
+            model: refined.model.clone(),
+            poses: refined.poses.clone(),
+        };
+        solver::normal_equations(&problem, &state, options.robust).expect("it evaluates")
+    }
+
+    fn assert_same(a: &NormalEquations, b: &NormalEquations) {
+        assert_eq!(a.u, b.u);
+        assert_eq!(a.g_a, b.g_a);
+        assert_eq!(a.v, b.v);
+        assert_eq!(a.w, b.w);
+        assert_eq!(a.g_b, b.g_b);
+    }
+
+    #[test]
+    fn kept_linearization_is_the_one_at_the_solution() {
+        for options in [
+            RefineOptions::default(),
+            RefineOptions {
+                cost: CostKind::Image,
+                robust: Some(RobustLoss::Huber { scale: 4e-3 }),
+                ..RefineOptions::default()
+            },
+        ] {
+            let (data, refined) = noisy_fit(&options);
+            // The fit ends on a negligible predicted decrease, linearised at
+            // its solution: the equations are kept, bit for bit those of a
+            // new linearisation.
+            let kept = Linearization::of(&refined, &data, &options).expect("kept");
+            assert_same(&kept, &fresh(&data, &refined, &options));
+            let at = AtSolution::new(&data, &refined, &options).expect("linearises");
+            assert_same(&at.ne, &kept);
+        }
+    }
+
+    #[test]
+    fn kept_linearization_is_not_used_for_another_fit() {
+        let options = RefineOptions::default();
+        let (data, refined) = noisy_fit(&options);
+        // Other options, another solution, another data set: recomputed.
+        let other = RefineOptions {
+            free: vec![Param::F, Param::Cx, Param::Cy, Param::K1],
+            ..options.clone()
+        };
+        assert!(Linearization::of(&refined, &data, &other).is_none());
+        let mut moved = refined.clone();
+        moved.poses[0].t.z += 1e-3;
+        assert!(Linearization::of(&moved, &data, &options).is_none());
+        let at = AtSolution::new(&data, &moved, &options).expect("linearises");
+        assert_same(&at.ne, &fresh(&data, &moved, &options));
+        let mut fewer = data.clone();
+        fewer.images.pop();
+        assert!(Linearization::of(&refined, &fewer, &options).is_none());
+    }
+}
