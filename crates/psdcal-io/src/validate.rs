@@ -84,8 +84,9 @@ pub fn validate_data_set(
         .collect();
     let mut images: Vec<ImageRows> = Vec::new();
     let mut image_index: HashMap<&str, usize> = HashMap::new();
-    // Per image (in `images` order), the line of each LED's row.
-    let mut first_line: Vec<Vec<Option<usize>>> = Vec::new();
+    // The line of each (image slot, LED index) row: indices hash faster
+    // than the two names, and the map grows with the rows only.
+    let mut first_line: HashMap<(usize, usize), usize> = HashMap::new();
     for row in &observations.rows {
         let at = || Location::line(&observations.source, row.line_no);
         let Some(&led) = led_index.get(row.led.as_str()) else {
@@ -101,19 +102,16 @@ pub fn validate_data_set(
                 first_line: row.line_no,
                 points: Vec::new(),
             });
-            first_line.push(vec![None; template.leds.len()]);
             images.len() - 1
         });
-        match first_line[slot][led] {
-            None => first_line[slot][led] = Some(row.line_no),
-            Some(first) => {
-                return Err(IoError::Duplicate {
-                    at: at(),
-                    first_line: first,
-                    what: format!("image '{}', LED '{}'", row.image, row.led),
-                })
-            }
+        if let Some(&first) = first_line.get(&(slot, led)) {
+            return Err(IoError::Duplicate {
+                at: at(),
+                first_line: first,
+                what: format!("image '{}', LED '{}'", row.image, row.led),
+            });
         }
+        first_line.insert((slot, led), row.line_no);
         let point = Vector2::new(row.x_mm, row.y_mm);
         if !is_on_active_area(geometry, &point) {
             warnings.push(Warning::PointOffSensor {
