@@ -111,7 +111,7 @@ impl Helper {
 /// no-op elsewhere, on one core, or when the system refuses): a thread
 /// started or woken by a busy thread tends to be queued on that thread's
 /// core and to wait there until it is preempted (measured here: a helper
-/// woken 0.03–0.6 ms late, often only once the caller had finished).
+/// woken 0.03–1.6 ms late, often only once the caller had finished).
 #[cfg(target_os = "linux")]
 fn other_cores() -> impl FnOnce() + Send {
     use rustix::thread::{sched_getaffinity, sched_getcpu, sched_setaffinity};
