@@ -1,8 +1,8 @@
 //! The whole calibration, end to end (docs/model.md §4): the robust start
-//! ([`crate::initialize`]: preliminary correction, normalised DLT, closed
+//! ([`mod@crate::initialize`]: preliminary correction, normalised DLT, closed
 //! form or focal search), Levenberg–Marquardt on the template-plane cost
 //! (P29) with the global search over `l1` when it is freed
-//! ([`crate::global`]), the covariance ([`crate::covariance`]) and the fit
+//! ([`crate::global`]), the covariance ([`mod@crate::covariance`]) and the fit
 //! statistics ([`crate::report`]), then the diagnostics
 //! ([`crate::diagnostics`]: misfit, gain imbalance, local minima,
 //! unreliable uncertainty).
@@ -42,11 +42,12 @@ use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::helper::Helper;
 use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
 use crate::linearity::{check_linearity_at, LinearityCheck, UncertaintyVerdict};
+use crate::linearization::AtSolution;
 use crate::misplaced::misplaced_led;
 use crate::prior::Prior;
 use crate::profile::profile_at_three_sigma;
 use crate::refine::{
-    refine, AtSolution, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
+    refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
 };
 use crate::report::{fit_statistics, FitStatistics};
 use crate::weighting::NoiseModel;
@@ -83,7 +84,7 @@ pub struct CalibrateOptions {
 /// How [`calibrate`] estimates the covariance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Uncertainty {
-    /// Analytic ([`crate::covariance`]): the sandwich for the unweighted
+    /// Analytic ([`mod@crate::covariance`]): the sandwich for the unweighted
     /// template-plane fit, `σ² (JᵀJ)⁻¹` otherwise.
     #[default]
     Linear,

@@ -199,7 +199,12 @@ impl ImagePlaneFit for CalibrationProblem<'_> {
         k: usize,
     ) -> Result<Vector2<f64>, CalibError> {
         self.measured(model, i, k).map(|(m, _)| m).map_err(|e| {
-            crate::refine::point_error(self.data(), i, self.data().images[i].points[k].led, e)
+            crate::calibration_problem::point_error(
+                self.data(),
+                i,
+                self.data().images[i].points[k].led,
+                e,
+            )
         })
     }
 }

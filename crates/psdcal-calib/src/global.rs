@@ -12,7 +12,7 @@
 //! 1. *Cold starts*: at every `cold_every`-th value of the `l1` grid the
 //!    measured points are corrected for that `l1` (the PSD stage,
 //!    `u = m (1 + l1 |m|² + l2 |m|⁴)`, (P14)–(P16)), the whole start
-//!    ([`crate::initialize`]: preliminary correction, DLT, closed form) is
+//!    ([`mod@crate::initialize`]: preliminary correction, DLT, closed form) is
 //!    run on them, and the fit with `l1` held there is refined from it.
 //! 2. *Profile*: for every `l1` of the grid, `l1` held and every other freed
 //!    parameter refined, in two sweeps (upwards and downwards over the whole

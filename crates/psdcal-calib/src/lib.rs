@@ -9,6 +9,7 @@
 
 pub mod data;
 mod error;
+mod focal_profile;
 pub mod homography;
 pub mod initialize;
 pub mod preliminary;
@@ -22,6 +23,7 @@ pub use initialize::{initialize, InitOptions, InitReport, InitRoute, Initializat
 pub use preliminary::{estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport};
 pub use zhang::{closed_form, pose_from_homography, ClosedFormSolution};
 pub mod bootstrap;
+pub mod calibration_problem;
 pub mod carried;
 pub mod covariance;
 pub mod diagnostics;

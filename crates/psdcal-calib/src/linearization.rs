@@ -2,7 +2,7 @@
 //! equations when they are at its solution (`psdcal_solver::Solution::
 //! normal_equations`), with everything they depend on. The covariance and
 //! the linearity check start from the normal equations at the solution
-//! ([`crate::refine::AtSolution`]); they take these instead of linearising
+//! ([`AtSolution`]); they take these instead of linearising
 //! again (one evaluation of every point) when asked for the same fit: the
 //! same options, data size, model, poses and weights. Anything else, or a
 //! refinement whose fields were changed since, is linearised afresh.
@@ -10,12 +10,15 @@
 use psdcal_model::{Model, Pose};
 use psdcal_solver::normal_equations::NormalEquations;
 
-use crate::refine::{FitState, RefineOptions, Refined};
+use psdcal_solver::solver;
+
+use crate::calibration_problem::{CalibrationProblem, FitState};
+use crate::refine::{RefineOptions, Refined};
 use crate::weighting::PointWeights;
-use crate::CalibrationData;
+use crate::{CalibError, CalibrationData};
 
 /// The undamped normal equations of a refinement at its solution, with
-/// everything they depend on: [`crate::refine::AtSolution::new`] takes them instead of
+/// everything they depend on: [`AtSolution::new`] takes them instead of
 /// linearising again when asked for the same fit (same options, data size,
 /// model, poses and weights). A cache: it takes no part in comparisons.
 #[derive(Debug, Clone)]
@@ -74,13 +77,51 @@ impl Linearization {
     }
 }
 
+/// The fit of a refinement at its solution: its problem (the freed
+/// parameters of the options, the refinement's weights), its state, and the
+/// undamped normal equations there — what the covariance and the linearity
+/// check start from, built once for both.
+pub(crate) struct AtSolution<'a> {
+    pub problem: CalibrationProblem<'a>,
+    pub state: FitState,
+    pub ne: NormalEquations,
+}
+
+impl<'a> AtSolution<'a> {
+    /// Linearises `refined`'s fit for the cost and freed parameters of `options`.
+    pub(crate) fn new(
+        data: &'a CalibrationData,
+        refined: &'a Refined,
+        options: &'a RefineOptions,
+    ) -> Result<Self, CalibError> {
+        let names = options.free_names();
+        let problem = CalibrationProblem::new(
+            data,
+            options.cost,
+            &refined.model,
+            &names,
+            refined.weights.as_ref(),
+        )?
+        .with_prior(&refined.model, options.prior.as_ref())?;
+        let state = FitState {
+            model: refined.model.clone(),
+            poses: refined.poses.clone(),
+        };
+        let ne = match Linearization::of(refined, data, options) {
+            Some(ne) => ne,
+            None => solver::normal_equations(&problem, &state, options.robust)?,
+        };
+        Ok(Self { problem, state, ne })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     //! The linearisation a refinement keeps against one computed afresh at
     //! its solution, and its invalidation when the solution is changed.
 
     use super::*;
-    use crate::refine::{refine, AtSolution, CalibrationProblem, CostKind, RobustLoss};
+    use crate::refine::{refine, CostKind, RobustLoss};
     use psdcal_model::{Param, PsdGeometry, SensorModel};
     use psdcal_solver::solver;
     use psdcal_testkit::{add_noise, covering_poses, image_points, perturbed, scatter, PointKind};

@@ -16,11 +16,11 @@
 //! `cost / s² = Σ ‖r‖² / s² + (m − μ)ᵀ Σ⁻¹ (m − μ)` is the negative log
 //! posterior (up to constants) and its information `JᵀJ / s²` the joint
 //! information of the data and the prior. The calibration sets `s² =
-//! cost / dof` of the fit with `m` held at `μ` ([`crate::calibrate`]).
+//! cost / dof` of the fit with `m` held at `μ` ([`mod@crate::calibrate`]).
 //!
 //! The prior's own randomness (`μ − m* ~ N(0, Σ)`) enters the estimate's
 //! covariance through the gradient `s² Σ⁻¹ (m − μ)`: its variance is
-//! `s⁴ Σ⁻¹` ([`Prior::meat`], used by [`crate::covariance`]).
+//! `s⁴ Σ⁻¹` ([`Prior::meat`], used by [`mod@crate::covariance`]).
 
 use nalgebra::{DMatrix, DVector};
 use psdcal_model::{Model, ParameterCovariance};

@@ -13,7 +13,7 @@
 //! images, the distortion at zero.
 //!
 //! *Refinement*: the image-plane error of the model's chain (the same
-//! [`Model`] and the same solver as [`crate::refine`]),
+//! [`Model`] and the same solver as [`mod@crate::refine`]),
 //! `r_ij = project(θ, pose_i, P_j) − m_ij` (mm on the sensor), over the
 //! freed model parameters and one `sensor_from_template` pose per image.
 //!
@@ -862,7 +862,7 @@ fn finish(
     })
 }
 
-/// [`finish`] for a refinement from any start (the comparison with a fit
+/// `finish` for a refinement from any start (the comparison with a fit
 /// started from the truth).
 pub fn finish_refined(
     data: &SurveyedData,

@@ -51,7 +51,7 @@
 //! the sensor) and close to the unweighted one in size. Because `J` depends
 //! on the parameters, the template-plane weights are recomputed at each
 //! solution and the refinement repeated until the weighted cost settles
-//! ([`crate::refine`]).
+//! ([`mod@crate::refine`]).
 
 use nalgebra::{Matrix2, Vector2};
 use psdcal_model::sensor::{electrode_currents, impact_point_amplitude_jacobian};

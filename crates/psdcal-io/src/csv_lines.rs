@@ -1,7 +1,7 @@
 //! The bounded line reader under every CSV reader: physical lines, 1-based,
 //! read one at a time from any `BufRead` (constant memory), each checked to
 //! be text (no control byte, valid UTF-8) and at most
-//! [`MAX_LINE_BYTES`](crate::limits::MAX_LINE_BYTES) long, the whole input
+//! [`MAX_LINE_BYTES`] long, the whole input
 //! optionally at most a number of bytes. Line ends are `\n` or `\r\n`; a
 //! carriage return alone (old Mac line ends) is refused as such.
 //! A reader of plain lines (raw.csv's numeric fast path) may take whole

@@ -9,7 +9,7 @@
 //! changes the speed and nothing else. A *plain line* is:
 //!
 //! - ASCII, ending in `\n` or `\r\n`, at most
-//!   [`MAX_LINE_BYTES`](crate::limits::MAX_LINE_BYTES) long without its end;
+//!   [`MAX_LINE_BYTES`] long without its end;
 //! - exactly as many comma-separated fields as the header;
 //! - each wanted field: blanks (space, tab), a number token, blanks; every
 //!   other field printable ASCII or tabs without `"`;

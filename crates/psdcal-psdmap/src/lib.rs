@@ -14,7 +14,7 @@
 //!   one-standard-error choice;
 //! - [`fit`]: [`fit_psd_map`], the whole fit with the coefficients'
 //!   covariance, the cross-validated RMS and the residuals;
-//! - [`residual_map`]: the residuals summarised per cell.
+//! - [`mod@residual_map`]: the residuals summarised per cell.
 //!
 //! Millimetres inside; reports convert to µm.
 #![warn(missing_docs)]

@@ -22,7 +22,7 @@ pub(crate) struct Arrows<'a> {
     pub(crate) outline: &'a [Vec<(f64, f64)>],
 }
 
-/// Legend entry of [`Arrows::outline`].
+/// Legend entry of `Arrows::outline`.
 pub const OUTLINE_LABEL: &str = "valid region boundary";
 
 impl Figure for Arrows<'_> {

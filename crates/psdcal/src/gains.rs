@@ -56,7 +56,7 @@ pub fn gains_summary(file: &GainsFile, signals: &Path, out: Option<&Path>) -> Re
 
 /// The gains.json record estimated from the amplitude records in `signals`.
 /// Every record must have four positive amplitudes within a factor
-/// [`MAX_GAIN_RATIO`] of `vx1`; a record that does not is an error naming
+/// `MAX_GAIN_RATIO` (10) of `vx1`; a record that does not is an error naming
 /// its line, so the file written is always one `calibrate --gains` reads.
 pub fn estimate_gains(signals: &Path, method: GainsMethod) -> Result<GainsFile> {
     let points = Points::read(signals)?;

@@ -45,7 +45,7 @@
 //! | job | entry point |
 //! | --- | --- |
 //! | read and validate a data set (files or memory) | [`DataSet`] |
-//! | calibrate it, write calibration.json (version 2) and residuals | [`calibrate`], [`Calibrated`] |
+//! | calibrate it, write calibration.json (version 2) and residuals | [`calibrate()`], [`Calibrated`] |
 //! | a calibration file (version 1 or 2) as a sensor | [`LoadedSensor`], [`sensor_of`] |
 //! | measured → ideal points, angles of arrival, positions, error maps | [`correct()`], [`aoa_table`], [`locate_table`], [`map_table`] |
 //! | electrical gains | [`estimate_gains`] |
@@ -55,7 +55,7 @@
 //! | a live stream of samples → angles per window and LED | [`track()`] |
 //! | the same from arrays in memory (front ends such as the Python package) | [`arrays`], [`simulate_data`], [`error_text`] |
 //! | simulate a data set, the demo, the paper's study | [`simulate_files`], [`demo()`], [`plan_study`] |
-//! | simulate a calibrated rig and emitters (rig.json, rig_points.csv, truth.csv) | [`simulate_positioning`] |
+//! | simulate a calibrated rig and emitters (rig.json, rig_points.csv, truth.csv) | [`simulate_positioning()`] |
 //! | a calibration report (HTML and plots) | [`write_report`] |
 //! | a calibration as an OpenCV, mrcal or ROS camera model | [`export()`] |
 //! | two calibrations compared in angles, with the combined σ | [`diff()`] |

@@ -19,7 +19,7 @@
 //! impact-point formula ([`crate::weighting::point_covariance`]). The
 //! unweighted least-squares estimate over a set of poses then has the
 //! covariance `S⁻¹ M S⁻¹` with `S = Σ S_i`, `M = Σ M_i` — the sandwich of
-//! [`crate::covariance`] with the point noise known instead of estimated.
+//! [`mod@crate::covariance`] with the point noise known instead of estimated.
 //! For the image-plane cost `B_j = −I` and the same formula holds.
 //!
 //! **Gains.** When the model owns a gains stage (the gains freed, as
@@ -143,7 +143,7 @@ pub fn point_jacobians(setup: &PlanSetup, pose: &Pose) -> Result<Vec<PointJacobi
         .map(|(k, obs)| {
             let (_, wrt_pose, b) = problem
                 .linearize(&state, 0, k, &rotation, &mut jac, &mut a)
-                .map_err(|e| crate::refine::point_error(&data, 0, obs.led, e))?;
+                .map_err(|e| crate::calibration_problem::point_error(&data, 0, obs.led, e))?;
             Ok(PointJacobians {
                 wrt_free: DMatrix::from_column_slice(2, p, &a),
                 wrt_pose,
