@@ -36,10 +36,12 @@ pub mod misplaced;
 pub mod plan;
 pub mod prior;
 pub mod profile;
+pub mod projection_dlt;
 pub mod refine;
 pub mod report;
 pub mod surveyed;
 pub mod surveyed_checks;
+pub mod surveyed_problem;
 pub mod weighting;
 
 pub use bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};

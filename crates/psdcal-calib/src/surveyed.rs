@@ -9,13 +9,14 @@
 //! the 2n × 12 system by SVD, which needs n ≥ 6 points off any one plane),
 //! split by RQ decomposition `P = K [R | t]`, `K` upper triangular with a
 //! positive diagonal, `det R = +1`; one focal length `f = (K₁₁ + K₂₂)/2`,
-//! `(cx, cy) = (K₁₃, K₂₃)/K₃₃`. The intrinsics start at the median over the
-//! images, the distortion at zero.
+//! `(cx, cy) = (K₁₃, K₂₃)/K₃₃` ([`crate::projection_dlt`]). The intrinsics
+//! start at the median over the images, the distortion at zero.
 //!
 //! *Refinement*: the image-plane error of the model's chain (the same
 //! [`Model`] and the same solver as [`mod@crate::refine`]),
 //! `r_ij = project(θ, pose_i, P_j) − m_ij` (mm on the sensor), over the
-//! freed model parameters and one `sensor_from_template` pose per image.
+//! freed model parameters and one `sensor_from_template` pose per image
+//! ([`crate::surveyed_problem`]).
 //!
 //! *Uncertainty with survey noise*: the points are known to σ_s per
 //! coordinate (independent), the measured points to σ_m. With `J` the
@@ -36,25 +37,22 @@
 //! *Diagnostics*: the planar fit's, on this problem
 //! ([`crate::surveyed_checks`]).
 
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix3x4, SMatrix, Vector2, Vector3};
+use nalgebra::{DMatrix, SMatrix, Vector2, Vector3};
 use psdcal_model::{Model, Param, ParameterCovariance, Pose, PsdGeometry, SensorModel};
-use psdcal_solver::normal_equations::{ResidualTerm, Step};
-use psdcal_solver::solver::{self, Problem, SolverOptions, SolverReport};
+use psdcal_solver::solver::{self, SolverOptions, SolverReport};
 
 use crate::data::ImageObservations;
 use crate::diagnostics::DiagnosticReport;
 use crate::linearity::LinearityCheck;
+use crate::projection_dlt::relative_reprojection;
+pub use crate::projection_dlt::{
+    decompose_projection, dlt_projection, flatness, MIN_SURVEYED_POINTS,
+};
 use crate::surveyed_checks::check_surveyed;
+pub use crate::surveyed_problem::{
+    dense_jacobians, DenseJacobians, SurveyedProblem, SurveyedState,
+};
 use crate::CalibError;
-
-/// One point's residual, `∂r/∂pose` and `∂r/∂P`.
-type PointLinearization = (Vector2<f64>, SMatrix<f64, 2, 6>, SMatrix<f64, 2, 3>);
-
-/// `J`, the residuals, and per observation its point and `∂r/∂P`.
-pub type DenseJacobians = (DMatrix<f64>, DVector<f64>, Vec<(usize, SMatrix<f64, 2, 3>)>);
-
-/// Fewest points per image for the 3 × 4 DLT (11 unknowns, 2 rows a point).
-pub const MIN_SURVEYED_POINTS: usize = 6;
 
 /// Smallest ratio of the point cloud's third to first principal spread
 /// (its flatness) accepted by the DLT start in a single image.
@@ -270,127 +268,6 @@ pub fn refine_surveyed(
     })
 }
 
-/// The model's parameters and one pose per image: the planar fit's state.
-pub type SurveyedState = crate::refine::FitState;
-
-/// The image-plane cost of surveyed points as a solver [`Problem`].
-#[derive(Debug, Clone)]
-pub struct SurveyedProblem<'a> {
-    data: &'a SurveyedData,
-    columns: Vec<usize>,
-}
-
-impl<'a> SurveyedProblem<'a> {
-    /// The problem with the standard parameters `free` freed.
-    pub fn new(data: &'a SurveyedData, model: &Model, free: &[Param]) -> Result<Self, CalibError> {
-        let columns = free
-            .iter()
-            .map(|p| {
-                model
-                    .index(p.name())
-                    .ok_or_else(|| CalibError::InvalidInput {
-                        reason: format!("the model has no parameter '{}'", p.name()),
-                    })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        Ok(Self { data, columns })
-    }
-
-    /// The data set.
-    pub fn data(&self) -> &'a SurveyedData {
-        self.data
-    }
-
-    /// Residual, `∂r/∂θ_free` (2 × p, column-major into `a`), `∂r/∂pose`
-    /// and `∂r/∂P` of observation `k` of image `i`.
-    fn linearize(
-        &self,
-        state: &SurveyedState,
-        i: usize,
-        k: usize,
-        a: &mut [f64],
-    ) -> Result<PointLinearization, CalibError> {
-        let obs = &self.data.images[i].points[k];
-        let pose = &state.poses[i];
-        let mut jac = state.model.jacobian_buffer();
-        let (m, j) = state
-            .model
-            .project_point_with_jacobians(
-                pose,
-                &pose.rotation_jacobian(),
-                &self.data.points[obs.led],
-                &mut jac,
-            )
-            .map_err(|e| self.point_error(i, obs.led, e))?;
-        for (slot, c) in self.columns.iter().enumerate() {
-            a[2 * slot] = jac.wrt_params[2 * c];
-            a[2 * slot + 1] = jac.wrt_params[2 * c + 1];
-        }
-        Ok((m - obs.measured, j.wrt_pose, j.wrt_point))
-    }
-
-    fn point_error(&self, i: usize, led: usize, e: psdcal_model::ModelError) -> CalibError {
-        CalibError::Numerical {
-            stage: "surveyed refinement",
-            reason: format!(
-                "image '{}', point '{}': {e}",
-                self.data.images[i].id,
-                self.data.names.get(led).map_or("?", String::as_str)
-            ),
-        }
-    }
-}
-
-impl Problem for SurveyedProblem<'_> {
-    type State = SurveyedState;
-    type Error = CalibError;
-
-    fn global_len(&self) -> usize {
-        self.columns.len()
-    }
-
-    fn block_count(&self) -> usize {
-        self.data.images.len()
-    }
-
-    fn evaluate(
-        &self,
-        state: &SurveyedState,
-        jacobians: bool,
-        visit: &mut dyn FnMut(&ResidualTerm<'_>),
-    ) -> Result<(), CalibError> {
-        let mut a = vec![0.0; 2 * self.columns.len()];
-        for (i, image) in self.data.images.iter().enumerate() {
-            for (k, obs) in image.points.iter().enumerate() {
-                if jacobians {
-                    let (r, b, _) = self.linearize(state, i, k, &mut a)?;
-                    visit(&ResidualTerm {
-                        r: r.as_slice(),
-                        a: &a,
-                        block: Some((i, b.as_slice())),
-                    });
-                } else {
-                    let m = state
-                        .model
-                        .project_point(&state.poses[i], &self.data.points[obs.led])
-                        .map_err(|e| self.point_error(i, obs.led, e))?;
-                    let r = m - obs.measured;
-                    visit(&ResidualTerm {
-                        r: r.as_slice(),
-                        a: &[],
-                        block: None,
-                    });
-                }
-            }
-        }
-        Ok(())
-    }
-
-    fn apply_step(&self, state: &SurveyedState, step: &Step) -> Option<SurveyedState> {
-        state.stepped(&self.columns, step)
-    }
-}
-
 /// The input's checks, each failure with what to change.
 fn check(data: &SurveyedData, options: &SurveyedOptions) -> Result<(), CalibError> {
     if !(options.survey_sigma_mm.is_finite() && options.survey_sigma_mm >= 0.0) {
@@ -454,115 +331,6 @@ fn check(data: &SurveyedData, options: &SurveyedOptions) -> Result<(), CalibErro
     Ok(())
 }
 
-/// The cloud's third principal spread over its first (0: coplanar).
-pub fn flatness(points: &[Vector3<f64>]) -> f64 {
-    let n = points.len().max(1) as f64;
-    let mean = points.iter().fold(Vector3::zeros(), |s, p| s + p) / n;
-    let scatter = points.iter().fold(Matrix3::zeros(), |s, p| {
-        s + (p - mean) * (p - mean).transpose()
-    });
-    let mut ev: Vec<f64> = scatter.symmetric_eigenvalues().iter().copied().collect();
-    ev.sort_by(f64::total_cmp);
-    if ev[2] <= 0.0 {
-        return 0.0;
-    }
-    (ev[0].max(0.0) / ev[2]).sqrt()
-}
-
-/// The normalised DLT of one image's 3 × 4 projection matrix (module
-/// documentation); `None` when the system has no clear null vector.
-pub fn dlt_projection(points: &[Vector3<f64>], image: &[Vector2<f64>]) -> Option<Matrix3x4<f64>> {
-    let n = points.len();
-    if n < MIN_SURVEYED_POINTS || image.len() != n {
-        return None;
-    }
-    let (t3, s3) = normalisation3(points);
-    let (t2, s2) = normalisation2(image);
-    // At least 12 rows; padded with zero rows so the SVD is of a tall matrix
-    // and keeps every right singular vector.
-    let rows = (2 * n).max(12);
-    let mut a = DMatrix::<f64>::zeros(rows, 12);
-    for (k, (p, q)) in points.iter().zip(image).enumerate() {
-        let p = (p - t3) * s3;
-        let q = (q - t2) * s2;
-        let ph = [p.x, p.y, p.z, 1.0];
-        for c in 0..4 {
-            a[(2 * k, c)] = ph[c];
-            a[(2 * k, 8 + c)] = -q.x * ph[c];
-            a[(2 * k + 1, 4 + c)] = ph[c];
-            a[(2 * k + 1, 8 + c)] = -q.y * ph[c];
-        }
-    }
-    let svd = a.svd(false, true);
-    let v_t = svd.v_t?;
-    let (imin, _) = svd
-        .singular_values
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.total_cmp(b.1))?;
-    let h = v_t.row(imin);
-    let pn = Matrix3x4::from_fn(|r, c| h[4 * r + c]);
-    // Undo the normalisations: P = T2⁻¹ P̃ T3.
-    let t2_inv = Matrix3::new(1.0 / s2, 0.0, t2.x, 0.0, 1.0 / s2, t2.y, 0.0, 0.0, 1.0);
-    let mut t3m = nalgebra::Matrix4::<f64>::identity() * s3;
-    t3m[(3, 3)] = 1.0;
-    for r in 0..3 {
-        t3m[(r, 3)] = -s3 * t3[r];
-    }
-    let p = t2_inv * pn * t3m;
-    p.iter().all(|v| v.is_finite()).then_some(p)
-}
-
-fn normalisation3(points: &[Vector3<f64>]) -> (Vector3<f64>, f64) {
-    let n = points.len() as f64;
-    let c = points.iter().fold(Vector3::zeros(), |s, p| s + p) / n;
-    let d = points.iter().map(|p| (p - c).norm()).sum::<f64>() / n;
-    (c, 3f64.sqrt() / d.max(f64::MIN_POSITIVE))
-}
-
-fn normalisation2(points: &[Vector2<f64>]) -> (Vector2<f64>, f64) {
-    let n = points.len() as f64;
-    let c = points.iter().fold(Vector2::zeros(), |s, p| s + p) / n;
-    let d = points.iter().map(|p| (p - c).norm()).sum::<f64>() / n;
-    (c, 2f64.sqrt() / d.max(f64::MIN_POSITIVE))
-}
-
-/// `P = K [R | t]` with `K` upper triangular (positive diagonal, `K₃₃ = 1`)
-/// and `R` a rotation, by RQ decomposition; `P`'s sign is chosen so that
-/// `det P₁:₃ > 0`.
-pub fn decompose_projection(p: &Matrix3x4<f64>) -> Option<(Matrix3<f64>, Pose)> {
-    let mut m: Matrix3<f64> = p.fixed_view::<3, 3>(0, 0).into_owned();
-    let mut p4: Vector3<f64> = p.column(3).into_owned();
-    if m.determinant() < 0.0 {
-        m = -m;
-        p4 = -p4;
-    }
-    // RQ through QR of the row-reversed transpose: with E the exchange
-    // matrix, (E M)ᵀ = Q̃ R̃ gives M = (E R̃ᵀ E)(E Q̃ᵀ).
-    let e = Matrix3::new(0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0);
-    let qr = (e * m).transpose().qr();
-    let (q, r) = (qr.q(), qr.r());
-    let mut k = e * r.transpose() * e;
-    let mut rot = e * q.transpose();
-    for i in 0..3 {
-        if k[(i, i)] < 0.0 {
-            k.set_column(i, &(-k.column(i)));
-            rot.set_row(i, &(-rot.row(i)));
-        }
-    }
-    if rot.determinant() < 0.0 || k[(2, 2)] <= 0.0 {
-        return None;
-    }
-    let t = k.try_inverse()? * p4;
-    let k = k / k[(2, 2)];
-    k.iter()
-        .chain(t.iter())
-        .all(|v| v.is_finite())
-        .then(|| (k, Pose::from_rotation(&rot, t)))
-}
-
-/// The start of every image (module documentation): the intrinsics' median
-/// over the images, each image's pose from its own DLT.
 /// The preliminary radial correction of the 3-D start: the `k1` (about
 /// the sensor's centre) whose corrected points the per-image DLTs explain
 /// best — the sum over images of the DLT's reprojection error relative to
@@ -595,25 +363,6 @@ pub fn preliminary_k1(data: &SurveyedData) -> f64 {
         }
     }
     best.1
-}
-
-/// Σ ‖proj(P X) − q‖² over Σ ‖q − q̄‖².
-fn relative_reprojection(p: &Matrix3x4<f64>, pts: &[Vector3<f64>], q: &[Vector2<f64>]) -> f64 {
-    let n = q.len() as f64;
-    let mean = q.iter().fold(Vector2::zeros(), |s, v| s + v) / n;
-    let spread: f64 = q.iter().map(|v| (v - mean).norm_squared()).sum();
-    let err: f64 = pts
-        .iter()
-        .zip(q)
-        .map(|(x, q)| {
-            let h = p * x.push(1.0);
-            if h.z.abs() < f64::MIN_POSITIVE {
-                return f64::INFINITY;
-            }
-            (Vector2::new(h.x / h.z, h.y / h.z) - q).norm_squared()
-        })
-        .sum();
-    err / spread.max(f64::MIN_POSITIVE)
 }
 
 fn dlt_start(
@@ -697,42 +446,6 @@ fn median(v: &mut [f64]) -> f64 {
     } else {
         0.5 * (v[n / 2 - 1] + v[n / 2])
     }
-}
-
-/// The dense Jacobians at a state: `J` (2n × (p + 6 images)), the
-/// residuals, and per observation its point index and `∂r/∂P` (2 × 3).
-pub fn dense_jacobians(
-    data: &SurveyedData,
-    state: &SurveyedState,
-    free: &[Param],
-) -> Result<DenseJacobians, CalibError> {
-    let problem = SurveyedProblem::new(data, &state.model, free)?;
-    let p = free.len();
-    let n_images = data.images.len();
-    let rows: usize = data.images.iter().map(|i| 2 * i.points.len()).sum();
-    let cols = p + 6 * n_images;
-    let mut j = DMatrix::zeros(rows, cols);
-    let mut r = DVector::zeros(rows);
-    let mut jp = Vec::with_capacity(rows / 2);
-    let mut a = vec![0.0; 2 * p];
-    let mut row = 0;
-    for (i, image) in data.images.iter().enumerate() {
-        for k in 0..image.points.len() {
-            let (res, b, dp) = problem.linearize(state, i, k, &mut a)?;
-            for d in 0..2 {
-                r[row + d] = res[d];
-                for c in 0..p {
-                    j[(row + d, c)] = a[2 * c + d];
-                }
-                for c in 0..6 {
-                    j[(row + d, p + 6 * i + c)] = b[(d, c)];
-                }
-            }
-            jp.push((image.points[k].led, dp));
-            row += 2;
-        }
-    }
-    Ok((j, r, jp))
 }
 
 /// The covariance of `x = (θ_free, poses)` with the survey noise
