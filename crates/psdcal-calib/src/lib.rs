@@ -39,6 +39,7 @@ pub mod profile;
 pub mod projection_dlt;
 pub mod refine;
 pub mod report;
+pub mod residual_structure;
 pub mod surveyed;
 pub mod surveyed_checks;
 pub mod surveyed_problem;
