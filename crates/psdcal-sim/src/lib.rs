@@ -12,6 +12,7 @@
 /// The Butterworth band-pass, now in psdcal-signal (re-exported so that
 /// `psdcal_sim::butterworth` keeps its paths).
 pub use psdcal_signal::butterworth;
+pub mod chain_config;
 mod error;
 pub mod insitu;
 pub mod nonlinearity;
