@@ -98,9 +98,9 @@ pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
 pub use poses::{write_poses, PoseRow, Poses};
 pub use positioning::{EstimateRow, MatchedEstimate, PositionEstimates, PositionTruth, TruthRow};
 pub use psd_map_file::{
-    read_psd_map, write_psd_map, LoadedPsdMap, MapCandidateRecord, MapCoefficients,
-    MapCovarianceRecord, MapFitRecord, MapResidualsRecord, PsdMapFile, PSD_MAP_FORMAT,
-    PSD_MAP_VERSION,
+    psd_map_from_reader, read_psd_map, write_psd_map, LoadedPsdMap, MapCandidateRecord,
+    MapCoefficients, MapCovarianceRecord, MapFitRecord, MapResidualsRecord, PsdMapFile,
+    PSD_MAP_FORMAT, PSD_MAP_VERSION,
 };
 pub use raw::{
     npy_header, write_csv_frames, write_npy_frames, Frame, RawFormat, RawReader, RATE_TOLERANCE,

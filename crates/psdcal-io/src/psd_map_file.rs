@@ -258,10 +258,22 @@ pub fn write_psd_map(path: impl AsRef<Path>, file: &PsdMapFile) -> Result<(), Io
 /// Reads psd_map.json (bounded) and checks it.
 pub fn read_psd_map(path: impl AsRef<Path>) -> Result<(PsdMapFile, LoadedPsdMap), IoError> {
     let path = path.as_ref();
-    let source = path.display().to_string();
-    let text = crate::error::read_text(path)?;
+    psd_map_from_text(&path.display().to_string(), &crate::error::read_text(path)?)
+}
+
+/// [`read_psd_map`] from a reader (bounded); `source` names it in messages.
+pub fn psd_map_from_reader(
+    source: &str,
+    reader: impl std::io::Read,
+) -> Result<(PsdMapFile, LoadedPsdMap), IoError> {
+    psd_map_from_text(source, &crate::error::read_text_from(source, reader)?)
+}
+
+/// Parses and checks psd_map.json's text; `source` names it in messages.
+fn psd_map_from_text(source: &str, text: &str) -> Result<(PsdMapFile, LoadedPsdMap), IoError> {
+    let source = source.to_string();
     let value: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| crate::error::json_error(&source, &e))?;
+        serde_json::from_str(text).map_err(|e| crate::error::json_error(&source, &e))?;
     let bad = |message: String| IoError::Invalid {
         at: Location::file(&source),
         message,
@@ -283,7 +295,7 @@ pub fn read_psd_map(path: impl AsRef<Path>) -> Result<(PsdMapFile, LoadedPsdMap)
         }
     }
     let file: PsdMapFile =
-        serde_json::from_str(&text).map_err(|e| crate::error::json_error(&source, &e))?;
+        serde_json::from_str(text).map_err(|e| crate::error::json_error(&source, &e))?;
     let loaded = file.to_stage(&source)?;
     Ok((file, loaded))
 }

@@ -33,6 +33,7 @@ use psdcal_model::sensor::Amplitudes;
 use crate::correct::correct_point;
 use crate::dataset::{DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
 use crate::error::{Error, Result};
+use crate::provenance::InputHashes;
 
 /// Rows of numbers: `values.len() == rows × columns`, row-major.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -231,32 +232,29 @@ pub fn data_set(
         };
         return DataSet::from_files(&files, options);
     }
-    let mut files = Vec::new();
+    // Each file is hashed as it is read (the provenance lists what was read).
+    let mut inputs = InputHashes::default();
     let template = match template {
-        TableInput::File(p) => {
-            files.push(p.clone());
-            Template::read(p)?
-        }
+        TableInput::File(p) => inputs.read(p, |s, r| Template::from_reader(s, r))?,
         TableInput::Rows(r) => template_from_rows(r)?,
     };
     let known = match gains {
-        Some(p) => {
-            files.push(p.clone());
-            Some(psdcal_io::read_gains(p)?.gains())
-        }
+        Some(p) => Some(
+            inputs
+                .read(p, |s, r| psdcal_io::GainsFile::from_reader(s, r))?
+                .gains(),
+        ),
         None => None,
     };
     let memory = match points {
         PointsInput::Observations(TableInput::File(p)) => {
-            files.push(p.clone());
-            MemoryPoints::Observations(Observations::read(p)?)
+            MemoryPoints::Observations(inputs.read(p, |s, r| Observations::from_reader(s, r))?)
         }
         PointsInput::Observations(TableInput::Rows(r)) => {
             MemoryPoints::Observations(observations_from_rows(r)?)
         }
         PointsInput::Signals(TableInput::File(p)) => {
-            files.push(p.clone());
-            MemoryPoints::Signals(Signals::read(p)?, known)
+            MemoryPoints::Signals(inputs.read(p, |s, r| Signals::from_reader(s, r))?, known)
         }
         PointsInput::Signals(TableInput::Rows(r)) => {
             MemoryPoints::Signals(signals_from_rows(r)?, known)
@@ -270,9 +268,7 @@ pub fn data_set(
         ));
     }
     let mut set = DataSet::from_memory(template, memory, options)?;
-    for path in &files {
-        set.inputs.add(path);
-    }
+    set.inputs = inputs;
     Ok(set)
 }
 

@@ -50,8 +50,14 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
         .check(set.signals.is_some(), set.known_gains.is_some())
         .map_err(Error::Options)?;
     let data = convert::calibration_data(set, options.fit_gains);
+    // The data set's files, and the map's when there is one (hashed as read).
+    let mut inputs = set.inputs.clone();
     let map = match &options.psd_map {
-        Some(path) => Some(calibrate_map::load(path, &set.options.geometry)?),
+        Some(path) => Some(calibrate_map::load(
+            path,
+            &set.options.geometry,
+            &mut inputs,
+        )?),
         None => None,
     };
     let mut calibrate_options = convert::calibrate_options(options);
@@ -112,10 +118,6 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
     let mut record = convert::record(&result, &data, set, options);
     record.valid_region = Some(ValidRegionRecord::from_region(&result.valid_region));
     record.psd_map = map_stage;
-    let mut inputs = set.inputs.clone();
-    if let Some(path) = &options.psd_map {
-        inputs.add(path);
-    }
     record.provenance = Some(provenance("", options.to_json(), &inputs));
     let report = convert::fit_report(&result);
     Ok(Calibrated {

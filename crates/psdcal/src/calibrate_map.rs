@@ -12,12 +12,14 @@ use std::path::Path;
 use nalgebra::DMatrix;
 use psdcal_calib::{CalibrateOptions, CalibrationData, CalibrationResult};
 use psdcal_io::{
-    read_psd_map, Calibration, LoadedPsdMap, PsdMapFile, PsdMapStageCovariance, PsdMapStageRecord,
+    psd_map_from_reader, Calibration, LoadedPsdMap, PsdMapFile, PsdMapStageCovariance,
+    PsdMapStageRecord,
 };
 use psdcal_locate::{CalibratedSensor, SensorPsdMap};
 use psdcal_model::{Model, ParameterCovariance, PsdGeometry, Stage};
 
 use crate::error::{Error, Result};
+use crate::provenance::InputHashes;
 
 /// A map file read for a calibration.
 #[derive(Debug, Clone)]
@@ -26,9 +28,14 @@ pub(crate) struct MapInput {
     pub loaded: LoadedPsdMap,
 }
 
-/// Reads psd_map.json and checks it belongs to a sensor of `geometry`.
-pub(crate) fn load(path: &Path, geometry: &PsdGeometry) -> Result<MapInput> {
-    let (file, loaded) = read_psd_map(path)?;
+/// Reads psd_map.json once, adding it with the hash of the bytes read to
+/// `inputs`, and checks it belongs to a sensor of `geometry`.
+pub(crate) fn load(
+    path: &Path,
+    geometry: &PsdGeometry,
+    inputs: &mut InputHashes,
+) -> Result<MapInput> {
+    let (file, loaded) = inputs.read(path, |s, r| psd_map_from_reader(s, r))?;
     file.check_sensor(&path.display().to_string(), geometry)?;
     Ok(MapInput { file, loaded })
 }

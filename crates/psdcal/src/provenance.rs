@@ -43,17 +43,6 @@ impl InputHashes {
         });
         Ok(parsed)
     }
-
-    /// Hashes `path` and adds it (a file that cannot be read again is
-    /// listed with an empty hash: it was read once already, so this only
-    /// happens when it changed under us).
-    pub fn add(&mut self, path: &Path) {
-        let sha256 = std::fs::read(path).map_or_else(|_| String::new(), |b| sha256_hex(&b));
-        self.0.push(InputFile {
-            path: path.display().to_string(),
-            sha256,
-        });
-    }
 }
 
 /// A reader that hashes (SHA-256) the bytes read through it

@@ -136,7 +136,8 @@ pub(crate) fn scan_summary(file: &PsdMapFile, stage: &PsdMap) -> PsdMapScanRecor
 
 /// Reads a scan and fits its map.
 pub fn psd_map_from_scan(request: &PsdMapRequest) -> Result<PsdMapOutcome> {
-    let scan = Scan::read(&request.scan)?;
+    let mut inputs = InputHashes::default();
+    let scan = inputs.read(&request.scan, |s, r| Scan::from_reader(s, r))?;
     let points = scan.points(&request.geometry, &ChannelGains::UNIT)?;
     let options = FitOptions {
         model: request.model,
@@ -147,8 +148,6 @@ pub fn psd_map_from_scan(request: &PsdMapRequest) -> Result<PsdMapOutcome> {
         .map_err(|e| Error::Input(format!("{}: {e}", points.source)))?;
     let um = |mm: f64| mm * 1e3;
     let k = fit.map.terms();
-    let mut inputs = InputHashes::default();
-    inputs.add(&request.scan);
     let file = PsdMapFile {
         format: PSD_MAP_FORMAT.into(),
         version: PSD_MAP_VERSION,

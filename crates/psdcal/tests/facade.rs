@@ -116,3 +116,51 @@ fn the_warnings_alone_are_the_summarys() {
     assert!(summary.warnings.len() >= 2, "{:?}", summary.warnings);
     assert_eq!(calibrated.warnings(), summary.warnings);
 }
+
+#[test]
+fn a_data_set_of_files_and_rows_lists_only_its_files_with_their_hashes() {
+    use psdcal::arrays::{data_set, PointsInput, Rows, TableInput};
+    let observations = Observations::read(example("observations.csv")).unwrap();
+    let ids = |s: &str| s.parse::<f64>().unwrap();
+    let values: Vec<f64> = observations
+        .rows
+        .iter()
+        .flat_map(|o| [ids(&o.image), ids(&o.led), o.x_mm, o.y_mm])
+        .collect();
+    let rows = Rows {
+        name: "observations array",
+        values: &values,
+        columns: 4,
+    };
+    let template = example("template.csv");
+    let set = data_set(
+        &TableInput::File(template.clone()),
+        &PointsInput::Observations(TableInput::Rows(rows)),
+        None,
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(set.inputs.0.len(), 1);
+    assert_eq!(set.inputs.0[0].path, template.display().to_string());
+    assert_eq!(
+        set.inputs.0[0].sha256,
+        psdcal::sha256_hex(&std::fs::read(&template).unwrap())
+    );
+    // The same data as two files: both listed, in the order read.
+    let both = data_set(
+        &TableInput::File(template.clone()),
+        &PointsInput::Observations(TableInput::File(example("observations.csv"))),
+        None,
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let paths: Vec<&str> = both.inputs.0.iter().map(|i| i.path.as_str()).collect();
+    assert_eq!(
+        paths,
+        [
+            template.display().to_string(),
+            example("observations.csv").display().to_string()
+        ]
+    );
+    assert_eq!(set.template, both.template);
+}
