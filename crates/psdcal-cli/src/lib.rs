@@ -5,10 +5,6 @@
 //! Exit codes: 0 success, 1 failure (one `error: ...` line on stderr),
 //! 2 usage error (clap, or an output that is one of the inputs).
 
-// The arguments' doc comments are clap's help texts: their brackets are
-// option syntax (`bootstrap:N[:SEED]`), not links.
-#![allow(rustdoc::broken_intra_doc_links)]
-
 pub mod choice;
 pub mod cli;
 pub mod cli_locate;
