@@ -157,20 +157,37 @@ pub struct EmitterObservation {
     pub measured: Vector2<f64>,
 }
 
-/// Observes `emitter` with a sensor of true model `truth` posed at
-/// `world_from_sensor`, through `chain` at `snr_db` with a spot of
-/// photocurrent `i0` (A) and balanced gains (module documentation).
-#[allow(clippy::too_many_arguments)]
+/// A sensor as the room's emitters reach it: its true model and active
+/// area, its signal chain, the spot's photocurrent and the channels' SNR.
+#[derive(Debug, Clone, Copy)]
+pub struct RoomSensor<'a> {
+    /// The sensor's true model.
+    pub truth: &'a SensorModel,
+    /// Its active area.
+    pub geometry: &'a PsdGeometry,
+    /// Its electrode signal chain.
+    pub chain: &'a SignalChain,
+    /// Photocurrent of an emitter's spot, A.
+    pub i0: f64,
+    /// Per-channel SNR, dB (no noise when `None`).
+    pub snr_db: Option<f64>,
+}
+
+/// Observes `emitter` with `sensor` posed at `world_from_sensor`, through
+/// its chain with balanced gains (module documentation).
 pub fn observe_emitter(
-    truth: &SensorModel,
-    geometry: &PsdGeometry,
-    chain: &SignalChain,
-    i0: f64,
-    snr_db: Option<f64>,
+    sensor: &RoomSensor<'_>,
     world_from_sensor: &Pose,
     emitter: &Vector3<f64>,
     rng: &mut ChaCha8Rng,
 ) -> Result<EmitterObservation, SimError> {
+    let RoomSensor {
+        truth,
+        geometry,
+        chain,
+        i0,
+        snr_db,
+    } = *sensor;
     let true_measured =
         true_impact(truth, geometry, world_from_sensor, emitter, 1.0).ok_or_else(|| {
             SimError::Options(format!(

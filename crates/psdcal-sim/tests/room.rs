@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 use psdcal_model::{PsdGeometry, SensorModel};
-use psdcal_sim::room::{observe_emitter, true_impact, Room, RoomOptions};
+use psdcal_sim::room::{observe_emitter, true_impact, Room, RoomOptions, RoomSensor};
 use psdcal_sim::{SignalChain, SimError};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -49,10 +49,17 @@ fn noise_free_observations_back_project_onto_the_emitter() {
     let truth = SensorModel::paper_lens2();
     let g = PsdGeometry::default();
     let chain = SignalChain::default();
+    let sensor = RoomSensor {
+        truth: &truth,
+        geometry: &g,
+        chain: &chain,
+        i0: 20e-6,
+        snr_db: None,
+    };
     let mut rng = ChaCha8Rng::seed_from_u64(9);
     for e in r.emitters.iter().take(20) {
         for s in &r.sensors {
-            let o = observe_emitter(&truth, &g, &chain, 20e-6, None, s, e, &mut rng).unwrap();
+            let o = observe_emitter(&sensor, s, e, &mut rng).unwrap();
             assert!((o.measured - o.true_measured).norm() < 1e-9, "{o:?}");
             let ray = s.rotation()
                 * truth

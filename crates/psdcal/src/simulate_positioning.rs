@@ -16,7 +16,7 @@ use std::path::PathBuf;
 
 use psdcal_io::write_atomic_bytes;
 use psdcal_model::PsdGeometry;
-use psdcal_sim::room::{observe_emitter, Room, RoomOptions};
+use psdcal_sim::room::{observe_emitter, Room, RoomOptions, RoomSensor};
 use psdcal_sim::{Lens, SimulationOptions, TemplateKind};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -172,19 +172,17 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
         rows: Vec::new(),
     };
     let (mut sx, mut sy, mut n) = (0.0, 0.0, 0usize);
+    let sensor = RoomSensor {
+        truth: &truth,
+        geometry: &geometry,
+        chain: &chain,
+        i0,
+        snr_db: request.snr_db,
+    };
     for (j, e) in room.emitters.iter().enumerate() {
         let emitter = format!("e{}", j + 1);
         for (k, pose) in room.sensors.iter().enumerate() {
-            let o = observe_emitter(
-                &truth,
-                &geometry,
-                &chain,
-                i0,
-                request.snr_db,
-                pose,
-                e,
-                &mut rng,
-            )?;
+            let o = observe_emitter(&sensor, pose, e, &mut rng)?;
             let d = o.measured - o.true_measured;
             (sx, sy, n) = (sx + d.x * d.x, sy + d.y * d.y, n + 1);
             points.rows.push(vec![
