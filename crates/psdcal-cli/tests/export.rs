@@ -212,40 +212,7 @@ fn what_cannot_be_represented_is_refused_with_the_reason() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     // A calibration with a PSD map: a non-radial field.
-    let sim = d.join("sim");
-    run_ok(&[
-        "simulate",
-        "--lens",
-        "2",
-        "--snr",
-        "40",
-        "--psd-nonlinearity",
-        "-q",
-        "--out",
-        s(&sim),
-    ]);
-    let scan = d.join("scan.csv");
-    run_ok(&[
-        "simulate-scan",
-        "--step",
-        "0.5",
-        "--snr",
-        "50",
-        "-q",
-        "--out",
-        s(&scan),
-    ]);
-    let map = d.join("map.json");
-    run_ok(&[
-        "psd-map",
-        "--scan",
-        s(&scan),
-        "--model",
-        "poly:5",
-        "-q",
-        "--out",
-        s(&map),
-    ]);
+    let (sim, _, map) = common::simulated_map(d, &["--model", "poly:5"]);
     let cal = d.join("cal.json");
     run_ok(&[
         "calibrate",

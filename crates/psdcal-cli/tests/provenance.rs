@@ -64,29 +64,7 @@ fn the_hash_function_is_sha256() {
 fn psd_maps_and_calibrations_with_them_list_each_input_once_with_its_hash() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let sim = d.join("sim");
-    run_ok(&[
-        "simulate",
-        "--snr",
-        "40",
-        "--psd-nonlinearity",
-        "-q",
-        "--out",
-        s(&sim),
-    ]);
-    let scan = d.join("scan.csv");
-    run_ok(&[
-        "simulate-scan",
-        "--step",
-        "0.5",
-        "--snr",
-        "50",
-        "-q",
-        "--out",
-        s(&scan),
-    ]);
-    let map = d.join("map.json");
-    run_ok(&["psd-map", "--scan", s(&scan), "-q", "--out", s(&map)]);
+    let (sim, scan, map) = common::simulated_map(d, &[]);
     assert_eq!(inputs(&json(&map)), expected(&[&scan]));
 
     let template = sim.join("template.csv");

@@ -28,6 +28,46 @@ where
         .expect("the psdcal binary runs")
 }
 
+/// A simulated data set with the PSD's non-linearity (`dir/sim`: lens 2,
+/// 40 dB), a lensless scan of a sensor (`dir/scan.csv`: 0.5 mm steps,
+/// 50 dB) and its map (`dir/map.json`, `psd-map` given `map_args` too):
+/// `(sim, scan, map)`.
+pub fn simulated_map(dir: &Path, map_args: &[&str]) -> (PathBuf, PathBuf, PathBuf) {
+    let (sim, scan, map) = (dir.join("sim"), dir.join("scan.csv"), dir.join("map.json"));
+    let text = |p: &Path| p.to_str().unwrap().to_owned();
+    let (sim_text, scan_text, map_text) = (text(&sim), text(&scan), text(&map));
+    let mut psd_map = vec!["psd-map", "--scan", &scan_text, "-q", "--out", &map_text];
+    psd_map.extend_from_slice(map_args);
+    for args in [
+        vec![
+            "simulate",
+            "--lens",
+            "2",
+            "--snr",
+            "40",
+            "--psd-nonlinearity",
+            "-q",
+            "--out",
+            &sim_text,
+        ],
+        vec![
+            "simulate-scan",
+            "--step",
+            "0.5",
+            "--snr",
+            "50",
+            "-q",
+            "--out",
+            &scan_text,
+        ],
+        psd_map,
+    ] {
+        let out = psdcal(&args);
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {}", stderr(&out));
+    }
+    (sim, scan, map)
+}
+
 /// Standard output as text.
 pub fn stdout(output: &Output) -> String {
     String::from_utf8_lossy(&output.stdout).into_owned()
