@@ -26,29 +26,27 @@
 //! so is a fit whose focal length has a standard deviation above
 //! [`MAX_RELATIVE_STD_F`] of its value (nearly parallel template poses).
 
-use psdcal_model::stages::gains::GAIN_NAMES;
 use psdcal_model::{
     ChannelGains, Diagnostic, DiagnosticCode, Model, Param, ParameterCovariance, Pose, SensorModel,
     ValidRegion,
 };
-use serde::Serialize;
 use std::sync::Arc;
 
 use crate::bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
+pub use crate::calibration_summary::{CalibrationSummary, ParameterSummary};
 use crate::covariance::{analytic_method, covariance_at, Covariance};
 use crate::data::CalibrationData;
 use crate::diagnostics::{diagnose_structure, diagnose_uncertainty, DiagnosticOptions};
+use crate::gain_starts::refine_from_gain_starts;
 use crate::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::helper::Helper;
-use crate::initialize::{initialize, InitOptions, InitReport, InitRoute};
+use crate::initialize::{initialize, InitOptions, InitReport};
 use crate::linearity::{check_linearity_at, LinearityCheck, UncertaintyVerdict};
 use crate::linearization::AtSolution;
 use crate::misplaced::misplaced_led;
 use crate::prior::Prior;
 use crate::profile::profile_at_three_sigma;
-use crate::refine::{
-    refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss, Termination,
-};
+use crate::refine::{refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss};
 use crate::report::{fit_statistics, FitStatistics};
 use crate::weighting::NoiseModel;
 use crate::CalibError;
@@ -199,70 +197,8 @@ fn calibrate_as_given(
     let global_options = &global_options;
     let start = start_model(options, &init.model)?;
     let (refined, global, gain_start) = if options.refine.fit_gains {
-        // Several starts, the lowest cost among the converged ones wins: (a)
-        // the start with the gains freed from unit at once; (b) the fit with
-        // the gains held at unit first, then freed; (c) when a nominal focal
-        // length is given and the closed form supplied the start, the
-        // focal-length search around the nominal value, gains freed. A wrong
-        // minimum stands out by a residual orders of magnitude larger.
-        let (a, global) =
-            refine_global(data, &start, &init.poses, &options.refine, global_options)?;
-        let mut best = (a, global, "gains freed from the start");
-        // A focal length far outside any lens for this sensor (the start's
-        // plausible range) is a runaway along a degenerate direction, never
-        // a better answer.
-        let diagonal = data.geometry.lx.hypot(data.geometry.ly);
-        let plausible = |r: &Refined| {
-            let f = r.model.get("f").unwrap_or(f64::NAN);
-            f > 0.1 * diagonal && f < 100.0 * diagonal
-        };
-        let mut consider = |candidate: Result<Refined, CalibError>, name: &'static str| {
-            if let Ok(c) = candidate {
-                let incumbent = &best.0;
-                let incumbent_usable =
-                    incumbent.report.termination.converged() && plausible(incumbent);
-                if c.report.termination.converged()
-                    && plausible(&c)
-                    && (c.cost < incumbent.cost || !incumbent_usable)
-                {
-                    best = (c, None, name);
-                }
-            }
-        };
-        let fixed = RefineOptions {
-            fit_gains: false,
-            ..options.refine.clone()
-        };
-        let b = refine_global(data, &start, &init.poses, &fixed, global_options)
-            .and_then(|(plain, _)| refine(data, &plain.model, &plain.poses, &options.refine));
-        consider(b, "gains fixed first, then freed");
-        if options.init.focal_guess.is_some() && init.report.route == InitRoute::ClosedForm {
-            let searched = InitOptions {
-                use_closed_form: false,
-                ..options.init
-            };
-            let c = initialize(data, &searched).and_then(|i| {
-                let m = start_model(options, &i.model)?;
-                refine_global(data, &m, &i.poses, &options.refine, global_options).map(|(r, _)| r)
-            });
-            consider(c, "search around the nominal focal length, gains freed");
-        }
-        if init.report.route == InitRoute::ClosedForm && options.init.refine_start {
-            // The refined closed form has absorbed the gain imbalance into
-            // the intrinsics; the unrefined closed form (the paper's start)
-            // has not, and competes with the gains freed.
-            let plain = InitOptions {
-                refine_start: false,
-                ..options.init
-            };
-            let d = initialize(data, &plain).and_then(|i| {
-                let m = start_model(options, &i.model)?;
-                refine_global(data, &m, &i.poses, &options.refine, global_options).map(|(r, _)| r)
-            });
-            consider(d, "closed form unrefined, gains freed");
-        }
-        let (r, g, name) = best;
-        (r, g, Some(name.to_string()))
+        let (r, g, name) = refine_from_gain_starts(data, &init, &start, options, global_options)?;
+        (r, g, Some(name))
     } else {
         let (r, g) = refine_global(data, &start, &init.poses, &options.refine, global_options)?;
         (r, g, None)
@@ -467,7 +403,10 @@ fn refine_with_prior(
 
 /// The refinement's start: `options.base` with the freed parameters the
 /// initialisation estimates (`f, cx, cy, k1, k2`) taken from `init_model`.
-fn start_model(options: &CalibrateOptions, init_model: &SensorModel) -> Result<Model, CalibError> {
+pub(crate) fn start_model(
+    options: &CalibrateOptions,
+    init_model: &SensorModel,
+) -> Result<Model, CalibError> {
     let mut start = options.base.clone();
     for p in [Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2] {
         if options.refine.free.contains(&p) {
@@ -477,69 +416,6 @@ fn start_model(options: &CalibrateOptions, init_model: &SensorModel) -> Result<M
     // A fixed f, cx or cy must have been given; the poses come from the start.
     start.validate()?;
     Ok(start)
-}
-
-/// One parameter of a summary.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ParameterSummary {
-    /// Its name (`f`, `cx`, …).
-    pub name: String,
-    /// Its value.
-    pub value: f64,
-    /// Its standard deviation (`None` when fixed).
-    pub std: Option<f64>,
-    /// Its unit.
-    pub unit: String,
-    /// Whether it was estimated.
-    pub estimated: bool,
-}
-
-/// A serialisable summary of a calibration, for `--json` output and reports.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct CalibrationSummary {
-    /// Every sensor parameter.
-    pub parameters: Vec<ParameterSummary>,
-    /// The relative channel gains `g_x2, g_y1, g_y2`, when estimated.
-    pub gains: Vec<ParameterSummary>,
-    /// Which start won the gain estimation.
-    pub gain_start: Option<String>,
-    /// The cost minimised.
-    pub cost: CostKind,
-    /// The noise model that weighted it.
-    pub noise: NoiseModel,
-    /// The robust loss, if any.
-    pub robust: Option<RobustLoss>,
-    /// How the start was found (`closed_form`, `focal_search`, `focal_guess`).
-    pub start: String,
-    /// The closed form's focal length, when it had one (mm).
-    pub closed_form_f: Option<f64>,
-    /// Why the closed form was not used as the start, when it was not
-    /// (information about the start, not a problem with the result).
-    pub closed_form_rejection: Option<String>,
-    /// Why the refinement stopped.
-    pub termination: Termination,
-    /// Iterations of the final refinement.
-    pub iterations: usize,
-    /// Cost after each accepted step.
-    pub cost_history: Vec<f64>,
-    /// Fit statistics.
-    pub statistics: FitStatistics,
-    /// Names of the estimated parameters, in the order of `covariance` and `correlation`.
-    pub covariance_parameters: Vec<String>,
-    /// Their covariance.
-    pub covariance: Vec<Vec<f64>>,
-    /// Their correlations.
-    pub correlation: Vec<Vec<f64>>,
-    /// Residual variance σ² per coordinate (cost units).
-    pub sigma2: f64,
-    /// Degrees of freedom.
-    pub dof: usize,
-    /// The global search over `l1`, when run.
-    pub global: Option<GlobalReport>,
-    /// Warnings.
-    pub warnings: Vec<String>,
-    /// Diagnostics with stable codes (calibration.json's `diagnostics`).
-    pub diagnostics: Vec<Diagnostic>,
 }
 
 impl CalibrationResult {
@@ -556,70 +432,11 @@ impl CalibrationResult {
             linearization: None,
         }
     }
-
-    /// The serialisable summary.
-    pub fn summary(&self) -> CalibrationSummary {
-        let rows = |m: &nalgebra::DMatrix<f64>| -> Vec<Vec<f64>> {
-            (0..m.nrows())
-                .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
-                .collect()
-        };
-        CalibrationSummary {
-            parameters: self.parameter_summaries(false),
-            gains: self.parameter_summaries(true),
-            gain_start: self.gain_start.clone(),
-            cost: self.cost_kind,
-            noise: self.noise,
-            robust: self.robust,
-            start: match self.init.route {
-                InitRoute::ClosedForm => "closed_form",
-                InitRoute::FocalSearch => "focal_search",
-                InitRoute::FocalGuess => "focal_guess",
-            }
-            .into(),
-            closed_form_f: self
-                .init
-                .closed_form
-                .as_ref()
-                .and_then(|c| c.focal_length().ok()),
-            closed_form_rejection: self.init.closed_form_rejection.clone(),
-            termination: self.refine.termination,
-            iterations: self.refine.iterations,
-            cost_history: self.refine.cost_history.clone(),
-            statistics: self.statistics.clone(),
-            covariance_parameters: self.covariance.names().to_vec(),
-            covariance: self.covariance.rows(),
-            correlation: rows(&self.covariance.correlation()),
-            sigma2: self.covariance.sigma2,
-            dof: self.covariance.dof,
-            global: self.global.clone(),
-            warnings: self.warnings.clone(),
-            diagnostics: self.diagnostics.clone(),
-        }
-    }
 }
 
 impl CalibrationResult {
     /// The standard parameters of the estimated model.
     pub fn sensor_model(&self) -> SensorModel {
         self.model.sensor_model()
-    }
-
-    /// Every parameter of the model but the gains (`gains == false`), or the
-    /// gains alone, with σ when estimated.
-    fn parameter_summaries(&self, gains: bool) -> Vec<ParameterSummary> {
-        self.model
-            .parameters()
-            .iter()
-            .zip(self.model.values())
-            .filter(|(p, _)| GAIN_NAMES.contains(&p.name.as_str()) == gains)
-            .map(|(p, value)| ParameterSummary {
-                name: p.name.clone(),
-                value: *value,
-                std: self.covariance.std(&p.name),
-                unit: p.unit.clone(),
-                estimated: self.free.contains(&p.name),
-            })
-            .collect()
     }
 }

@@ -28,6 +28,7 @@ pub mod carried;
 pub mod covariance;
 pub mod diagnostics;
 pub mod electrical;
+mod gain_starts;
 pub mod global;
 mod helper;
 pub mod linearity;
@@ -62,6 +63,7 @@ pub use refine::{
 pub use report::{fit_statistics, FitStatistics, ImageStats, PointError};
 pub use weighting::{point_covariance, NoiseModel, PointWeights};
 pub mod calibrate;
+mod calibration_summary;
 pub use calibrate::{
     calibrate, CalibrateOptions, CalibrationResult, CalibrationSummary, ParameterSummary,
     Uncertainty,
