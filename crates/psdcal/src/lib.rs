@@ -93,6 +93,7 @@ mod provenance;
 mod psd_map;
 mod psd_map_report;
 mod report;
+mod report_plots;
 mod report_tables;
 mod report_views;
 mod residuals;

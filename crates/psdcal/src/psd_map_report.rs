@@ -31,7 +31,8 @@ use psdcal_report::{
 
 use crate::error::{Error, Result};
 use crate::psd_map::{residual_cells, PsdMapOutcome, SCAN_SUMMARY_CELLS};
-use crate::report::{arrow_scale_for, plot_files, scale_text, write_plots};
+use crate::report::{plot_files, write_plots};
+use crate::report_plots::{arrow_scale_for, scale_text};
 
 /// The page's file name in the report folder.
 pub const PSD_MAP_PAGE: &str = "psd_map.html";
