@@ -21,6 +21,7 @@ pub mod paper;
 pub mod planned;
 pub mod render;
 pub mod study;
+pub mod tables;
 
 pub use data::SimulationData;
 pub use psdcal_sim::{Lens, SimError, TemplateKind};
