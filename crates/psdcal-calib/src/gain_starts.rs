@@ -60,6 +60,13 @@ pub(crate) fn refine_from_gain_starts(
             }
         }
     };
+    // The gains freed from the start another start option finds.
+    let freed_from = |init_options: &InitOptions| {
+        initialize(data, init_options).and_then(|i| {
+            let m = start_model(options, &i.model)?;
+            refine_global(data, &m, &i.poses, &options.refine, global_options).map(|(r, _)| r)
+        })
+    };
     let fixed = RefineOptions {
         fit_gains: false,
         ..options.refine.clone()
@@ -72,11 +79,10 @@ pub(crate) fn refine_from_gain_starts(
             use_closed_form: false,
             ..options.init
         };
-        let c = initialize(data, &searched).and_then(|i| {
-            let m = start_model(options, &i.model)?;
-            refine_global(data, &m, &i.poses, &options.refine, global_options).map(|(r, _)| r)
-        });
-        consider(c, "search around the nominal focal length, gains freed");
+        consider(
+            freed_from(&searched),
+            "search around the nominal focal length, gains freed",
+        );
     }
     if init.report.route == InitRoute::ClosedForm && options.init.refine_start {
         // The refined closed form has absorbed the gain imbalance into
@@ -86,11 +92,7 @@ pub(crate) fn refine_from_gain_starts(
             refine_start: false,
             ..options.init
         };
-        let d = initialize(data, &plain).and_then(|i| {
-            let m = start_model(options, &i.model)?;
-            refine_global(data, &m, &i.poses, &options.refine, global_options).map(|(r, _)| r)
-        });
-        consider(d, "closed form unrefined, gains freed");
+        consider(freed_from(&plain), "closed form unrefined, gains freed");
     }
     let (r, g, name) = best;
     Ok((r, g, name.to_string()))
