@@ -29,10 +29,11 @@ use psdcal_model::{Diagnostic, DiagnosticCode};
 use psdcal_solver::normal_equations::inverse_scaled;
 use serde::Serialize;
 
+use crate::calibration_problem::{CalibrationProblem, FitState};
 use crate::covariance::Covariance;
 use crate::data::CalibrationData;
 use crate::global::GlobalReport;
-use crate::refine::{CalibrationProblem, CostKind, FitState, RefineOptions, Refined};
+use crate::refine::{CostKind, RefineOptions, Refined};
 pub use crate::residual_structure::{
     diagnose_residuals, FieldTest, ImagePlaneFit, GAIN_SHARE, MIN_EXPLAINED, MISFIT_RATIO,
     RANK_CUTOFF, SIGNIFICANCE_Z,

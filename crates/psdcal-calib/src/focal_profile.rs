@@ -18,9 +18,10 @@
 use psdcal_model::{Model, Pose, SensorModel};
 use psdcal_solver::{solver, SolverOptions};
 
+use crate::calibration_problem::{CalibrationProblem, FitState};
 use crate::homography::{fast_homography, Homography};
 use crate::initialize::{FocalSearchReport, REFINE_SUBSET_IMAGES};
-use crate::refine::{CalibrationProblem, CostKind, FitState};
+use crate::refine::CostKind;
 use crate::zhang::pose_from_homography;
 use crate::{CalibError, CalibrationData, ImageObservations};
 

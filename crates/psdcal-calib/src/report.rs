@@ -12,8 +12,9 @@
 use psdcal_model::{Model, Pose};
 use serde::Serialize;
 
+use crate::calibration_problem::{CalibrationProblem, FitState};
 use crate::data::CalibrationData;
-use crate::refine::{CalibrationProblem, CostKind, FitState, RobustLoss};
+use crate::refine::{CostKind, RobustLoss};
 
 /// How many of the worst points a report lists.
 pub const WORST_POINTS: usize = 10;

@@ -39,8 +39,8 @@ use nalgebra::{DMatrix, Matrix2, SMatrix};
 use psdcal_model::sensor::electrode_currents;
 use psdcal_model::{Amplitudes, CostKind, Model, Pose, PsdGeometry};
 
+use crate::calibration_problem::{CalibrationProblem, FitState};
 use crate::data::CalibrationData;
-use crate::refine::{CalibrationProblem, FitState};
 use crate::weighting::{point_covariance, NoiseModel};
 use crate::CalibError;
 
