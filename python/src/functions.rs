@@ -5,9 +5,8 @@
 use numpy::ndarray::{Array1, Array2};
 use numpy::IntoPyArray;
 use psdcal::arrays::{data_set, PointsInput};
-use psdcal::option_text::{
-    parse_images, parse_lens, parse_record_cycles, parse_snr, parse_template_kind,
-};
+use psdcal::option_text::{parse_images, parse_lens, parse_snr, parse_template_kind};
+use psdcal::parse_record_cycles;
 use pyo3::exceptions::PyUserWarning;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};

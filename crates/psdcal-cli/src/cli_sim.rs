@@ -4,10 +4,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use psdcal::option_text::{
-    parse_images, parse_record_cycles, parse_snr, parse_threads, parse_trials,
-};
-use psdcal::StudyRequest;
+use psdcal::option_text::{parse_images, parse_snr, parse_threads, parse_trials};
+use psdcal::{parse_record_cycles, StudyRequest};
 
 use crate::choice::{choice, name, LensArg, TableArg, TemplateArg};
 

@@ -10,6 +10,7 @@ use std::path::Path;
 use psdcal_model::Amplitudes;
 
 use crate::atomic::write_atomic;
+use crate::csv_field::csv_field;
 use crate::IoError;
 
 /// One LED of a template to write.
@@ -49,15 +50,6 @@ pub struct SignalRowOut {
     pub amplitudes: Amplitudes,
 }
 
-/// A CSV field: quoted when it needs to be.
-fn field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r', ';']) || s.starts_with('#') {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 /// Writes template.csv (`led,X_mm,Y_mm[,lines]`), with a leading comment.
 pub fn write_template(
     path: impl AsRef<Path>,
@@ -71,9 +63,9 @@ pub fn write_template(
         }
         writeln!(w, "led,X_mm,Y_mm{}", if with_lines { ",lines" } else { "" })?;
         for l in leds {
-            write!(w, "{},{},{}", field(&l.id), l.x_mm, l.y_mm)?;
+            write!(w, "{},{},{}", csv_field(&l.id), l.x_mm, l.y_mm)?;
             if with_lines {
-                write!(w, ",{}", field(&l.lines.join(";")))?;
+                write!(w, ",{}", csv_field(&l.lines.join(";")))?;
             }
             writeln!(w)?;
         }
@@ -96,8 +88,8 @@ pub fn write_observations(
             writeln!(
                 w,
                 "{},{},{},{}",
-                field(&r.image),
-                field(&r.led),
+                csv_field(&r.image),
+                csv_field(&r.led),
                 r.x_mm,
                 r.y_mm
             )?;
@@ -122,8 +114,8 @@ pub fn write_signals(
             writeln!(
                 w,
                 "{},{},{},{},{},{}",
-                field(&r.image),
-                field(&r.led),
+                csv_field(&r.image),
+                csv_field(&r.led),
                 a.vx1,
                 a.vx2,
                 a.vy1,

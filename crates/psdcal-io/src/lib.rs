@@ -41,6 +41,7 @@ mod calibration;
 mod camera_model_file;
 mod corners;
 mod coverage;
+mod csv_field;
 mod csv_fields;
 mod csv_lines;
 mod csv_numeric;
@@ -83,6 +84,7 @@ pub use calibration::{
 pub use camera_model_file::{float_text, write_camera_model, CameraFormat, CameraModelFile};
 pub use corners::{Corner, Corners};
 pub use coverage::{Bounds, Coverage};
+pub use csv_field::csv_field;
 pub use error::{ColumnRef, IoError, Location};
 pub use export::{
     write_observations, write_signals, write_template, ObservationRow, SignalRowOut, TemplateLed,

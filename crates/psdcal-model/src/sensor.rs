@@ -56,6 +56,18 @@ pub struct Amplitudes {
     pub vy2: f64,
 }
 
+impl From<[f64; 4]> for Amplitudes {
+    /// The channels in the order `vx1, vx2, vy1, vy2`.
+    fn from(a: [f64; 4]) -> Self {
+        Self {
+            vx1: a[0],
+            vx2: a[1],
+            vy1: a[2],
+            vy2: a[3],
+        }
+    }
+}
+
 /// Gains of the four channels relative to channel x1 (`g_k = K_k / K_x1`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ChannelGains {

@@ -190,3 +190,16 @@ impl From<ModelError> for SignalError {
         }
     }
 }
+
+impl SignalError {
+    /// The status code of a record or window this error stops: `saturated`,
+    /// `too_short`, `tone_collision`, or `invalid_input` for the rest.
+    pub fn status(&self) -> &'static str {
+        match self {
+            SignalError::Saturated { .. } => "saturated",
+            SignalError::RecordTooShortToDemodulate { .. } => "too_short",
+            SignalError::TonesNotSeparable { .. } => "tone_collision",
+            _ => "invalid_input",
+        }
+    }
+}

@@ -64,109 +64,84 @@
 //! file is written atomically.
 #![warn(missing_docs)]
 
-mod advice;
-mod aoa;
-pub mod arrays;
-mod calibrate;
-mod calibrate_map;
-mod calibrate_options;
-mod convert;
-mod correct;
+mod answer;
+mod base;
+mod calibration;
 mod dataset;
-mod demo;
-mod demodulate;
-mod diff;
-mod error;
-mod evaluate;
-mod export;
-mod fit_report;
-mod focal_check;
-mod gains;
-mod in_situ;
-mod locate;
-mod map;
-pub mod option_text;
-mod options;
-mod plan;
-mod point_rows;
-mod provenance;
+mod frontend;
 mod psd_map;
-mod psd_map_report;
-mod report;
-mod report_plots;
-mod report_tables;
-mod report_views;
-mod residuals;
-mod sensor;
-mod simulate;
-mod simulate_positioning;
-mod simulate_raw;
-mod simulate_scan;
+mod reports;
+mod signals;
+mod simulation;
 mod study;
-mod study_page;
-mod study_psd_map;
-mod summary;
-mod summary_text;
-mod table;
-mod track;
-mod track_input;
-mod track_rig;
 
-pub use advice::{advice, error_text};
-pub use aoa::{aoa_table, measurement, AoaTable};
-pub use calibrate::{calibrate, Calibrated};
-pub use calibrate_options::{calibrate_settings, CalibrateSettings, CALIBRATE_OPTION_NAMES};
-pub use correct::{correct, Corrected};
-pub use dataset::{source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
-pub use demo::{demo, Demo, DemoParameter};
-pub use demodulate::{
-    demodulate, DemodulateRequest, Demodulated, RecordOutcome, RecordStatus, MAX_RECORD_SAMPLES,
-};
-pub use diff::{diff, DiffRequest, Diffed, DEFAULT_DIFF_GRID, DIFF_COLUMNS};
-pub use error::{Error, Result};
-pub use evaluate::{evaluate, EvaluateRequest, Evaluation};
-pub use export::{
+pub use base::option_text;
+pub use frontend::arrays;
+
+pub use answer::aoa::{aoa_table, measurement, AoaTable};
+pub use answer::correct::{correct, Corrected};
+pub use answer::diff::{diff, DiffRequest, Diffed, DEFAULT_DIFF_GRID, DIFF_COLUMNS};
+pub use answer::evaluate::{evaluate, EvaluateRequest, Evaluation};
+pub use answer::export::{
     export, ExportRequest, ExportTarget, Exported, DEFAULT_MAX_ERROR_DEG, DEFAULT_PIXEL_UM,
 };
-pub use fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
-pub use focal_check::{focal_check, FocalCheck, FocalCheckRequest};
-pub use gains::{estimate_gains, gains_summary, GainsMethod};
-pub use in_situ::{calibrate_in_situ, position_with_jacobian, InSitu, SensorPose};
-pub use locate::{locate_table, LocateTable, LocateTarget};
-pub use map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
-pub use option_text::plane_at_distance;
-pub use options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
-pub use plan::{plan_poses, PlanRequest, Planned};
-pub use point_rows::{answer_points, PointsAnswer, RowAnswer};
-pub use provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
-pub use psd_map::{
-    parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, RESIDUAL_MAP_CELLS,
-    SCAN_SUMMARY_CELLS,
+pub use answer::focal_check::{focal_check, FocalCheck, FocalCheckRequest};
+pub use answer::locate::{locate_table, LocateTable, LocateTarget};
+pub use answer::map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
+pub use answer::point_rows::{answer_points, PointsAnswer, RowAnswer};
+pub use answer::sensor::{covariance_warning, save_calibration, sensor_of, LoadedSensor};
+pub use base::advice::{advice, error_text};
+pub use base::error::{Error, Result};
+pub use base::option_text::plane_at_distance;
+pub use base::options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
+pub use base::provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
+pub use base::summary::Summary;
+pub use base::summary_text::summary_text;
+pub use base::table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
+pub use calibration::calibrate::{calibrate, Calibrated};
+pub use calibration::calibrate_options::{
+    calibrate_settings, CalibrateSettings, CALIBRATE_OPTION_NAMES,
 };
-pub use psd_map_report::PSD_MAP_PAGE;
+pub use calibration::fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
+pub use calibration::gains::{estimate_gains, gains_summary, GainsMethod};
+pub use calibration::in_situ::{calibrate_in_situ, position_with_jacobian, InSitu, SensorPose};
+pub use calibration::residuals::{ImageResiduals, Residual, ResidualTable};
+pub use dataset::data_set::{
+    source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource,
+};
+pub use psd_map::from_scan::{
+    parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, PSD_MAP_PAGE,
+    RESIDUAL_MAP_CELLS, SCAN_SUMMARY_CELLS,
+};
 pub use psdcal_io::RawFormat;
 pub use psdcal_psdmap::ModelChoice as PsdMapModel;
 pub use psdcal_signal::DemodConfig;
 pub use psdcal_sim::{Impairment, Impairments};
-pub use report::{report_content, write_report, ReportFiles, ReportRequest};
-pub use residuals::{ImageResiduals, Residual, ResidualTable};
-pub use sensor::{covariance_warning, save_calibration, sensor_of, LoadedSensor};
-pub use simulate::{
-    chain_with_record, record_cycles_flag, simulate_data, simulate_files, simulate_files_at_poses,
-    transient_cycles, SimulateRequest, SimulatedData, SimulatedFiles, DEFAULT_RECORD_CYCLES,
-    MAX_RECORD_CYCLES,
+pub use reports::report::{report_content, write_report, ReportFiles, ReportRequest};
+pub use signals::demodulate::{
+    demodulate, DemodulateRequest, Demodulated, RecordOutcome, RecordStatus, MAX_RECORD_SAMPLES,
 };
-pub use simulate_positioning::{simulate_positioning, PositioningRequest, SimulatedRig};
-pub use simulate_raw::{
+pub use signals::track::{track, TrackRequest, TrackSummary, TrackTarget};
+pub use simulation::demo::{demo, Demo, DemoParameter};
+pub use simulation::plan::{plan_poses, PlanRequest, Planned};
+pub use simulation::simulate::{
+    chain_with_record, parse_record_cycles, record_cycles_flag, simulate_data, simulate_files,
+    simulate_files_at_poses, transient_cycles, SimulateRequest, SimulatedData, SimulatedFiles,
+    DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
+};
+pub use simulation::simulate_positioning::{
+    simulate_positioning, PositioningRequest, SimulatedRig,
+};
+pub use simulation::simulate_raw::{
     simulate_raw_files, RawRequest, FDMA_SPACING_HZ, RAW_F0_HZ, RAW_SAMPLE_RATE_HZ,
 };
-pub use simulate_scan::{scan_samples, simulate_scan_file, ScanRequest, SimulatedScan};
-pub use study::{expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest};
-pub use study_psd_map::{pooled, psd_map_seed, refine_seed, RefineErrors, ScanSpec, SeedErrors};
-pub use summary::Summary;
-pub use summary_text::summary_text;
-pub use table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
-pub use track::{track, TrackRequest, TrackSummary, TrackTarget};
+pub use simulation::simulate_scan::{scan_samples, simulate_scan_file, ScanRequest, SimulatedScan};
+pub use study::monte_carlo::{
+    expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest,
+};
+pub use study::study_psd_map::{
+    pooled, psd_map_seed, refine_seed, RefineErrors, ScanSpec, SeedErrors,
+};
 
 pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, Warning};

@@ -1,0 +1,12 @@
+//! Using a calibration: the sensor from calibration.json, ideal points, angles of arrival, positions, error maps, comparisons, exports and evaluations.
+
+pub(crate) mod aoa;
+pub(crate) mod correct;
+pub(crate) mod diff;
+pub(crate) mod evaluate;
+pub(crate) mod export;
+pub(crate) mod focal_check;
+pub(crate) mod locate;
+pub(crate) mod map;
+pub(crate) mod point_rows;
+pub(crate) mod sensor;

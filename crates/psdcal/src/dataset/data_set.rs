@@ -1,0 +1,158 @@
+//! A calibration data set: the template and the points of every image,
+//! read from files or given in memory, validated (docs/model.md §1 turns
+//! electrode amplitudes into impact points), with what was dropped.
+
+use std::path::{Path, PathBuf};
+
+use psdcal_io::{
+    validate_data_set, DataSetSummary, GainsFile, Observations, Signals, Template,
+    ValidatedDataSet, ValidationOptions, Warning,
+};
+use psdcal_model::{ChannelGains, PsdGeometry};
+
+use crate::base::error::Result;
+use crate::base::provenance::InputHashes;
+
+/// Where a data set's points come from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PointSource {
+    /// observations.csv: measured impact points.
+    Observations(PathBuf),
+    /// signals.csv: electrode amplitudes.
+    Signals(PathBuf),
+}
+
+/// The files of a data set.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DataSetFiles {
+    /// template.csv.
+    pub template: PathBuf,
+    /// observations.csv or signals.csv.
+    pub points: PointSource,
+    /// gains.json of an electrical calibration (with signals only): divided
+    /// out of the amplitudes and held fixed.
+    pub gains: Option<PathBuf>,
+}
+
+/// How a data set is validated (default: 9 × 9 mm, not strict).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LoadOptions {
+    /// The PSD's active area.
+    pub geometry: PsdGeometry,
+    /// Every warning is an error instead of dropping the data.
+    pub strict: bool,
+}
+
+/// The points of a data set given in memory.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MemoryPoints {
+    /// Measured impact points.
+    Observations(Observations),
+    /// Electrode amplitudes, with the known gains to divide out (if any).
+    Signals(Signals, Option<ChannelGains>),
+}
+
+/// A validated data set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DataSet {
+    /// The template.
+    pub template: Template,
+    /// Every observation read (impact points; from amplitudes when the
+    /// source was signals).
+    pub observations: Observations,
+    /// The amplitudes, when the source was signals.
+    pub signals: Option<Signals>,
+    /// Known gains divided out of the amplitudes (from a gains file).
+    pub known_gains: Option<ChannelGains>,
+    /// The usable points by image, and the warnings.
+    pub validated: ValidatedDataSet,
+    /// The options it was validated with.
+    pub options: LoadOptions,
+    /// The input files and their SHA-256 (empty for a data set in memory).
+    pub inputs: InputHashes,
+}
+
+impl DataSet {
+    /// Reads and validates the files.
+    pub fn from_files(files: &DataSetFiles, options: &LoadOptions) -> Result<Self> {
+        // Each file is read once; its hash is of the bytes parsed.
+        let mut inputs = InputHashes::default();
+        let template = inputs.read(&files.template, |s, r| Template::from_reader(s, r))?;
+        let known: Option<GainsFile> = match &files.gains {
+            Some(path) => Some(inputs.read(path, |s, r| GainsFile::from_reader(s, r))?),
+            None => None,
+        };
+        let points = match &files.points {
+            PointSource::Observations(path) => MemoryPoints::Observations(
+                inputs.read(path, |s, r| Observations::from_reader(s, r))?,
+            ),
+            PointSource::Signals(path) => MemoryPoints::Signals(
+                inputs.read(path, |s, r| Signals::from_reader(s, r))?,
+                known.map(|g| g.gains()),
+            ),
+        };
+        let mut set = Self::from_memory(template, points, options)?;
+        set.inputs = inputs;
+        Ok(set)
+    }
+
+    /// Validates a data set given in memory.
+    pub fn from_memory(
+        template: Template,
+        points: MemoryPoints,
+        options: &LoadOptions,
+    ) -> Result<Self> {
+        let (observations, signals, known_gains) = match points {
+            MemoryPoints::Observations(o) => (o, None, None),
+            MemoryPoints::Signals(s, gains) => {
+                let o =
+                    s.to_observations(&options.geometry, &gains.unwrap_or(ChannelGains::UNIT))?;
+                (o, Some(s), gains)
+            }
+        };
+        let validated = validate_data_set(
+            &template,
+            &observations,
+            &ValidationOptions {
+                geometry: options.geometry,
+                strict: options.strict,
+            },
+        )?;
+        Ok(Self {
+            template,
+            observations,
+            signals,
+            known_gains,
+            validated,
+            options: *options,
+            inputs: InputHashes::default(),
+        })
+    }
+
+    /// What was dropped, and why.
+    pub fn warnings(&self) -> &[Warning] {
+        &self.validated.warnings
+    }
+
+    /// What `psdcal check` reports: images, points, drops and coverage.
+    pub fn summary(&self) -> DataSetSummary {
+        DataSetSummary::new(
+            &self.template,
+            &self.observations,
+            &self.validated,
+            &self.options.geometry,
+        )
+    }
+
+    /// The file the points came from, as read.
+    pub fn points_source(&self) -> &str {
+        &self.observations.source
+    }
+}
+
+/// The path of a point source.
+pub fn source_path(source: &PointSource) -> &Path {
+    match source {
+        PointSource::Observations(p) | PointSource::Signals(p) => p,
+    }
+}

@@ -1,0 +1,241 @@
+//! `track`: angles of arrival (one sensor) or positions (a rig) from a
+//! live stream of raw samples (docs/model.md §8.5): rows of
+//! `vx1,vx2,vy1,vy2` (volts) per sensor in, as they arrive (standard input,
+//! or a recording file: `track_input.rs`); per window of `round(window fs)`
+//! samples and per LED of tones.csv, one row out, flushed at the end of each
+//! window (`daq-reader | psdcal track … | controller`):
+//!
+//! - one sensor (`--calibration`): `t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status`;
+//! - a rig (`--rig`, one stream of `4 S` channels, `track_rig.rs`):
+//!   `t_s,led,sensors,x_world_mm,…,status`, the position and its covariance.
+//!
+//! Each window is demodulated on its own, exactly as `demodulate` treats a
+//! record of the same samples (its own filter start, frequency estimate and
+//! noise): the same samples give the same angles. `t_s` is the time of the
+//! window's first sample, counted from the first sample of the stream.
+//!
+//! A line that is not a sample gives a row with the status `malformed_line`
+//! and is not counted as a sample; the stream goes on. Statuses per LED:
+//! `ok`, `dark`, `saturated`, `too_short`, `tone_collision`, or the
+//! location code of an angle or position that cannot be computed (e.g.
+//! `outside_valid_region`, `too_few_sensors`).
+
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+
+use psdcal_io::Tones;
+use psdcal_locate::{LocateOptions, Measurement};
+use psdcal_model::Amplitudes;
+use psdcal_signal::tones::check_separable;
+use psdcal_signal::{demodulate_record, DemodConfig, RecordEstimate, SignalError};
+
+use crate::answer::sensor::LoadedSensor;
+use crate::base::error::{Error, Result};
+use crate::base::table::{deg, num};
+use crate::signals::track_input::{Sample, SampleSource};
+use crate::signals::track_rig::TrackRig;
+
+/// Whose angles or positions `track` computes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TrackTarget {
+    /// One sensor's calibration.json: angles of arrival.
+    Sensor(PathBuf),
+    /// A rig.json: positions in the world frame from every sensor's stream.
+    Rig(PathBuf),
+}
+
+/// What `track` needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackRequest {
+    /// The sensor or the rig.
+    pub target: TrackTarget,
+    /// Sample rate, Hz (a recording file may carry it instead).
+    pub rate_hz: Option<f64>,
+    /// tones.csv: the LEDs and their tones.
+    pub tones: PathBuf,
+    /// Window length, s.
+    pub window_s: f64,
+    /// The demodulation's parameters.
+    pub config: DemodConfig,
+    /// A recording file to read instead of the input stream.
+    pub raw: Option<PathBuf>,
+    /// A .tdms recording's channels (four per sensor); empty: the default.
+    pub channels: Vec<String>,
+}
+
+/// What `track` saw.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct TrackSummary {
+    /// Samples read.
+    pub samples: u64,
+    /// Windows answered.
+    pub windows: u64,
+    /// Malformed lines.
+    pub malformed: u64,
+}
+
+const HEADER: &str = "t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status";
+
+/// The sensor or rig answering each window.
+enum Answerer {
+    Sensor(Box<LoadedSensor>),
+    Rig(Box<TrackRig>),
+}
+
+/// Runs the stream from `input` (or the request's recording file) to
+/// `output` until the input ends. See the module documentation.
+///
+/// Errors: the calibration, rig or tones file, an unusable rate, window or
+/// tone set (checked before the first sample), reading the input or writing
+/// the output.
+pub fn track(
+    request: &TrackRequest,
+    input: impl BufRead,
+    mut output: impl Write,
+) -> Result<TrackSummary> {
+    let answerer = match &request.target {
+        TrackTarget::Sensor(path) => Answerer::Sensor(Box::new(LoadedSensor::read(path)?)),
+        TrackTarget::Rig(path) => Answerer::Rig(Box::new(TrackRig::load(path)?)),
+    };
+    let sensors: Vec<String> = match &answerer {
+        Answerer::Sensor(_) => vec![String::new()],
+        Answerer::Rig(rig) => rig.ids(),
+    };
+    let tones = Tones::read(&request.tones)?;
+    let (mut source, fs) = match &request.raw {
+        Some(path) => SampleSource::file(path, &sensors, &request.channels, request.rate_hz)?,
+        None => {
+            let fs = request.rate_hz.ok_or_else(|| {
+                Error::Options(
+                    "no --rate: the samples on standard input need their rate as --rate HZ"
+                        .to_string(),
+                )
+            })?;
+            (SampleSource::lines(input, sensors.clone()), fs)
+        }
+    };
+    if !(fs.is_finite() && fs > 0.0) {
+        return Err(Error::Options(format!(
+            "--rate {fs}: expected a finite, positive sample rate"
+        )));
+    }
+    let window = (request.window_s * fs).round();
+    if !(window >= 1.0 && window <= crate::signals::demodulate::MAX_RECORD_SAMPLES as f64) {
+        return Err(Error::Options(format!(
+            "--window {} s: expected between one sample and {} samples",
+            request.window_s,
+            crate::signals::demodulate::MAX_RECORD_SAMPLES
+        )));
+    }
+    let window = window as usize;
+    let freqs: Vec<f64> = tones.tones.iter().map(|t| t.frequency_hz).collect();
+    check_separable(&freqs, fs, window as f64 / fs)
+        .map_err(|e| Error::Options(format!("{}: {e}", tones.source)))?;
+    request
+        .config
+        .validate()
+        .map_err(|e| Error::Options(e.to_string()))?;
+    let mut summary = TrackSummary::default();
+    // A reader that went away (`| head`) ends the stream quietly.
+    macro_rules! emit {
+        ($result:expr) => {
+            match $result {
+                Ok(()) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => return Ok(summary),
+                Err(source) => {
+                    return Err(Error::Io(psdcal_io::IoError::Write {
+                        file: "standard output".to_string(),
+                        source,
+                    }))
+                }
+            }
+        };
+    }
+    let header = match &answerer {
+        Answerer::Sensor(_) => HEADER.to_string(),
+        Answerer::Rig(_) => crate::signals::track_rig::HEADER.to_string(),
+    };
+    emit!(writeln!(output, "{header}").and_then(|()| output.flush()));
+    let empty_fields = header.matches(',').count() - 1;
+    let mut frames: Vec<Vec<[f64; 4]>> = vec![Vec::with_capacity(window); sensors.len()];
+    let options = LocateOptions::default();
+    while let Some(sample) = source.next()? {
+        let Sample::Values(values) = sample else {
+            summary.malformed += 1;
+            let t = (summary.samples as f64) / fs;
+            let commas = ",".repeat(empty_fields);
+            emit!(
+                writeln!(output, "{},{commas}malformed_line", num(t)).and_then(|()| output.flush())
+            );
+            continue;
+        };
+        for (s, f) in frames.iter_mut().enumerate() {
+            f.push([
+                values[4 * s],
+                values[4 * s + 1],
+                values[4 * s + 2],
+                values[4 * s + 3],
+            ]);
+        }
+        summary.samples += 1;
+        if frames[0].len() == window {
+            let t0 = (summary.samples - window as u64) as f64 / fs;
+            let estimates: Vec<_> = frames
+                .iter()
+                .map(|f| demodulate_record(f, fs, &freqs, &request.config))
+                .collect();
+            let rows = match &answerer {
+                Answerer::Sensor(sensor) => {
+                    sensor_rows(sensor, &tones, &estimates[0], t0, &options)
+                }
+                Answerer::Rig(rig) => rig.rows(&tones, &estimates, t0),
+            };
+            for row in rows {
+                emit!(writeln!(output, "{row}"));
+            }
+            emit!(output.flush());
+            summary.windows += 1;
+            frames.iter_mut().for_each(Vec::clear);
+        }
+    }
+    Ok(summary)
+}
+
+/// One sensor's rows of a window: angles per LED.
+fn sensor_rows(
+    sensor: &LoadedSensor,
+    tones: &Tones,
+    estimate: &std::result::Result<RecordEstimate<4>, SignalError>,
+    t0: f64,
+    options: &LocateOptions,
+) -> Vec<String> {
+    let mut rows = Vec::with_capacity(tones.tones.len());
+    for (k, tone) in tones.tones.iter().enumerate() {
+        let led = psdcal_io::csv_field(&tone.led);
+        let row = match estimate {
+            Ok(est) => {
+                let t = &est.tones[k];
+                let snr = num(t.min_snr_db());
+                if t.dark {
+                    format!("{},{led},,,{snr},dark", num(t0))
+                } else {
+                    match sensor.sensor.aoa(
+                        &Measurement::Amplitudes(Amplitudes::from(t.amplitudes)),
+                        options,
+                    ) {
+                        Ok(answer) => format!(
+                            "{},{led},{},{},{snr},ok",
+                            num(t0),
+                            deg(answer.aoa.alpha.x),
+                            deg(answer.aoa.alpha.y)
+                        ),
+                        Err(e) => format!("{},{led},,,{snr},{}", num(t0), e.status()),
+                    }
+                }
+            }
+            Err(e) => format!("{},{led},,,,{}", num(t0), e.status()),
+        };
+        rows.push(row);
+    }
+    rows
+}

@@ -1,0 +1,265 @@
+//! The samples `track` reads: rows of `4 S` values (S sensors, each
+//! `vx1, vx2, vy1, vy2`, volts) from a text stream as they arrive, or from a
+//! recording file (docs/formats.md, "Raw recordings").
+//!
+//! Text stream (standard input): blank lines and `#` comments are skipped;
+//! a first line naming the columns sets their order (one sensor: `vx1`,
+//! `vx2`, `vy1`, `vy2`; a rig: `SENSOR/vx1` … for every sensor of
+//! rig.json; extra columns ignored), otherwise the fields are the sensors
+//! in rig.json's order, four each. A line that is not the needed finite
+//! numbers (or longer than 1 MiB, or not UTF-8) is [`Sample::Malformed`].
+//!
+//! Recording file: one sensor, raw.csv, raw.npy or raw.tdms (psdcal-io's
+//! `RawReader`); a rig, raw.tdms with the channels `SENSOR/vx1` … (a group
+//! per sensor, named by its id) or the channels named, four per sensor in
+//! rig.json's order.
+
+use std::io::{BufRead, Read};
+use std::path::Path;
+
+use psdcal_io::{RawReader, TdmsReader, MAX_LINE_BYTES, TDMS_DEFAULT_CHANNELS};
+
+use crate::base::error::{Error, Result};
+
+/// One input row.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Sample {
+    /// The `4 S` values.
+    Values(Vec<f64>),
+    /// A line that is not a sample.
+    Malformed,
+}
+
+/// Rows read from a file at a time.
+const BLOCK: usize = 4096;
+
+/// Where the samples come from.
+pub(crate) enum SampleSource<R> {
+    /// A text stream.
+    Lines {
+        input: R,
+        sensors: Vec<String>,
+        columns: Option<Vec<usize>>,
+        first_line: bool,
+        line: Vec<u8>,
+    },
+    /// One sensor's recording file.
+    Raw {
+        reader: Box<RawReader>,
+        buffer: std::collections::VecDeque<[f64; 4]>,
+    },
+    /// A rig's TDMS recording.
+    Tdms {
+        reader: Box<TdmsReader>,
+        width: usize,
+        buffer: Vec<f64>,
+        next: usize,
+    },
+}
+
+impl<R: BufRead> SampleSource<R> {
+    /// A text stream of the `sensors` (an empty id: the one sensor).
+    pub fn lines(input: R, sensors: Vec<String>) -> Self {
+        SampleSource::Lines {
+            input,
+            sensors,
+            columns: None,
+            first_line: true,
+            line: Vec::new(),
+        }
+    }
+
+    /// A recording file of the `sensors`, its sample rate (`rate_hz` or the
+    /// file's own).
+    pub fn file(
+        path: &Path,
+        sensors: &[String],
+        channels: &[String],
+        rate_hz: Option<f64>,
+    ) -> Result<(Self, f64)> {
+        if sensors.len() == 1 && sensors[0].is_empty() {
+            let reader = RawReader::open_channels(path, rate_hz, channels)?;
+            let rate = reader.sample_rate_hz();
+            let buffer = Default::default();
+            let reader = Box::new(reader);
+            return Ok((SampleSource::Raw { reader, buffer }, rate));
+        }
+        let specs: Vec<String> = if channels.is_empty() {
+            sensors
+                .iter()
+                .flat_map(|s| {
+                    TDMS_DEFAULT_CHANNELS
+                        .iter()
+                        .map(move |c| format!("{s}/{c}"))
+                })
+                .collect()
+        } else {
+            channels.to_vec()
+        };
+        let is_tdms = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("tdms"));
+        if !is_tdms || specs.len() != 4 * sensors.len() {
+            return Err(Error::Options(format!(
+                "{}: a rig's recording is a .tdms file with four channels per sensor ({} named, \
+                 {} sensors); expected raw.tdms with groups named by the sensors, or the rows \
+                 on standard input",
+                path.display(),
+                specs.len(),
+                sensors.len()
+            )));
+        }
+        let reader = TdmsReader::open(path, &specs, specs.len())?;
+        let increment = reader.increment_s(psdcal_io::RATE_TOLERANCE)?;
+        let rate = match (rate_hz, increment) {
+            (Some(r), _) => r,
+            (None, Some(dt)) => 1.0 / dt,
+            (None, None) => {
+                return Err(Error::Options(format!(
+                    "{}: the channels carry no wf_increment; give the sample rate as --rate HZ",
+                    path.display()
+                )))
+            }
+        };
+        let width = specs.len();
+        let reader = Box::new(reader);
+        let source = SampleSource::Tdms {
+            reader,
+            width,
+            buffer: Vec::new(),
+            next: 0,
+        };
+        Ok((source, rate))
+    }
+
+    /// The next row; `None` at the end of the input.
+    pub fn next(&mut self) -> Result<Option<Sample>> {
+        match self {
+            SampleSource::Raw { reader, buffer } => {
+                if buffer.is_empty() {
+                    let mut block = Vec::with_capacity(BLOCK);
+                    reader.read_frames(&mut block, BLOCK)?;
+                    buffer.extend(block);
+                }
+                Ok(buffer.pop_front().map(|f| Sample::Values(f.to_vec())))
+            }
+            SampleSource::Tdms {
+                reader,
+                width,
+                buffer,
+                next,
+            } => {
+                if *next >= buffer.len() {
+                    buffer.clear();
+                    *next = 0;
+                    if reader.read_rows(buffer, BLOCK)? == 0 {
+                        return Ok(None);
+                    }
+                }
+                let row = buffer[*next..*next + *width].to_vec();
+                *next += *width;
+                Ok(Some(Sample::Values(row)))
+            }
+            SampleSource::Lines {
+                input,
+                sensors,
+                columns,
+                first_line,
+                line,
+            } => loop {
+                line.clear();
+                let read = (&mut *input)
+                    .take(MAX_LINE_BYTES as u64 + 1)
+                    .read_until(b'\n', line)
+                    .map_err(|source| {
+                        Error::Io(psdcal_io::IoError::Read {
+                            file: "standard input".to_string(),
+                            source,
+                        })
+                    })?;
+                if read == 0 {
+                    return Ok(None);
+                }
+                if line.len() > MAX_LINE_BYTES && line.last() != Some(&b'\n') {
+                    // Skip the rest of the line.
+                    let mut rest = Vec::new();
+                    let _ = input.read_until(b'\n', &mut rest);
+                    return Ok(Some(Sample::Malformed));
+                }
+                let Ok(text) = std::str::from_utf8(line) else {
+                    return Ok(Some(Sample::Malformed));
+                };
+                let text = text.trim();
+                if text.is_empty() || text.starts_with('#') {
+                    continue;
+                }
+                let fields: Vec<&str> = text.split(',').map(str::trim).collect();
+                let is_header = fields.iter().any(|f| {
+                    let name = f.rsplit('/').next().unwrap_or(f);
+                    name.eq_ignore_ascii_case("vx1")
+                });
+                if *first_line && is_header {
+                    *first_line = false;
+                    *columns = Some(header_columns(&fields, sensors).ok_or_else(|| {
+                        Error::Input(format!(
+                            "standard input: the header '{}' lacks one of {}",
+                            text.chars().take(60).collect::<String>(),
+                            needed(sensors)
+                        ))
+                    })?);
+                    continue;
+                }
+                *first_line = false;
+                let default: Vec<usize> = (0..4 * sensors.len()).collect();
+                let cols = columns.as_deref().unwrap_or(&default);
+                return Ok(Some(match sample(&fields, cols) {
+                    Some(v) => Sample::Values(v),
+                    None => Sample::Malformed,
+                }));
+            },
+        }
+    }
+}
+
+/// The column names a header must hold.
+fn needed(sensors: &[String]) -> String {
+    let names: Vec<String> = sensors
+        .iter()
+        .flat_map(|s| {
+            TDMS_DEFAULT_CHANNELS.iter().map(move |c| {
+                if s.is_empty() {
+                    c.to_string()
+                } else {
+                    format!("{s}/{c}")
+                }
+            })
+        })
+        .collect();
+    let text = names.join(", ");
+    text.chars().take(120).collect()
+}
+
+/// The positions of every sensor's `vx1, vx2, vy1, vy2` in a header.
+fn header_columns(fields: &[&str], sensors: &[String]) -> Option<Vec<usize>> {
+    let mut out = Vec::with_capacity(4 * sensors.len());
+    for s in sensors {
+        for c in TDMS_DEFAULT_CHANNELS {
+            let name = if s.is_empty() {
+                c.to_string()
+            } else {
+                format!("{s}/{c}")
+            };
+            out.push(fields.iter().position(|f| f.eq_ignore_ascii_case(&name))?);
+        }
+    }
+    Some(out)
+}
+
+/// Finite numbers at `columns`.
+fn sample(fields: &[&str], columns: &[usize]) -> Option<Vec<f64>> {
+    columns
+        .iter()
+        .map(|&c| fields.get(c)?.parse::<f64>().ok().filter(|v| v.is_finite()))
+        .collect()
+}

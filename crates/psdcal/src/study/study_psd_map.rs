@@ -1,0 +1,339 @@
+//! The study's PSD-map condition (docs/model.md §8.3; EXPERIMENTS.md): per
+//! seed, a simulated data set of lens 2 at 40 dB with 12 images and the
+//! PSD's non-radial non-linearity, calibrated (a) with the map of a
+//! simulated 0.25 mm raster scan (37 × 37, stage σ 0.3 µm, 50 dB) held
+//! fixed, (b) with `l1` freed instead, and (c) the same data set without
+//! any non-linearity (the same seed: the same poses and noise), calibrated
+//! plainly; and (d) with the same map refined (`--refine-psd-map`). Each calibration is judged by its RMS angle error over 9 × 9
+//! held-out directions (80 % of the sensor), measured through the true
+//! non-linearity without noise, answered from the calibration record alone
+//! (`sensor_of`), against the true ray: `e = atan2(|d̂ × t̂|, d̂ · t̂)`,
+//! `RMS = √(Σ e² / 81)`. Seeds pool by the RMS of their RMS errors. The
+//! map's own error is the RMS of `d(m) − (spot(m) − m)` over a 41 × 41 grid
+//! inside the scan, next to the scan's noise `√((σx² + σy²)/2)`.
+
+use std::path::Path;
+
+use nalgebra::Vector2;
+use psdcal_model::SensorModel;
+use psdcal_sim::{Lens, PsdNonlinearity, TemplateKind};
+
+use crate::answer::sensor::sensor_of;
+use crate::base::error::{Error, Result};
+use crate::base::options::CalibrationOptions;
+use crate::calibration::calibrate::calibrate;
+use crate::dataset::data_set::{DataSet, DataSetFiles, LoadOptions, PointSource};
+use crate::psd_map::from_scan::{psd_map_from_scan, PsdMapOutcome, PsdMapRequest};
+use crate::simulation::simulate::{simulate_files, SimulateRequest, DEFAULT_RECORD_CYCLES};
+use crate::simulation::simulate_scan::{simulate_scan_file, ScanRequest};
+use psdcal_io::Calibration;
+use psdcal_locate::{LocateOptions, Measurement};
+use psdcal_model::{Param, PsdGeometry};
+use psdcal_psdmap::ModelChoice as PsdMapModel;
+
+/// One seed's angle errors (rad) and the map's error against the truth.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SeedErrors {
+    /// Calibrated with the map.
+    pub map: f64,
+    /// Calibrated with the map refined, its scan as the prior.
+    pub refined: f64,
+    /// Calibrated with `l1` freed.
+    pub l1: f64,
+    /// The same data without non-linearity.
+    pub clean: f64,
+    /// RMS of the map's error against the true field over the scan's
+    /// interior, mm.
+    pub map_error_mm: f64,
+    /// The same for the refined map, mm.
+    pub refined_map_error_mm: f64,
+    /// The scan's noise per axis (√(σx² + σy²)/√2), mm.
+    pub scan_noise_mm: f64,
+}
+
+/// The map of `scan` with the model chosen by cross-validation (folds from
+/// `seed`), written to `dir/psd_map{seed}.json`.
+fn fit_and_write_map(
+    dir: &Path,
+    scan: &Path,
+    seed: u64,
+) -> Result<(PsdMapOutcome, std::path::PathBuf)> {
+    let fitted = psd_map_from_scan(&PsdMapRequest {
+        scan: scan.to_path_buf(),
+        model: PsdMapModel::Auto,
+        geometry: PsdGeometry::default(),
+        seed,
+        command: String::new(),
+        report: None,
+    })?;
+    let map_path = dir.join(format!("psd_map{seed}.json"));
+    fitted.write(&map_path)?;
+    Ok((fitted, map_path))
+}
+
+fn data_set(dir: &Path, seed: u64, nonlinearity: bool) -> Result<DataSet> {
+    simulate_files(&SimulateRequest {
+        lens: Lens::Two,
+        snr_db: Some(40.0),
+        imbalance: false,
+        psd_distortion: false,
+        psd_nonlinearity: nonlinearity,
+        images: 12,
+        template: TemplateKind::Scatter14,
+        record_cycles: DEFAULT_RECORD_CYCLES,
+        seed,
+        out: dir.to_path_buf(),
+    })?;
+    DataSet::from_files(
+        &DataSetFiles {
+            template: dir.join("template.csv"),
+            points: PointSource::Observations(dir.join("observations.csv")),
+            gains: None,
+        },
+        &LoadOptions::default(),
+    )
+}
+
+/// The RMS angle error of a calibration (module documentation), rad.
+fn aoa_error(record: &Calibration, nonlinearity: bool) -> Result<f64> {
+    let truth = SensorModel::paper_lens2();
+    let geometry = PsdGeometry::default();
+    let nl = PsdNonlinearity::new(geometry);
+    let sensor = sensor_of(record)?;
+    let (mut sum, mut n) = (0.0, 0);
+    for i in 0..9 {
+        for j in 0..9 {
+            let ideal = Vector2::new(
+                0.4 * geometry.lx * (i as f64 / 4.0 - 1.0),
+                0.4 * geometry.ly * (j as f64 / 4.0 - 1.0),
+            );
+            let spot = truth.distort(&ideal)?;
+            let m = if nonlinearity {
+                nl.reported(&spot)
+            } else {
+                spot
+            };
+            let est = sensor.aoa(&Measurement::Point(m), &LocateOptions::default())?;
+            let e = est.aoa.direction.into_inner();
+            let t = truth.ray_direction(&ideal).into_inner();
+            let angle = e.cross(&t).norm().atan2(e.dot(&t));
+            sum += angle * angle;
+            n += 1;
+        }
+    }
+    Ok((sum / n as f64).sqrt())
+}
+
+/// The experiment for one seed; `amplitudes`: fit the map from the scan's
+/// amplitude form.
+pub fn psd_map_seed(dir: &Path, seed: u64, amplitudes: bool) -> Result<SeedErrors> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
+        path: dir.to_path_buf(),
+        message: format!("cannot create {}: {e}", dir.display()),
+    })?;
+    let scan = dir.join(format!("scan{seed}.csv"));
+    let scanned = simulate_scan_file(&ScanRequest {
+        step_mm: 0.25,
+        stage_sigma_um: 0.3,
+        snr_db: Some(50.0),
+        nonlinearity: true,
+        geometry: PsdGeometry::default(),
+        seed: 1000 + seed,
+        out: scan.clone(),
+    })?;
+    if amplitudes {
+        let stage: Vec<_> = scanned.samples.iter().map(|s| s.stage).collect();
+        let amps: Vec<_> = scanned.samples.iter().map(|s| s.amplitudes).collect();
+        psdcal_io::write_scan(&scan, &stage, None, Some(&amps))?;
+    }
+    let (fitted, map_path) = fit_and_write_map(dir, &scan, seed)?;
+    assert_eq!(fitted.file.fit.from_amplitudes, amplitudes);
+    // The map against the true field (measured → spot) inside the scan.
+    let map_error_mm = map_error(&fitted.fit.map, &fitted.fit.block)?;
+
+    let noisy = data_set(&dir.join(format!("nl{seed}")), seed, true)?;
+    let with_map = CalibrationOptions {
+        psd_map: Some(map_path),
+        ..CalibrationOptions::default()
+    };
+    let map = aoa_error(&calibrate(&noisy, &with_map)?.record, true)?;
+    let refined_record = calibrate(
+        &noisy,
+        &CalibrationOptions {
+            refine_psd_map: true,
+            ..with_map
+        },
+    )?
+    .record;
+    let refined = aoa_error(&refined_record, true)?;
+    let refined_block: Vec<f64> = refined_record
+        .psd_map
+        .as_ref()
+        .ok_or_else(|| Error::Input("the refined calibration lost its map".into()))?
+        .parameters
+        .iter()
+        .map(|(_, v)| *v)
+        .collect();
+    let refined_map_error_mm = map_error(&fitted.fit.map, &refined_block)?;
+    let free_l1 = CalibrationOptions {
+        free: vec![
+            Param::F,
+            Param::Cx,
+            Param::Cy,
+            Param::K1,
+            Param::K2,
+            Param::L1,
+        ],
+        ..CalibrationOptions::default()
+    };
+    let l1 = aoa_error(&calibrate(&noisy, &free_l1)?.record, true)?;
+    let clean_set = data_set(&dir.join(format!("clean{seed}")), seed, false)?;
+    let clean = aoa_error(
+        &calibrate(&clean_set, &CalibrationOptions::default())?.record,
+        false,
+    )?;
+    Ok(SeedErrors {
+        map,
+        refined,
+        refined_map_error_mm,
+        l1,
+        clean,
+        map_error_mm,
+        scan_noise_mm: fitted.fit.sigma_mm.norm() / 2f64.sqrt(),
+    })
+}
+
+/// The RMS of a map's error `d(m) − (spot(m) − m)` against the true
+/// non-linearity over a 41 × 41 grid of ±4.3 mm (inside the scan), mm.
+fn map_error(map: &psdcal_model::stages::PsdMap, block: &[f64]) -> Result<f64> {
+    let nl = PsdNonlinearity::new(PsdGeometry::default());
+    let mut s = 0.0;
+    for i in 0..41 {
+        for j in 0..41 {
+            let m = Vector2::new(-4.3 + 8.6 * i as f64 / 40.0, -4.3 + 8.6 * j as f64 / 40.0);
+            let truth = nl.spot(&m).ok_or_else(|| {
+                Error::Input("the true field is undefined inside the scan".into())
+            })? - m;
+            s += (map.displacement(block, &m) - truth).norm_squared();
+        }
+    }
+    Ok((s / 1681.0).sqrt())
+}
+
+/// A scan of [`refine_seed`]: raster step (mm), stage σ (µm), SNR (dB).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScanSpec {
+    /// Raster step, mm.
+    pub step_mm: f64,
+    /// The stage's position noise, µm.
+    pub stage_sigma_um: f64,
+    /// The PSD's SNR during the scan, dB.
+    pub snr_db: f64,
+}
+
+/// One seed of `calibrate --refine-psd-map` against the map held fixed.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct RefineErrors {
+    /// RMS angle error with the map held fixed, rad.
+    pub held: f64,
+    /// RMS angle error with the map refined, rad.
+    pub refined: f64,
+    /// The scan's map against the true field (RMS), mm.
+    pub held_map_error_mm: f64,
+    /// The refined map against the true field (RMS), mm.
+    pub refined_map_error_mm: f64,
+    /// The largest σ of a map coefficient from the scan, mm.
+    pub held_max_sigma_mm: f64,
+    /// The largest σ of a map coefficient after refinement, mm.
+    pub refined_max_sigma_mm: f64,
+}
+
+/// The data set of seed `seed` (lens 2, 40 dB, 12 images, the PSD's
+/// non-linearity) calibrated with the map of a scan `scan` held fixed and
+/// refined (`--refine-psd-map`): angle errors as in [`psd_map_seed`], the
+/// map's error against the true field before and after, and the largest
+/// coefficient σ before and after.
+pub fn refine_seed(dir: &Path, seed: u64, scan: &ScanSpec) -> Result<RefineErrors> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
+        path: dir.to_path_buf(),
+        message: format!("cannot create {}: {e}", dir.display()),
+    })?;
+    let scan_path = dir.join(format!("scan{seed}.csv"));
+    simulate_scan_file(&ScanRequest {
+        step_mm: scan.step_mm,
+        stage_sigma_um: scan.stage_sigma_um,
+        snr_db: Some(scan.snr_db),
+        nonlinearity: true,
+        geometry: PsdGeometry::default(),
+        seed: 1000 + seed,
+        out: scan_path.clone(),
+    })?;
+    let (fitted, map_path) = fit_and_write_map(dir, &scan_path, seed)?;
+    let noisy = data_set(&dir.join(format!("nl{seed}")), seed, true)?;
+    let held_options = CalibrationOptions {
+        psd_map: Some(map_path),
+        ..CalibrationOptions::default()
+    };
+    let held = calibrate(&noisy, &held_options)?.record;
+    let refined = calibrate(
+        &noisy,
+        &CalibrationOptions {
+            refine_psd_map: true,
+            ..held_options
+        },
+    )?
+    .record;
+    let stage = refined
+        .psd_map
+        .as_ref()
+        .ok_or_else(|| Error::Input("the refined calibration lost its map".into()))?;
+    let block: Vec<f64> = stage.parameters.iter().map(|(_, v)| *v).collect();
+    let (held_stage, _) = held
+        .psd_map
+        .as_ref()
+        .ok_or_else(|| Error::Input("the calibration lost its map".into()))?
+        .to_stage(held.covariance.parameters.len())
+        .map_err(Error::Input)?;
+    let max_sigma = |c: &psdcal_model::ParameterCovariance| {
+        (0..c.len())
+            .map(|i| c.matrix()[(i, i)].sqrt())
+            .fold(0.0, f64::max)
+    };
+    let prior = held.psd_map.as_ref().map(|m| m.map_covariance(&held_stage));
+    let posterior = stage.map_covariance(&held_stage);
+    Ok(RefineErrors {
+        held: aoa_error(&held, true)?,
+        refined: aoa_error(&refined, true)?,
+        held_map_error_mm: map_error(&fitted.fit.map, &fitted.fit.block)?,
+        refined_map_error_mm: map_error(&fitted.fit.map, &block)?,
+        held_max_sigma_mm: max_sigma(
+            &prior
+                .ok_or_else(|| Error::Input("no map".into()))?
+                .map_err(Error::Input)?,
+        ),
+        refined_max_sigma_mm: max_sigma(&posterior.map_err(Error::Input)?),
+    })
+}
+
+/// RMS over seeds of one field.
+pub fn pooled(errors: &[SeedErrors], field: fn(&SeedErrors) -> f64) -> f64 {
+    (errors.iter().map(|e| field(e).powi(2)).sum::<f64>() / errors.len() as f64).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn pooling_is_the_rms_over_seeds() {
+        let e = |map: f64| super::SeedErrors {
+            map,
+            refined: 0.0,
+            refined_map_error_mm: 0.0,
+            l1: 0.0,
+            clean: 0.0,
+            map_error_mm: 0.0,
+            scan_noise_mm: 0.0,
+        };
+        let p = super::pooled(&[e(3.0), e(4.0)], |x| x.map);
+        assert!((p - 12.5f64.sqrt()).abs() < 1e-15);
+    }
+}
