@@ -79,8 +79,11 @@ pub struct CalibrateOptions {
     pub prior: Option<ParameterCovariance>,
 }
 
-/// How [`calibrate`] estimates the covariance.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// How [`calibrate`] estimates the covariance (calibration.json's
+/// provenance: `{"method": "linear"}` or `{"method": "bootstrap",
+/// "resamples": N, "seed": S}`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(tag = "method", rename_all = "kebab-case")]
 pub enum Uncertainty {
     /// Analytic ([`mod@crate::covariance`]): the sandwich for the unweighted
     /// template-plane fit, `σ² (JᵀJ)⁻¹` otherwise.

@@ -41,18 +41,66 @@ use crate::homography::{fast_homography_normalised, normalizing_transform};
 use crate::{CalibError, CalibrationData};
 
 /// Which preliminary correction to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Preliminary {
     /// No correction (`k1 = k2 = 0`).
     Off,
     /// Line straightness; needs declared lines.
     Straightness,
     /// Homography consistency; any template.
+    #[serde(rename = "homography")]
     HomographyConsistency,
     /// Straightness when the template declares usable lines, homography
     /// consistency otherwise. A report never carries `Auto`.
     #[default]
     Auto,
+}
+
+impl Preliminary {
+    /// Every method, in the order the command line lists them.
+    pub const ALL: [Preliminary; 4] = [
+        Preliminary::Auto,
+        Preliminary::Straightness,
+        Preliminary::HomographyConsistency,
+        Preliminary::Off,
+    ];
+
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Preliminary::Auto => "auto",
+            Preliminary::Straightness => "straightness",
+            Preliminary::HomographyConsistency => "homography",
+            Preliminary::Off => "off",
+        }
+    }
+}
+
+impl std::str::FromStr for Preliminary {
+    type Err = String;
+
+    /// `auto`, `straightness`, `homography` or `off` (any case).
+    fn from_str(text: &str) -> Result<Self, String> {
+        let wanted = text.trim().to_ascii_lowercase();
+        Self::ALL
+            .into_iter()
+            .find(|p| p.name() == wanted)
+            .ok_or_else(|| {
+                format!("expected auto, straightness, homography or off, found '{text}'")
+            })
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for Preliminary {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
 }
 
 /// Options of [`estimate_preliminary`].

@@ -81,6 +81,13 @@ pub enum NoiseModel {
 }
 
 impl NoiseModel {
+    /// Every noise model, in the order the command line lists them.
+    pub const ALL: [NoiseModel; 3] = [
+        NoiseModel::Uniform,
+        NoiseModel::ChannelSnr,
+        NoiseModel::ChannelFloor,
+    ];
+
     /// The name used on the command line and in reports.
     pub fn name(&self) -> &'static str {
         match self {
@@ -88,6 +95,32 @@ impl NoiseModel {
             NoiseModel::ChannelSnr => "channel-snr",
             NoiseModel::ChannelFloor => "channel-floor",
         }
+    }
+}
+
+impl std::str::FromStr for NoiseModel {
+    type Err = String;
+
+    /// `uniform`, `channel-snr` or `channel-floor` (any case, `_` for `-`).
+    fn from_str(text: &str) -> Result<Self, String> {
+        let wanted = text.trim().to_ascii_lowercase().replace('_', "-");
+        Self::ALL
+            .into_iter()
+            .find(|n| n.name() == wanted)
+            .ok_or_else(|| {
+                format!("expected uniform, channel-snr or channel-floor, found '{text}'")
+            })
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for NoiseModel {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
     }
 }
 

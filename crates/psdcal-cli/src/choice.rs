@@ -25,30 +25,6 @@ pub fn name<T: ValueEnum>(value: &T) -> String {
         .map_or_else(String::new, |p| p.get_name().to_string())
 }
 
-/// `--cost`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum CostArg {
-    Template,
-    Image,
-}
-
-/// `--noise`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum NoiseArg {
-    Uniform,
-    ChannelSnr,
-    ChannelFloor,
-}
-
-/// `--preliminary`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum PreliminaryArg {
-    Auto,
-    Straightness,
-    Homography,
-    Off,
-}
-
 /// `--lens` of `simulate` and `map`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum LensArg {
@@ -142,9 +118,6 @@ pub fn impairments(list: &[ImpairmentArg]) -> psdcal::Impairments {
     psdcal::Impairments::only(&kinds)
 }
 
-same_variants!(CostArg => psdcal::Cost { Template, Image });
-same_variants!(NoiseArg => psdcal::Noise { Uniform, ChannelSnr, ChannelFloor });
-same_variants!(PreliminaryArg => psdcal::Preliminary { Auto, Straightness, Homography, Off });
 same_variants!(LensArg => psdcal::Lens { One, Two });
 same_variants!(TemplateArg => psdcal::TemplateKind { Scatter14, Grid });
 same_variants!(GainsMethodArg => psdcal::GainsMethod { EqualCurrent });

@@ -9,10 +9,9 @@ use psdcal::option_text::{
 };
 pub use psdcal::PointSource;
 use psdcal::{
-    CalibrationOptions, DataSetFiles, LoadOptions, Param, PsdGeometry, Robust, Uncertainty,
+    CalibrationOptions, CostKind, DataSetFiles, LoadOptions, NoiseModel, Param, Preliminary,
+    PsdGeometry, RobustLoss, Uncertainty,
 };
-
-use crate::choice::{CostArg, NoiseArg, PreliminaryArg};
 
 /// psdcal: calibrate infrared position-sensitive-device (PSD) sensors.
 #[derive(Debug, Parser)]
@@ -145,20 +144,20 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "MM", value_parser = positive_mm)]
     pub focal_guess: Option<f64>,
     /// Cost to minimise: template (the paper's template-plane error) or image
-    #[arg(long, value_name = "KIND", value_enum, default_value_t = CostArg::Template)]
-    pub cost: CostArg,
+    #[arg(long, value_name = "KIND", value_enum, default_value_t = CostKind::Template)]
+    pub cost: CostKind,
     /// Noise weighting of the cost: uniform (unweighted, the paper's),
     /// channel-snr (the same SNR on every electrode channel, each record's own
     /// from signals.csv's snr_db when given: points near the electrodes weigh
     /// more) or channel-floor (the same absolute noise on
     /// every channel: brighter spots weigh more)
-    #[arg(long, value_name = "MODEL", value_enum, default_value_t = NoiseArg::Uniform)]
-    pub noise: NoiseArg,
+    #[arg(long, value_name = "MODEL", value_enum, default_value_t = NoiseModel::Uniform)]
+    pub noise: NoiseModel,
     /// Preliminary distortion correction before the linear stage: auto (line
     /// straightness when the template declares lines, else homography
     /// consistency), straightness, homography, or off
-    #[arg(long, value_name = "METHOD", value_enum, default_value_t = PreliminaryArg::Auto)]
-    pub preliminary: PreliminaryArg,
+    #[arg(long, value_name = "METHOD", value_enum, default_value_t = Preliminary::Auto)]
+    pub preliminary: Preliminary,
     /// Skip the preliminary distortion correction (same as --preliminary off)
     #[arg(long, conflicts_with = "preliminary")]
     pub no_preliminary: bool,
@@ -167,7 +166,7 @@ pub struct CalibrateArgs {
     pub no_normalize: bool,
     /// Robust loss: huber:SCALE or cauchy:SCALE (SCALE in mm of the cost)
     #[arg(long, value_name = "LOSS:SCALE", value_parser = parse_robust)]
-    pub robust: Option<Robust>,
+    pub robust: Option<RobustLoss>,
     /// Covariance of the estimate: linear (analytic, the default) or
     /// bootstrap:N[:SEED] (N ≥ 10 refits of images resampled with
     /// replacement; seed 1 by default), where the linear one is not enough
@@ -303,12 +302,12 @@ impl Cli {
                     fit_gains,
                     fixed: args.set,
                     focal_guess: args.focal_guess,
-                    cost: args.cost.into(),
-                    noise: args.noise.into(),
+                    cost: args.cost,
+                    noise: args.noise,
                     preliminary: if args.no_preliminary {
-                        psdcal::Preliminary::Off
+                        Preliminary::Off
                     } else {
-                        args.preliminary.into()
+                        args.preliminary
                     },
                     normalize: !args.no_normalize,
                     robust: args.robust,

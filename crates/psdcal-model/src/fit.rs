@@ -21,3 +21,40 @@ pub enum CostKind {
     /// Image-plane reprojection error, mm on the sensor.
     Image,
 }
+
+impl CostKind {
+    /// Every cost, in the order the command line lists them.
+    pub const ALL: [CostKind; 2] = [CostKind::Template, CostKind::Image];
+
+    /// The name on the command line and in calibration.json.
+    pub fn name(self) -> &'static str {
+        match self {
+            CostKind::Template => "template",
+            CostKind::Image => "image",
+        }
+    }
+}
+
+impl std::str::FromStr for CostKind {
+    type Err = String;
+
+    /// `template` or `image` (any case).
+    fn from_str(text: &str) -> Result<Self, String> {
+        let wanted = text.trim().to_ascii_lowercase();
+        Self::ALL
+            .into_iter()
+            .find(|c| c.name() == wanted)
+            .ok_or_else(|| format!("expected template or image, found '{text}'"))
+    }
+}
+
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for CostKind {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Self::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}

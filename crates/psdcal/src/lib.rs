@@ -93,7 +93,7 @@ pub use answer::sensor::{covariance_warning, save_calibration, sensor_of, Loaded
 pub use base::advice::{advice, error_text};
 pub use base::error::{Error, Result};
 pub use base::option_text::plane_at_distance;
-pub use base::options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
+pub use base::options::CalibrationOptions;
 pub use base::provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
 pub use base::summary::Summary;
 pub use base::summary_text::summary_text;
@@ -113,7 +113,9 @@ pub use psd_map::from_scan::{
     parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, PSD_MAP_PAGE,
     RESIDUAL_MAP_CELLS, SCAN_SUMMARY_CELLS,
 };
+pub use psdcal_calib::{BootstrapOptions, NoiseModel, Preliminary, RobustLoss, Uncertainty};
 pub use psdcal_io::RawFormat;
+pub use psdcal_model::CostKind;
 pub use psdcal_psdmap::ModelChoice as PsdMapModel;
 pub use psdcal_signal::DemodConfig;
 pub use psdcal_sim::{Impairment, Impairments};

@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use psdcal_locate::{Plane, MAX_GRID};
 use psdcal_model::{Param, UnknownParam};
 
-use crate::base::options::{Cost, Noise, Preliminary, Robust, Uncertainty};
+use psdcal_calib::{BootstrapOptions, RobustLoss, Uncertainty};
 
 /// Parameters to estimate and whether the gains are freed too (`--fit`).
 #[derive(Debug, Clone, PartialEq)]
@@ -41,14 +41,14 @@ pub fn parse_fit(text: &str) -> Result<FitList, String> {
 
 /// `--robust huber:0.1` or `cauchy:0.1`.
 /// `--robust LOSS:SCALE`: `huber:SCALE` or `cauchy:SCALE`, SCALE in mm.
-pub fn parse_robust(text: &str) -> Result<Robust, String> {
+pub fn parse_robust(text: &str) -> Result<RobustLoss, String> {
     let (kind, scale) = text
         .split_once(':')
         .ok_or_else(|| format!("expected LOSS:SCALE such as huber:0.1, found '{text}'"))?;
     let scale = positive_mm(scale)?;
     match kind.trim().to_ascii_lowercase().as_str() {
-        "huber" => Ok(Robust::Huber { scale }),
-        "cauchy" => Ok(Robust::Cauchy { scale }),
+        "huber" => Ok(RobustLoss::Huber { scale }),
+        "cauchy" => Ok(RobustLoss::Cauchy { scale }),
         other => Err(format!("unknown loss '{other}' (expected huber or cauchy)")),
     }
 }
@@ -83,10 +83,10 @@ pub fn parse_uncertainty(text: &str) -> Result<Uncertainty, String> {
             if parts.next().is_some() {
                 return Err(format!("expected bootstrap:N[:SEED], found '{text}'"));
             }
-            Ok(Uncertainty::Bootstrap {
+            Ok(Uncertainty::Bootstrap(BootstrapOptions {
                 resamples: resamples as usize,
                 seed,
-            })
+            }))
         }
         _ => Err(format!(
             "expected linear or bootstrap:N[:SEED], found '{text}'"
@@ -250,40 +250,6 @@ pub fn parse_threads(text: &str) -> Result<usize, String> {
         Ok(n) if (1..=1024).contains(&n) => Ok(n),
         _ => Err(format!(
             "expected a number of threads from 1 to 1024, found '{text}'"
-        )),
-    }
-}
-
-/// `--cost template|image`.
-pub fn parse_cost(text: &str) -> Result<Cost, String> {
-    match text.trim().to_ascii_lowercase().as_str() {
-        "template" => Ok(Cost::Template),
-        "image" => Ok(Cost::Image),
-        _ => Err(format!("expected template or image, found '{text}'")),
-    }
-}
-
-/// `--noise uniform|channel-snr|channel-floor` (`_` for `-` too).
-pub fn parse_noise(text: &str) -> Result<Noise, String> {
-    match text.trim().to_ascii_lowercase().replace('_', "-").as_str() {
-        "uniform" => Ok(Noise::Uniform),
-        "channel-snr" => Ok(Noise::ChannelSnr),
-        "channel-floor" => Ok(Noise::ChannelFloor),
-        _ => Err(format!(
-            "expected uniform, channel-snr or channel-floor, found '{text}'"
-        )),
-    }
-}
-
-/// `--preliminary auto|straightness|homography|off`.
-pub fn parse_preliminary(text: &str) -> Result<Preliminary, String> {
-    match text.trim().to_ascii_lowercase().as_str() {
-        "auto" => Ok(Preliminary::Auto),
-        "straightness" => Ok(Preliminary::Straightness),
-        "homography" => Ok(Preliminary::Homography),
-        "off" => Ok(Preliminary::Off),
-        _ => Err(format!(
-            "expected auto, straightness, homography or off, found '{text}'"
         )),
     }
 }

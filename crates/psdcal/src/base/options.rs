@@ -1,81 +1,9 @@
-//! The options of a calibration, as enums and values (never strings).
+//! The options of a calibration, as values and the option enums of the
+//! crates that own them (never strings).
 
-use psdcal_model::Param;
+use psdcal_calib::{NoiseModel, Preliminary, RobustLoss, Uncertainty};
+use psdcal_model::{CostKind, Param};
 use serde::Serialize;
-
-/// Which error the fit minimises (docs/model.md §4.6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Cost {
-    /// Template-plane error (P29), the paper's residual.
-    #[default]
-    Template,
-    /// Image-plane reprojection error.
-    Image,
-}
-
-/// How the cost is weighted by the electrode noise.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Noise {
-    /// Unweighted, the paper's.
-    #[default]
-    Uniform,
-    /// The same SNR on every electrode channel.
-    ChannelSnr,
-    /// The same absolute noise on every channel.
-    ChannelFloor,
-}
-
-/// The preliminary distortion correction before the linear stage (§4.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Preliminary {
-    /// Line straightness when the template declares lines, else homography
-    /// consistency.
-    #[default]
-    Auto,
-    /// Line straightness.
-    Straightness,
-    /// Homography consistency.
-    Homography,
-    /// None.
-    Off,
-}
-
-/// A robust loss with its scale (mm of the cost).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-#[serde(tag = "loss", rename_all = "kebab-case")]
-pub enum Robust {
-    /// Huber.
-    Huber {
-        /// Scale, mm.
-        scale: f64,
-    },
-    /// Cauchy.
-    Cauchy {
-        /// Scale, mm.
-        scale: f64,
-    },
-}
-
-/// How the covariance of the estimate is computed (docs/model.md §4.6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
-#[serde(tag = "method", rename_all = "kebab-case")]
-pub enum Uncertainty {
-    /// Analytic: the sandwich for the unweighted template-plane fit,
-    /// `σ² (JᵀJ)⁻¹` otherwise.
-    #[default]
-    Linear,
-    /// Case bootstrap by image: `resamples` refits of images drawn with
-    /// replacement, resample `b` from `ChaCha8Rng::seed_from_u64(seed + b)`.
-    Bootstrap {
-        /// Number of resamples (at least 10).
-        resamples: usize,
-        /// Base seed.
-        seed: u64,
-    },
-}
 
 /// Everything a calibration can be told.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -89,15 +17,15 @@ pub struct CalibrationOptions {
     /// Nominal focal length, mm (narrows the start's search).
     pub focal_guess: Option<f64>,
     /// The cost minimised.
-    pub cost: Cost,
+    pub cost: CostKind,
     /// Its noise weighting.
-    pub noise: Noise,
+    pub noise: NoiseModel,
     /// The preliminary correction.
     pub preliminary: Preliminary,
     /// Normalise the data of the homographies.
     pub normalize: bool,
     /// A robust loss.
-    pub robust: Option<Robust>,
+    pub robust: Option<RobustLoss>,
     /// How the covariance is computed.
     pub uncertainty: Uncertainty,
     /// A PSD map (psd_map.json from `psdcal psd-map`) to put first in the
@@ -116,8 +44,8 @@ impl Default for CalibrationOptions {
             fit_gains: false,
             fixed: Vec::new(),
             focal_guess: None,
-            cost: Cost::Template,
-            noise: Noise::Uniform,
+            cost: CostKind::Template,
+            noise: NoiseModel::Uniform,
             preliminary: Preliminary::Auto,
             normalize: true,
             robust: None,

@@ -10,8 +10,8 @@ use std::path::PathBuf;
 use psdcal_model::PsdGeometry;
 
 use crate::base::option_text::{
-    parse_assignment, parse_cost, parse_fit, parse_noise, parse_preliminary, parse_robust,
-    parse_switch, parse_uncertainty, positive_mm, side_mm, FitList,
+    parse_assignment, parse_fit, parse_robust, parse_switch, parse_uncertainty, positive_mm,
+    side_mm, FitList,
 };
 use crate::base::options::CalibrationOptions;
 use crate::dataset::data_set::LoadOptions;
@@ -75,9 +75,9 @@ pub fn calibrate_settings(pairs: &[(String, Vec<String>)]) -> Result<CalibrateSe
                 o.fit_gains = gains;
             }
             "focal_guess" => o.focal_guess = Some(positive_mm(one()?).map_err(named)?),
-            "cost" => o.cost = parse_cost(one()?).map_err(named)?,
-            "noise" => o.noise = parse_noise(one()?).map_err(named)?,
-            "preliminary" => o.preliminary = parse_preliminary(one()?).map_err(named)?,
+            "cost" => o.cost = one()?.parse().map_err(named)?,
+            "noise" => o.noise = one()?.parse().map_err(named)?,
+            "preliminary" => o.preliminary = one()?.parse().map_err(named)?,
             "normalize" => o.normalize = parse_switch(one()?).map_err(named)?,
             "robust" => o.robust = Some(parse_robust(one()?).map_err(named)?),
             "uncertainty" => o.uncertainty = parse_uncertainty(one()?).map_err(named)?,
@@ -107,7 +107,6 @@ mod tests {
     use psdcal_model::Param;
 
     use super::*;
-    use crate::base::options::{Cost, Robust};
 
     fn pairs(items: &[(&str, &[&str])]) -> Vec<(String, Vec<String>)> {
         items
@@ -129,8 +128,11 @@ mod tests {
         ]))
         .unwrap();
         assert_eq!(s.options.free, [Param::F, Param::Cx, Param::Cy, Param::K1]);
-        assert_eq!(s.options.cost, Cost::Image);
-        assert_eq!(s.options.robust, Some(Robust::Huber { scale: 0.1 }));
+        assert_eq!(s.options.cost, psdcal_model::CostKind::Image);
+        assert_eq!(
+            s.options.robust,
+            Some(psdcal_calib::RobustLoss::Huber { scale: 0.1 })
+        );
         assert_eq!(s.options.fixed, [(Param::L1, -1.3e-3), (Param::K2, 0.0)]);
         assert_eq!(s.options.focal_guess, Some(8.0));
         assert_eq!((s.load.geometry.lx, s.load.geometry.ly), (10.0, 9.0));

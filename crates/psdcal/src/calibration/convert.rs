@@ -8,7 +8,7 @@ use std::path::Path;
 
 use psdcal_calib::{
     CalibrateOptions, CalibrationData, CalibrationResult, CostKind, ImageObservations, InitOptions,
-    InitRoute, NoiseModel, Observation, RefineOptions, RobustLoss,
+    InitRoute, NoiseModel, Observation, RefineOptions,
 };
 use psdcal_io::{
     BootstrapRecord, Calibration, Covariance, FitSummary, GainsRecord, ImageFit, IoError, Location,
@@ -18,7 +18,7 @@ use psdcal_locate::CalibratedSensor;
 use psdcal_model::stages::gains::GAIN_NAMES;
 use psdcal_model::{Amplitudes, Param, SensorModel};
 
-use crate::base::options::{CalibrationOptions, Cost, Noise, Preliminary, Robust, Uncertainty};
+use crate::base::options::CalibrationOptions;
 use crate::calibration::fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
 use crate::dataset::data_set::DataSet;
 
@@ -115,49 +115,22 @@ pub fn calibrate_options(options: &CalibrationOptions) -> CalibrateOptions {
     }
     CalibrateOptions {
         init: InitOptions {
-            preliminary: match options.preliminary {
-                Preliminary::Auto => psdcal_calib::Preliminary::Auto,
-                Preliminary::Straightness => psdcal_calib::Preliminary::Straightness,
-                Preliminary::Homography => psdcal_calib::Preliminary::HomographyConsistency,
-                Preliminary::Off => psdcal_calib::Preliminary::Off,
-            },
+            preliminary: options.preliminary,
             normalize: options.normalize,
             focal_guess: options.focal_guess,
             ..InitOptions::default()
         },
         refine: RefineOptions {
-            cost: match options.cost {
-                Cost::Template => CostKind::Template,
-                Cost::Image => CostKind::Image,
-            },
-            noise: noise_model(options.noise),
+            cost: options.cost,
+            noise: options.noise,
             free: options.free.clone(),
             fit_gains: options.fit_gains,
-            robust: options.robust.map(|r| match r {
-                Robust::Huber { scale } => RobustLoss::Huber { scale },
-                Robust::Cauchy { scale } => RobustLoss::Cauchy { scale },
-            }),
+            robust: options.robust,
             ..RefineOptions::default()
         },
         base: base.into(),
-        uncertainty: match options.uncertainty {
-            Uncertainty::Linear => psdcal_calib::Uncertainty::Linear,
-            Uncertainty::Bootstrap { resamples, seed } => {
-                psdcal_calib::Uncertainty::Bootstrap(psdcal_calib::BootstrapOptions {
-                    resamples,
-                    seed,
-                })
-            }
-        },
+        uncertainty: options.uncertainty,
         ..CalibrateOptions::default()
-    }
-}
-
-fn noise_model(noise: Noise) -> NoiseModel {
-    match noise {
-        Noise::Uniform => NoiseModel::Uniform,
-        Noise::ChannelSnr => NoiseModel::ChannelSnr,
-        Noise::ChannelFloor => NoiseModel::ChannelFloor,
     }
 }
 
@@ -193,7 +166,7 @@ pub fn record(
     let stats = &result.statistics;
     file.fit = FitSummary {
         cost: result.cost_kind,
-        noise: noise_model(options.noise).name().to_string(),
+        noise: options.noise.name().to_string(),
         residual_mm2: stats.residual_mm2,
         rms_template_mm: stats.rms_template_mm,
         rms_image_mm: stats.rms_image_mm,
