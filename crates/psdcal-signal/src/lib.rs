@@ -14,9 +14,13 @@ pub mod butterworth;
 mod error;
 pub mod lockin;
 pub mod record;
+mod record_buffer;
 pub mod stream;
 pub mod tones;
+mod windows;
 
 pub use error::SignalError;
 pub use record::{demodulate_record, DemodConfig, RecordEstimate, ToneEstimate};
+pub use record_buffer::RecordBuffer;
 pub use stream::StreamFilter;
+pub use windows::{Window, Windows};

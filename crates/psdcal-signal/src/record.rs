@@ -372,34 +372,125 @@ pub fn demodulate_record<const C: usize>(
     config: &DemodConfig,
 ) -> Result<RecordEstimate<C>, SignalError> {
     config.validate()?;
-    let (f_min, f_max) = tones_hz
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| {
-            (lo.min(f), hi.max(f))
-        });
-    if tones_hz.is_empty() {
-        return Err(SignalError::NoTones);
-    }
+    let span = ToneSpan::of(tones_hz)?;
     check_separable(tones_hz, sample_rate_hz, f64::INFINITY)?;
-    let filter = if tones_hz.len() == 1 {
+    let filter = design_filter(tones_hz, span, sample_rate_hz, config)?;
+    let (first, window_len) = window_of(
+        frames.len(),
+        &filter,
+        tones_hz,
+        span,
+        sample_rate_hz,
+        config,
+    )?;
+    let window_s = window_len as f64 / sample_rate_hz;
+    check_separable(tones_hz, sample_rate_hz, window_s)?;
+    let filtered = filter_window(frames, filter, first, window_len, config)?;
+    let (ratio, settled_sums) = clock_ratio(
+        &filtered.window,
+        first,
+        sample_rate_hz,
+        tones_hz,
+        span,
+        config,
+    );
+    let freqs: Vec<f64> = tones_hz.iter().map(|f| f * ratio).collect();
+    let detection = match settled_sums {
+        Some(b) => Detection {
+            gram: closed_form_gram(&freqs, sample_rate_hz, first, window_len),
+            b,
+        },
+        None => detect(&filtered.window, first, sample_rate_hz, &freqs),
+    };
+    let Some((theta, inv)) = detection.solve() else {
+        return Err(SignalError::TonesNotSeparable {
+            first_hz: span.f_min,
+            second_hz: span.f_max,
+            spacing_hz: min_spacing(tones_hz),
+            window_s,
+            minimum_hz: 2.0 / window_s,
+        });
+    };
+    let dof = (window_len - 2 * tones_hz.len()) as f64;
+    let noise_sigma = noise_sigma(&filtered, &theta, &detection.b, dof);
+    let tones = tone_estimates(
+        tones_hz,
+        &freqs,
+        filtered.stream.filter(),
+        &inv,
+        &theta,
+        &noise_sigma,
+        config,
+    );
+    Ok(RecordEstimate {
+        tones,
+        window: first..frames.len(),
+        noise_sigma,
+        clock_ratio: ratio,
+    })
+}
+
+/// The lowest and highest tone.
+#[derive(Debug, Clone, Copy)]
+struct ToneSpan {
+    f_min: f64,
+    f_max: f64,
+}
+
+impl ToneSpan {
+    /// The span of `tones_hz`; [`SignalError::NoTones`] when empty.
+    fn of(tones_hz: &[f64]) -> Result<Self, SignalError> {
+        let (f_min, f_max) = tones_hz
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| {
+                (lo.min(f), hi.max(f))
+            });
+        if tones_hz.is_empty() {
+            return Err(SignalError::NoTones);
+        }
+        Ok(Self { f_min, f_max })
+    }
+}
+
+/// The band-pass: centred on a single tone, or from the lowest tone's lower
+/// edge to the highest's upper edge.
+fn design_filter(
+    tones_hz: &[f64],
+    span: ToneSpan,
+    sample_rate_hz: f64,
+    config: &DemodConfig,
+) -> Result<BandPass, SignalError> {
+    if tones_hz.len() == 1 {
         BandPass::centred(
             config.filter_order,
-            f_min,
+            span.f_min,
             config.bandwidth_hz,
             sample_rate_hz,
-        )?
+        )
     } else {
         BandPass::from_edges(
             config.filter_order,
-            f_min - 0.5 * config.bandwidth_hz,
-            f_max + 0.5 * config.bandwidth_hz,
+            span.f_min - 0.5 * config.bandwidth_hz,
+            span.f_max + 0.5 * config.bandwidth_hz,
             sample_rate_hz,
-        )?
-    };
+        )
+    }
+}
+
+/// The detection window `(first, length)` of a record of `len` samples:
+/// after the filter has settled, whole cycles of a single tone; refused
+/// when the record cannot hold the transient and the shortest window.
+fn window_of(
+    len: usize,
+    filter: &BandPass,
+    tones_hz: &[f64],
+    span: ToneSpan,
+    sample_rate_hz: f64,
+    config: &DemodConfig,
+) -> Result<(usize, usize), SignalError> {
     let settle = (filter.settling_time(config.settle_tolerance) * sample_rate_hz).ceil();
-    let min_window = (MIN_WINDOW_CYCLES * sample_rate_hz / f_min).ceil();
+    let min_window = (MIN_WINDOW_CYCLES * sample_rate_hz / span.f_min).ceil();
     let minimum = settle + min_window.max((2 * tones_hz.len() + 2) as f64);
-    let len = frames.len();
     if (len as f64) < minimum {
         return Err(SignalError::RecordTooShortToDemodulate {
             samples: len,
@@ -409,18 +500,32 @@ pub fn demodulate_record<const C: usize>(
     }
     let start = settle as usize;
     let window_len = if tones_hz.len() == 1 {
-        let cycles = ((len - start) as f64 * f_min / sample_rate_hz).floor();
-        ((cycles * sample_rate_hz / f_min).round() as usize).min(len - start)
+        let cycles = ((len - start) as f64 * span.f_min / sample_rate_hz).floor();
+        ((cycles * sample_rate_hz / span.f_min).round() as usize).min(len - start)
     } else {
         len - start
     };
-    let first = len - window_len;
-    let window_s = window_len as f64 / sample_rate_hz;
-    check_separable(tones_hz, sample_rate_hz, window_s)?;
+    Ok((len - window_len, window_len))
+}
 
-    // The samples checked and band-passed from rest in chunks that stay in
-    // the cache (checked up to the first offender, in sample order), the
-    // window kept.
+/// A record band-passed from rest: the filter after the record, the
+/// filtered window, and `Σ y²` over the window per channel.
+struct Filtered<const C: usize> {
+    stream: StreamFilter<C>,
+    window: Vec<[f64; C]>,
+    yy: [f64; C],
+}
+
+/// The samples checked and band-passed from rest in chunks that stay in
+/// the cache (checked up to the first offender, in sample order), the
+/// window from sample `first` kept.
+fn filter_window<const C: usize>(
+    frames: &[[f64; C]],
+    filter: BandPass,
+    first: usize,
+    window_len: usize,
+    config: &DemodConfig,
+) -> Result<Filtered<C>, SignalError> {
     let mut stream = StreamFilter::<C>::new(filter);
     let mut scratch_frames = [[0.0; C]; CHUNK];
     let mut window = Vec::with_capacity(window_len);
@@ -442,80 +547,100 @@ pub fn demodulate_record<const C: usize>(
             }
         }
     }
+    Ok(Filtered { stream, window, yy })
+}
 
+/// The clock ratio `1 + ρ` estimated from the phase drift between
+/// sub-windows (1 when not estimated or implausible), and the whole
+/// window's `Σ y φ` from the last pass when it settled at the frequencies
+/// it was run at.
+fn clock_ratio<const C: usize>(
+    window: &[[f64; C]],
+    first: usize,
+    sample_rate_hz: f64,
+    tones_hz: &[f64],
+    span: ToneSpan,
+    config: &DemodConfig,
+) -> (f64, Option<DMatrix<f64>>) {
     let mut ratio = 1.0;
-    // The whole window's Σ y φ from the last pass, when it settled at the
-    // frequencies it was run at.
     let mut settled_sums = None;
-    if config.estimate_frequency {
-        let spacing = min_spacing(tones_hz);
-        let subwindows = (2..=config.subwindows)
-            .rev()
-            .find(|&j| spacing >= 2.0 * j as f64 / window_s);
-        if let Some(j) = subwindows {
-            let mut rho = 0.0;
-            for _ in 0..MAX_FREQUENCY_PASSES {
-                let freqs: Vec<f64> = tones_hz.iter().map(|f| f * (1.0 + rho)).collect();
-                match clock_offset(&window, first, sample_rate_hz, &freqs, j) {
-                    Some((delta, sums)) if delta.abs() <= MAX_CLOCK_OFFSET => {
-                        let turns = delta.abs() * f_max * window_s;
-                        // A step that turns the highest tone by under
-                        // SETTLED_TURNS cycles is not taken: the pass's own
-                        // frequencies and sums are the result.
-                        if turns < SETTLED_TURNS {
-                            settled_sums = Some(sums);
-                            break;
-                        }
-                        rho += delta * (1.0 + rho);
-                        // Settled when the step turns the highest tone by
-                        // under 1e-7 cycles over the window (its effect on an
-                        // amplitude is then below 1e-13).
-                        if turns < 1e-7 {
-                            break;
-                        }
+    if !config.estimate_frequency {
+        return (ratio, settled_sums);
+    }
+    let window_s = window.len() as f64 / sample_rate_hz;
+    let spacing = min_spacing(tones_hz);
+    let subwindows = (2..=config.subwindows)
+        .rev()
+        .find(|&j| spacing >= 2.0 * j as f64 / window_s);
+    if let Some(j) = subwindows {
+        let mut rho = 0.0;
+        for _ in 0..MAX_FREQUENCY_PASSES {
+            let freqs: Vec<f64> = tones_hz.iter().map(|f| f * (1.0 + rho)).collect();
+            match clock_offset(window, first, sample_rate_hz, &freqs, j) {
+                Some((delta, sums)) if delta.abs() <= MAX_CLOCK_OFFSET => {
+                    let turns = delta.abs() * span.f_max * window_s;
+                    // A step that turns the highest tone by under
+                    // SETTLED_TURNS cycles is not taken: the pass's own
+                    // frequencies and sums are the result.
+                    if turns < SETTLED_TURNS {
+                        settled_sums = Some(sums);
+                        break;
                     }
-                    _ => break,
+                    rho += delta * (1.0 + rho);
+                    // Settled when the step turns the highest tone by
+                    // under 1e-7 cycles over the window (its effect on an
+                    // amplitude is then below 1e-13).
+                    if turns < 1e-7 {
+                        break;
+                    }
                 }
-            }
-            if rho.abs() <= MAX_CLOCK_OFFSET {
-                ratio = 1.0 + rho;
-            } else {
-                settled_sums = None;
+                _ => break,
             }
         }
+        if rho.abs() <= MAX_CLOCK_OFFSET {
+            ratio = 1.0 + rho;
+        } else {
+            settled_sums = None;
+        }
     }
-    let freqs: Vec<f64> = tones_hz.iter().map(|f| f * ratio).collect();
-    let detection = match settled_sums {
-        Some(b) => Detection {
-            gram: closed_form_gram(&freqs, sample_rate_hz, first, window_len),
-            b,
-        },
-        None => detect(&window, first, sample_rate_hz, &freqs),
-    };
-    let Some((theta, inv)) = detection.solve() else {
-        return Err(SignalError::TonesNotSeparable {
-            first_hz: f_min,
-            second_hz: f_max,
-            spacing_hz: min_spacing(tones_hz),
-            window_s,
-            minimum_hz: 2.0 / window_s,
-        });
-    };
-    let dof = (window_len - 2 * tones_hz.len()) as f64;
-    let nu = stream.filter().noise_gain();
+    (ratio, settled_sums)
+}
+
+/// The input-equivalent white-noise σ per channel from the fit's residual
+/// energy `Σ y² − θᵀb` over `dof` degrees of freedom and the filter's noise
+/// gain.
+fn noise_sigma<const C: usize>(
+    filtered: &Filtered<C>,
+    theta: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    dof: f64,
+) -> [f64; C] {
+    let nu = filtered.stream.filter().noise_gain();
     let mut noise_sigma = [0.0; C];
     for (c, sigma) in noise_sigma.iter_mut().enumerate() {
-        let fitted: f64 = (0..theta.nrows())
-            .map(|i| theta[(i, c)] * detection.b[(i, c)])
-            .sum();
-        *sigma = ((yy[c] - fitted).max(0.0) / (dof * nu)).sqrt();
+        let fitted: f64 = (0..theta.nrows()).map(|i| theta[(i, c)] * b[(i, c)]).sum();
+        *sigma = ((filtered.yy[c] - fitted).max(0.0) / (dof * nu)).sqrt();
     }
-    let tones = tones_hz
+    noise_sigma
+}
+
+/// Each tone's amplitudes (the fit's quadrature pair through the filter's
+/// gain), their σ, SNR and darkness.
+fn tone_estimates<const C: usize>(
+    tones_hz: &[f64],
+    freqs: &[f64],
+    filter: &BandPass,
+    inv: &DMatrix<f64>,
+    theta: &DMatrix<f64>,
+    noise_sigma: &[f64; C],
+    config: &DemodConfig,
+) -> Vec<ToneEstimate<C>> {
+    tones_hz
         .iter()
-        .zip(&freqs)
+        .zip(freqs)
         .enumerate()
         .map(|(k, (&nominal_hz, &frequency_hz))| {
-            let inv_gain = 1.0 / stream.filter().magnitude(frequency_hz);
+            let inv_gain = 1.0 / filter.magnitude(frequency_hz);
             let spread = (0.5 * (inv[(2 * k, 2 * k)] + inv[(2 * k + 1, 2 * k + 1)])).sqrt();
             let mut amplitudes = [0.0; C];
             let mut amplitude_std = [0.0; C];
@@ -536,13 +661,7 @@ pub fn demodulate_record<const C: usize>(
                 dark: total <= config.dark_factor * noise,
             }
         })
-        .collect();
-    Ok(RecordEstimate {
-        tones,
-        window: first..len,
-        noise_sigma,
-        clock_ratio: ratio,
-    })
+        .collect()
 }
 
 /// `10 log10((Â²/2) / σ²)` clamped to `±MAX_SNR_DB` (0/0 counts as no

@@ -24,10 +24,12 @@
 
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use psdcal_io::{write_atomic, Frame, IoError, RawReader, Schedule, ScheduleRow, Tones};
-use psdcal_signal::{demodulate_record, DemodConfig, SignalError};
+use psdcal_io::{write_atomic, IoError, RawReader, Schedule, ScheduleRow, Tones};
+use psdcal_signal::{
+    demodulate_record, DemodConfig, RecordBuffer, RecordEstimate, SignalError, ToneEstimate,
+};
 use serde_json::json;
 
 use crate::base::error::{Error, Result};
@@ -35,9 +37,6 @@ use crate::base::table::num;
 
 /// The longest record demodulated, samples (64 MB of frames).
 pub const MAX_RECORD_SAMPLES: usize = 2_000_000;
-
-/// Frames read from the recording at a time.
-const CHUNK: usize = 65_536;
 
 /// What `demodulate` reads and writes.
 #[derive(Debug, Clone, PartialEq)]
@@ -149,6 +148,41 @@ fn tones_of(
 /// Demodulates every interval of the schedule and writes signals.csv (with
 /// `snr_db`). See the module documentation.
 pub fn demodulate(request: &DemodulateRequest) -> Result<Demodulated> {
+    check_request(request)?;
+    let schedule = Schedule::read(&request.schedule)?;
+    let tones = request.tones.as_ref().map(Tones::read).transpose()?;
+    let mut reader = RawReader::open_channels(&request.raw, request.rate_hz, &request.channels)?;
+    let fs = reader.sample_rate_hz();
+    let mut buffer = RecordBuffer::new();
+    let mut records = Vec::new();
+    let mut warnings = Vec::new();
+    for row in &schedule.rows {
+        let leds = tones_of(row, tones.as_ref(), request.frequency_hz)?;
+        let (start, stop) = interval(row, &schedule, fs)?;
+        let Some(record) = buffer.record(start, stop, |out, max| reader.read_frames(out, max))?
+        else {
+            return Err(past_the_end(row, &schedule, &reader, buffer.end()));
+        };
+        let freqs: Vec<f64> = leds.iter().map(|(_, f)| *f).collect();
+        let outcome = demodulate_record(record, fs, &freqs, &request.config);
+        let judged = RecordJudge {
+            row,
+            leds: &leds,
+            place: place(row, &schedule),
+        };
+        records.extend(judged.outcomes(outcome, &mut warnings)?);
+    }
+    write_signals(&request.out, &reader, fs, &records)?;
+    Ok(Demodulated {
+        records,
+        sample_rate_hz: fs,
+        samples_read: reader.frames_read(),
+        warnings,
+    })
+}
+
+/// The request's own values, checked before any file is read.
+fn check_request(request: &DemodulateRequest) -> Result<()> {
     if !(request.frequency_hz.is_finite() && request.frequency_hz > 0.0) {
         return Err(Error::Options(format!(
             "--frequency {} Hz: expected a finite, positive modulation frequency",
@@ -158,152 +192,161 @@ pub fn demodulate(request: &DemodulateRequest) -> Result<Demodulated> {
     request
         .config
         .validate()
-        .map_err(|e| Error::Options(e.to_string()))?;
-    let schedule = Schedule::read(&request.schedule)?;
-    let tones = request.tones.as_ref().map(Tones::read).transpose()?;
-    let mut reader = RawReader::open_channels(&request.raw, request.rate_hz, &request.channels)?;
+        .map_err(|e| Error::Options(e.to_string()))
+}
+
+/// `schedule.csv:LINE`.
+fn place(row: &ScheduleRow, schedule: &Schedule) -> String {
+    format!("{}:{}", schedule.source, row.line_no)
+}
+
+/// The row's interval as frames `[round(t_start fs), round(t_stop fs))`;
+/// refused past [`MAX_RECORD_SAMPLES`].
+fn interval(row: &ScheduleRow, schedule: &Schedule, fs: f64) -> Result<(u64, u64)> {
+    let start = (row.t_start_s * fs).round();
+    let stop = (row.t_stop_s * fs).round();
+    let len = stop - start;
+    if len > MAX_RECORD_SAMPLES as f64 {
+        return Err(Error::Input(format!(
+            "{}: the interval [{}, {}) s holds {} samples, more than the {} a record may \
+             hold; expected shorter intervals",
+            place(row, schedule),
+            row.t_start_s,
+            row.t_stop_s,
+            len,
+            MAX_RECORD_SAMPLES
+        )));
+    }
+    Ok((start as u64, stop as u64))
+}
+
+/// The error of an interval that ends after the recording (`total` frames
+/// read).
+fn past_the_end(row: &ScheduleRow, schedule: &Schedule, reader: &RawReader, total: u64) -> Error {
     let fs = reader.sample_rate_hz();
-    let mut buffer: Vec<Frame> = Vec::new();
-    // Absolute index of buffer[0].
-    let mut buffer_start: u64 = 0;
-    let mut ended = false;
-    let mut records = Vec::new();
-    let mut warnings = Vec::new();
-    let place = |row: &ScheduleRow| format!("{}:{}", schedule.source, row.line_no);
-    for row in &schedule.rows {
-        let leds = tones_of(row, tones.as_ref(), request.frequency_hz)?;
-        let start = (row.t_start_s * fs).round();
-        let stop = (row.t_stop_s * fs).round();
-        let len = stop - start;
-        if len > MAX_RECORD_SAMPLES as f64 {
-            return Err(Error::Input(format!(
-                "{}: the interval [{}, {}) s holds {} samples, more than the {} a record may \
-                 hold; expected shorter intervals",
-                place(row),
-                row.t_start_s,
-                row.t_stop_s,
-                len,
-                MAX_RECORD_SAMPLES
-            )));
+    Error::Input(format!(
+        "{}: the interval [{}, {}) s of image '{}' ends after the recording {} \
+         ({} samples, {} s at {} Hz); expected intervals inside the recording",
+        place(row, schedule),
+        row.t_start_s,
+        row.t_stop_s,
+        row.image,
+        reader.source(),
+        total,
+        num(total as f64 / fs),
+        num(fs)
+    ))
+}
+
+/// One schedule row's LEDs, judged from its record's demodulation.
+struct RecordJudge<'a> {
+    row: &'a ScheduleRow,
+    leds: &'a [(String, f64)],
+    place: String,
+}
+
+impl RecordJudge<'_> {
+    /// `schedule.csv:LINE: record of image 'I', LED 'L'`.
+    fn what(&self, led: &str) -> String {
+        format!(
+            "{}: record of image '{}', LED '{}'",
+            self.place, self.row.image, led
+        )
+    }
+
+    /// The row's LEDs joined by `;`.
+    fn leds_text(&self) -> String {
+        self.leds
+            .iter()
+            .map(|l| l.0.as_str())
+            .collect::<Vec<_>>()
+            .join(";")
+    }
+
+    fn outcome(
+        &self,
+        led: &str,
+        status: RecordStatus,
+        tone: Option<&ToneEstimate<4>>,
+    ) -> RecordOutcome {
+        RecordOutcome {
+            image: self.row.image.clone(),
+            led: led.to_string(),
+            status,
+            snr_db: tone.map(ToneEstimate::min_snr_db),
+            amplitudes: tone.map(|t| t.amplitudes),
+            line: self.row.line_no,
         }
-        let (start, stop) = (start as u64, stop as u64);
-        // Drop what lies before the record, then read up to its end.
-        let drop = (start.saturating_sub(buffer_start) as usize).min(buffer.len());
-        buffer.drain(..drop);
-        buffer_start += drop as u64;
-        while buffer_start + (buffer.len() as u64) < stop && !ended {
-            let want = (stop - buffer_start - buffer.len() as u64).min(CHUNK as u64) as usize;
-            if reader.read_frames(&mut buffer, want.max(1))? == 0 {
-                ended = true;
-            }
-            // Frames before the record are not kept.
-            if buffer_start < start {
-                let drop = ((start - buffer_start) as usize).min(buffer.len());
-                buffer.drain(..drop);
-                buffer_start += drop as u64;
-            }
-        }
-        if buffer_start + (buffer.len() as u64) < stop || buffer_start > start {
-            let total = buffer_start + buffer.len() as u64;
-            return Err(Error::Input(format!(
-                "{}: the interval [{}, {}) s of image '{}' ends after the recording {} \
-                 ({} samples, {} s at {} Hz); expected intervals inside the recording",
-                place(row),
-                row.t_start_s,
-                row.t_stop_s,
-                row.image,
-                reader.source(),
-                total,
-                num(total as f64 / fs),
-                num(fs)
-            )));
-        }
-        let record = &buffer[(start - buffer_start) as usize..(stop - buffer_start) as usize];
-        let freqs: Vec<f64> = leds.iter().map(|(_, f)| *f).collect();
-        let outcome = demodulate_record(record, fs, &freqs, &request.config);
-        let what = |led: &str| {
-            format!(
-                "{}: record of image '{}', LED '{}'",
-                place(row),
-                row.image,
-                led
-            )
-        };
-        let rejected = |status: RecordStatus| -> Vec<RecordOutcome> {
-            leds.iter()
-                .map(|(led, _)| RecordOutcome {
-                    image: row.image.clone(),
-                    led: led.clone(),
-                    status,
-                    snr_db: None,
-                    amplitudes: None,
-                    line: row.line_no,
-                })
-                .collect()
-        };
+    }
+
+    /// Every LED's outcome, a warning per LED left out; an error that no
+    /// status names (a rate or band the data cannot have) stops the run.
+    fn outcomes(
+        &self,
+        outcome: std::result::Result<RecordEstimate<4>, SignalError>,
+        warnings: &mut Vec<String>,
+    ) -> Result<Vec<RecordOutcome>> {
         match outcome {
-            Ok(estimate) => {
-                for ((led, _), tone) in leds.iter().zip(&estimate.tones) {
+            Ok(estimate) => Ok(self
+                .leds
+                .iter()
+                .zip(&estimate.tones)
+                .map(|((led, _), tone)| {
                     let status = if tone.dark {
                         warnings.push(format!(
                             "{}: dark (the total light is at the noise); left out of signals.csv",
-                            what(led)
+                            self.what(led)
                         ));
                         RecordStatus::Dark
                     } else {
                         RecordStatus::Ok
                     };
-                    records.push(RecordOutcome {
-                        image: row.image.clone(),
-                        led: led.clone(),
-                        status,
-                        snr_db: Some(tone.min_snr_db()),
-                        amplitudes: Some(tone.amplitudes),
-                        line: row.line_no,
-                    });
-                }
-            }
+                    self.outcome(led, status, Some(tone))
+                })
+                .collect()),
             Err(e) => {
-                let status = match &e {
-                    SignalError::RecordTooShortToDemodulate { .. } => RecordStatus::TooShort,
-                    SignalError::Saturated { .. } => RecordStatus::Saturated,
-                    SignalError::TonesNotSeparable { .. } => RecordStatus::ToneCollision,
-                    _ => {
-                        let advice = match &e {
-                            SignalError::BandAboveNyquist { .. }
-                            | SignalError::SampleRateTooLow { .. } => {
-                                "; is the sample rate right? (--rate, or raw.csv's t_s: it must \
-                                 be well above twice the modulation frequency)"
-                            }
-                            _ => "",
-                        };
-                        return Err(Error::Input(format!(
-                            "{}: {e}{advice}",
-                            what(
-                                &leds
-                                    .iter()
-                                    .map(|l| l.0.as_str())
-                                    .collect::<Vec<_>>()
-                                    .join(";")
-                            )
-                        )));
-                    }
-                };
-                let leds_text: Vec<&str> = leds.iter().map(|l| l.0.as_str()).collect();
+                let status = self.rejected_status(&e)?;
                 warnings.push(format!(
                     "{}: {} ({e}); left out of signals.csv",
-                    what(&leds_text.join(";")),
+                    self.what(&self.leds_text()),
                     status.name()
                 ));
-                records.extend(rejected(status));
+                Ok(self
+                    .leds
+                    .iter()
+                    .map(|(led, _)| self.outcome(led, status, None))
+                    .collect())
             }
         }
     }
-    let written: Vec<&RecordOutcome> = records
-        .iter()
-        .filter(|r| r.status == RecordStatus::Ok)
-        .collect();
-    write_atomic(&request.out, |w| {
+
+    /// The status of a record the data refused, or the error of one the
+    /// set-up refused.
+    fn rejected_status(&self, e: &SignalError) -> Result<RecordStatus> {
+        match e {
+            SignalError::RecordTooShortToDemodulate { .. } => Ok(RecordStatus::TooShort),
+            SignalError::Saturated { .. } => Ok(RecordStatus::Saturated),
+            SignalError::TonesNotSeparable { .. } => Ok(RecordStatus::ToneCollision),
+            _ => {
+                let advice = match e {
+                    SignalError::BandAboveNyquist { .. } | SignalError::SampleRateTooLow { .. } => {
+                        "; is the sample rate right? (--rate, or raw.csv's t_s: it must \
+                         be well above twice the modulation frequency)"
+                    }
+                    _ => "",
+                };
+                Err(Error::Input(format!(
+                    "{}: {e}{advice}",
+                    self.what(&self.leds_text())
+                )))
+            }
+        }
+    }
+}
+
+/// signals.csv of the demodulated records (status `ok`), atomically.
+fn write_signals(out: &Path, reader: &RawReader, fs: f64, records: &[RecordOutcome]) -> Result<()> {
+    write_atomic(out, |w| {
         writeln!(
             w,
             "# demodulated by psdcal {} from {} ({} Hz); amplitudes in peak volts",
@@ -312,7 +355,7 @@ pub fn demodulate(request: &DemodulateRequest) -> Result<Demodulated> {
             num(fs)
         )?;
         writeln!(w, "image,led,vx1,vx2,vy1,vy2,snr_db")?;
-        for r in &written {
+        for r in records.iter().filter(|r| r.status == RecordStatus::Ok) {
             let a = r.amplitudes.unwrap_or_default();
             writeln!(
                 w,
@@ -328,13 +371,7 @@ pub fn demodulate(request: &DemodulateRequest) -> Result<Demodulated> {
         }
         Ok(())
     })
-    .map_err(|e: IoError| Error::Io(e))?;
-    Ok(Demodulated {
-        records,
-        sample_rate_hz: fs,
-        samples_read: reader.frames_read(),
-        warnings,
-    })
+    .map_err(|e: IoError| Error::Io(e))
 }
 
 impl Demodulated {

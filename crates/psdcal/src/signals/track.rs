@@ -27,7 +27,7 @@ use psdcal_io::Tones;
 use psdcal_locate::{LocateOptions, Measurement};
 use psdcal_model::Amplitudes;
 use psdcal_signal::tones::check_separable;
-use psdcal_signal::{demodulate_record, DemodConfig, RecordEstimate, SignalError};
+use psdcal_signal::{DemodConfig, RecordEstimate, SignalError, Window, Windows};
 
 use crate::answer::sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
@@ -157,7 +157,7 @@ pub fn track(
     };
     emit!(writeln!(output, "{header}").and_then(|()| output.flush()));
     let empty_fields = header.matches(',').count() - 1;
-    let mut frames: Vec<Vec<[f64; 4]>> = vec![Vec::with_capacity(window); sensors.len()];
+    let mut windows = Windows::new(sensors.len(), window, fs, freqs, request.config);
     let options = LocateOptions::default();
     while let Some(sample) = source.next()? {
         let Sample::Values(values) = sample else {
@@ -169,33 +169,19 @@ pub fn track(
             );
             continue;
         };
-        for (s, f) in frames.iter_mut().enumerate() {
-            f.push([
-                values[4 * s],
-                values[4 * s + 1],
-                values[4 * s + 2],
-                values[4 * s + 3],
-            ]);
-        }
         summary.samples += 1;
-        if frames[0].len() == window {
-            let t0 = (summary.samples - window as u64) as f64 / fs;
-            let estimates: Vec<_> = frames
-                .iter()
-                .map(|f| demodulate_record(f, fs, &freqs, &request.config))
-                .collect();
+        if let Some(Window { t0_s, estimates }) = windows.push(&values) {
             let rows = match &answerer {
                 Answerer::Sensor(sensor) => {
-                    sensor_rows(sensor, &tones, &estimates[0], t0, &options)
+                    sensor_rows(sensor, &tones, &estimates[0], t0_s, &options)
                 }
-                Answerer::Rig(rig) => rig.rows(&tones, &estimates, t0),
+                Answerer::Rig(rig) => rig.rows(&tones, &estimates, t0_s),
             };
             for row in rows {
                 emit!(writeln!(output, "{row}"));
             }
             emit!(output.flush());
             summary.windows += 1;
-            frames.iter_mut().for_each(Vec::clear);
         }
     }
     Ok(summary)
