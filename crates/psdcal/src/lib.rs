@@ -141,9 +141,9 @@ pub use simulation::simulate_scan::{scan_samples, simulate_scan_file, ScanReques
 pub use study::monte_carlo::{
     expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest,
 };
-pub use study::study_psd_map::{
-    pooled, psd_map_seed, refine_seed, RefineErrors, ScanSpec, SeedErrors,
-};
+pub use study::study_psd_map::{pooled, psd_map_seed, SeedErrors};
+#[cfg(feature = "testing")]
+pub use study::testing::{refine_seed, RefineErrors, ScanSpec};
 
 pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, Warning};

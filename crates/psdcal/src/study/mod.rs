@@ -3,3 +3,5 @@
 pub(crate) mod monte_carlo;
 pub(crate) mod study_page;
 pub(crate) mod study_psd_map;
+#[cfg(feature = "testing")]
+pub(crate) mod testing;

@@ -5,6 +5,8 @@
 //! angles are better than with the map held fixed; every coefficient's σ
 //! after refinement is at most the scan's (the record's `matrix` against
 //! the scan's `σ² U`).
+//! (A facade test that lives here because it needs the `testing` feature,
+//! which this crate's tests turn on.)
 
 use psdcal::{refine_seed, RefineErrors, ScanSpec};
 
