@@ -26,9 +26,9 @@
 
 use nalgebra::{Matrix2, Vector2};
 
+use crate::calibrated_sensor::{CalibratedSensor, LocateOptions, Measurement};
 use crate::error::LocateError;
 use crate::maps::MAX_GRID;
-use crate::sensor::{CalibratedSensor, LocateOptions, Measurement};
 
 /// One grid point's answer.
 #[derive(Debug, Clone, Copy, PartialEq)]

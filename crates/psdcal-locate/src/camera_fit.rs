@@ -28,9 +28,9 @@ use nalgebra::Vector2;
 use psdcal_model::Model;
 use psdcal_solver::{solve, Problem, ResidualTerm, SolverOptions, Step, Termination};
 
+use crate::calibrated_sensor::CalibratedSensor;
 use crate::error::LocateError;
 use crate::opencv_model::{OpenCv8, OPENCV8_LEN, RATIONAL_ONLY};
-use crate::sensor::CalibratedSensor;
 
 /// Which OpenCV model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -9,7 +9,7 @@
 //!   `αx = atan a`, `αy = atan b` (P39), with analytic Jacobians;
 //! - [`uncertainty`]: the calibration's covariance and the point noise
 //!   propagated to the ray and the angles;
-//! - [`sensor`]: a [`CalibratedSensor`] (model, active area, gains,
+//! - [`calibrated_sensor`]: a [`CalibratedSensor`] (model, active area, gains,
 //!   covariance) answering one measurement (point or electrode amplitudes);
 //! - [`plane`]: the position on a plane parallel to the sensor at distance
 //!   `S` (`X = S tan αx`, `Y = S tan αy`) or on a general plane, with its
@@ -50,6 +50,7 @@
 #![warn(missing_docs)]
 
 pub mod aoa;
+pub mod calibrated_sensor;
 pub mod calibration_diff;
 pub mod camera_fit;
 pub mod caution;
@@ -61,13 +62,15 @@ pub mod plane;
 pub mod psd_map;
 pub mod rig;
 pub mod sensitivity;
-pub mod sensor;
 pub mod triangulate;
 pub mod uncertainty;
 
 pub use aoa::{
     alpha_from_ray, angle_of_arrival, angle_of_arrival_with_jacobians, measured_from_ray,
     ray_of_point, AngleOfArrival, AoaJacobians,
+};
+pub use calibrated_sensor::{
+    AoaEstimate, CalibratedSensor, LocateOptions, MeasuredPoint, Measurement, PlaneLocation,
 };
 pub use calibration_diff::{diff_calibrations, CalibrationDiff, DiffPoint, DiffValues};
 pub use camera_fit::{fit_opencv, CameraFit, CameraFitOptions, OpenCvKind};
@@ -86,9 +89,6 @@ pub use rig::{Rig, RigLocation, RigSensor};
 pub use sensitivity::{
     aoa_deviation, paper_aoa_error, paper_aoa_error_at, paper_sensitivity_focal,
     paper_sensitivity_point, AoaDeviation, ParameterErrors,
-};
-pub use sensor::{
-    AoaEstimate, CalibratedSensor, LocateOptions, MeasuredPoint, Measurement, PlaneLocation,
 };
 pub use triangulate::{triangulate, Triangulation, WorldRay};
 pub use uncertainty::{

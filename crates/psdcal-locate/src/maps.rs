@@ -25,9 +25,9 @@
 use nalgebra::Vector2;
 use psdcal_model::{PsdGeometry, SensorModel, ValidRegion};
 
+use crate::calibrated_sensor::{check_region, CalibratedSensor, LocateOptions, Measurement};
 use crate::error::{exceeds, finite, LocateError};
 use crate::sensitivity::{aoa_deviation, check_distance, paper_aoa_error_at, ParameterErrors};
-use crate::sensor::{check_region, CalibratedSensor, LocateOptions, Measurement};
 use crate::uncertainty::ParameterCovariance;
 
 /// Largest grid side accepted.

@@ -4,7 +4,7 @@
 //! Each sensor `i` has `world_from_sensor_i` (CONVENTIONS.md: `P_w = R P_s +
 //! t`, mm). For an emitter, each observing sensor gives its angle of arrival
 //! and the covariance `C_i = Σ_ab,cal + Σ_ab,meas` of its ray
-//! ([`crate::sensor`]); the rays are intersected in the world frame with
+//! ([`crate::calibrated_sensor`]); the rays are intersected in the world frame with
 //! covariance `Σ_P = Σ (∂P/∂z_i) C_i (∂P/∂z_i)ᵀ`, reported whole and split
 //! into the calibrations' and the measurements' parts.
 //!
@@ -31,9 +31,9 @@ use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 use psdcal_model::sensor::is_on_active_area;
 use psdcal_model::{Model, Pose, PsdGeometry};
 
+use crate::calibrated_sensor::{AoaEstimate, CalibratedSensor, LocateOptions, Measurement};
 use crate::caution::Caution;
 use crate::error::{exceeds, LocateError};
-use crate::sensor::{AoaEstimate, CalibratedSensor, LocateOptions, Measurement};
 use crate::triangulate::{triangulate, Triangulation, WorldRay};
 
 /// Grid points per side over the active area in the shared-view check.

@@ -41,9 +41,9 @@ use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x2, Vector2, Vector3};
 use psdcal_model::Pose;
 use psdcal_solver::{linearize, solve, Problem, ResidualTerm, SolverOptions, Step};
 
+use crate::calibrated_sensor::LocateOptions;
 use crate::caution::Caution;
 use crate::error::{exceeds, LocateError};
-use crate::sensor::LocateOptions;
 
 /// Largest mutual angle below which rays are parallel, rad.
 pub const PARALLEL_RAYS_RAD: f64 = 1e-9;

@@ -86,10 +86,10 @@ pub use answer::export::{
     export, ExportRequest, ExportTarget, Exported, DEFAULT_MAX_ERROR_DEG, DEFAULT_PIXEL_UM,
 };
 pub use answer::focal_check::{focal_check, FocalCheck, FocalCheckRequest};
+pub use answer::loaded_sensor::{covariance_warning, save_calibration, sensor_of, LoadedSensor};
 pub use answer::locate::{locate_table, LocateTable, LocateTarget};
 pub use answer::map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
 pub use answer::point_rows::{answer_points, PointsAnswer, RowAnswer};
-pub use answer::sensor::{covariance_warning, save_calibration, sensor_of, LoadedSensor};
 pub use base::advice::{advice, error_text};
 pub use base::error::{Error, Result};
 pub use base::option_text::plane_at_distance;
@@ -119,7 +119,7 @@ pub use psdcal_model::CostKind;
 pub use psdcal_psdmap::ModelChoice as PsdMapModel;
 pub use psdcal_signal::DemodConfig;
 pub use psdcal_sim::{Impairment, Impairments};
-pub use reports::report::{report_content, write_report, ReportFiles, ReportRequest};
+pub use reports::calibration_page::{report_content, write_report, ReportFiles, ReportRequest};
 pub use signals::demodulate::{
     demodulate, DemodulateRequest, Demodulated, RecordOutcome, RecordStatus, MAX_RECORD_SAMPLES,
 };

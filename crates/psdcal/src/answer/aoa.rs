@@ -6,8 +6,8 @@ use std::path::Path;
 use psdcal_io::PointInput;
 use psdcal_locate::{sigmas_and_correlation, LocateOptions, Measurement};
 
+use crate::answer::loaded_sensor::LoadedSensor;
 use crate::answer::point_rows::{answer_points, PointsAnswer};
-use crate::answer::sensor::LoadedSensor;
 use crate::base::error::Result;
 use crate::base::table::{deg, num};
 

@@ -13,8 +13,8 @@ use nalgebra::Vector2;
 use psdcal_locate::{angle_of_arrival, CalibratedSensor, Caution, LocateError, Measurement};
 use psdcal_model::sensor::is_on_active_area;
 
+use crate::answer::loaded_sensor::LoadedSensor;
 use crate::answer::point_rows::{answer_points, PointsAnswer};
-use crate::answer::sensor::LoadedSensor;
 use crate::base::error::Result;
 use crate::base::table::num;
 

@@ -10,7 +10,7 @@ use psdcal_locate::{diff_calibrations, CalibrationDiff};
 use psdcal_report::{grid_step, heat_map_svg, Block, Frame, HeatCell, Page};
 use serde_json::json;
 
-use crate::answer::sensor::{covariance_warning, LoadedSensor};
+use crate::answer::loaded_sensor::{covariance_warning, LoadedSensor};
 use crate::base::error::{Error, Result};
 use crate::base::table::{deg, empty, num, Table};
 

@@ -20,7 +20,7 @@ use psdcal_io::{write_camera_model, CameraFormat, CameraModelFile};
 use psdcal_locate::{fit_opencv, CameraFit, CameraFitOptions, OpenCvKind, OPENCV8_NAMES};
 use serde_json::json;
 
-use crate::answer::sensor::LoadedSensor;
+use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 
 /// Where the model goes.

@@ -18,7 +18,7 @@ use nalgebra::Vector2;
 use psdcal_io::Corners;
 use serde_json::json;
 
-use crate::answer::sensor::LoadedSensor;
+use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 
 /// What to check.

@@ -10,8 +10,8 @@ use psdcal_io::{RigFile, RigObservations};
 use psdcal_locate::{LocateOptions, Measurement, Plane, Rig, RigSensor};
 
 use crate::answer::aoa::measurement;
+use crate::answer::loaded_sensor::{covariance_warning, LoadedSensor};
 use crate::answer::point_rows::answer_points;
-use crate::answer::sensor::{covariance_warning, LoadedSensor};
 use crate::base::error::Result;
 use crate::base::summary::{path_json, Summary};
 use crate::base::table::{deg, empty, num, StatusCount, Table};

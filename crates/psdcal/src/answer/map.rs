@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use psdcal_locate::{error_map, ErrorSource, MapOptions, ParameterErrors};
 use psdcal_model::{Param, PsdGeometry, SensorModel};
 
-use crate::answer::sensor::LoadedSensor;
+use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 use crate::base::summary::{path_json, Summary};
 use crate::base::table::{deg, empty, num, StatusCount, Table};

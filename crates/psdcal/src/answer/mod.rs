@@ -6,7 +6,7 @@ pub(crate) mod diff;
 pub(crate) mod evaluate;
 pub(crate) mod export;
 pub(crate) mod focal_check;
+pub(crate) mod loaded_sensor;
 pub(crate) mod locate;
 pub(crate) mod map;
 pub(crate) mod point_rows;
-pub(crate) mod sensor;

@@ -1,7 +1,7 @@
 //! The HTML pages with their plots: a calibration report and a PSD map report.
 
-pub(crate) mod psd_map_report;
-pub(crate) mod report;
-pub(crate) mod report_plots;
-pub(crate) mod report_tables;
-pub(crate) mod report_views;
+pub(crate) mod calibration_page;
+pub(crate) mod calibration_plots;
+pub(crate) mod calibration_tables;
+pub(crate) mod calibration_views;
+pub(crate) mod psd_map_page;

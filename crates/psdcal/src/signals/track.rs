@@ -29,7 +29,7 @@ use psdcal_model::Amplitudes;
 use psdcal_signal::tones::check_separable;
 use psdcal_signal::{DemodConfig, RecordEstimate, SignalError, Window, Windows};
 
-use crate::answer::sensor::LoadedSensor;
+use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 use crate::base::table::{deg, num};
 use crate::signals::track_input::{Sample, SampleSource};

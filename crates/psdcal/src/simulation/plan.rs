@@ -18,7 +18,7 @@ use psdcal_model::{ChannelGains, CostKind, Model, Param, PsdGeometry, SensorMode
 use psdcal_report::{heat_map_png, heat_map_svg, Frame, HeatCell};
 use serde_json::json;
 
-use crate::answer::sensor::LoadedSensor;
+use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 use crate::base::option_text::FitList;
 use crate::simulation::simulate::{chain_with_record, DEFAULT_RECORD_CYCLES};

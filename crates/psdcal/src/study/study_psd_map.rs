@@ -18,7 +18,7 @@ use nalgebra::Vector2;
 use psdcal_model::SensorModel;
 use psdcal_sim::{Lens, PsdNonlinearity, TemplateKind};
 
-use crate::answer::sensor::sensor_of;
+use crate::answer::loaded_sensor::sensor_of;
 use crate::base::error::{Error, Result};
 use crate::base::options::CalibrationOptions;
 use crate::calibration::calibrate::calibrate;

@@ -32,8 +32,8 @@ use psdcal_report::{
 
 use crate::base::error::{Error, Result};
 use crate::psd_map::from_scan::{residual_cells, PsdMapOutcome, PSD_MAP_PAGE, SCAN_SUMMARY_CELLS};
-use crate::reports::report::{plot_files, write_plots};
-use crate::reports::report_plots::{arrow_scale_for, scale_text};
+use crate::reports::calibration_page::{plot_files, write_plots};
+use crate::reports::calibration_plots::{arrow_scale_for, scale_text};
 
 /// Grid points per side of the field's arrows.
 const ARROW_GRID: usize = 15;
@@ -254,7 +254,7 @@ fn content(outcome: &PsdMapOutcome) -> PsdMapReport {
         cross_validation,
         choice,
         plots,
-        provenance: Some(crate::reports::report_tables::provenance_table(
+        provenance: Some(crate::reports::calibration_tables::provenance_table(
             &file.provenance,
         )),
     }

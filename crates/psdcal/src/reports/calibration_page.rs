@@ -9,12 +9,12 @@ use psdcal_locate::{error_map, ErrorSource, MapOptions};
 use psdcal_model::Model;
 use psdcal_report::{calibration_page, CalibrationReport, Frame, HeatCell, Plot, PlotData};
 
-use crate::answer::sensor::LoadedSensor;
+use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 use crate::calibration::residuals::ResidualTable;
 use crate::dataset::data_set::{DataSet, DataSetFiles, LoadOptions, PointSource};
-use crate::reports::report_plots::{data_plots, model_plots, region_boundary, region_text};
-use crate::reports::report_tables::{residual_rows, tables, worst_points, Sources};
+use crate::reports::calibration_plots::{data_plots, model_plots, region_boundary, region_text};
+use crate::reports::calibration_tables::{residual_rows, tables, worst_points, Sources};
 
 /// Grid points per side of the error maps.
 const MAP_GRID: usize = 21;
@@ -164,7 +164,7 @@ pub fn report_content(
         recomputed = Some(residual_rows(&table));
         worst = Some(worst_points(&table, &set.template));
         data_plots(&mut plots, set, &table, lx, ly);
-        plots.extend(crate::reports::report_views::pose_plot(
+        plots.extend(crate::reports::calibration_views::pose_plot(
             calibration,
             &set.template,
         ));
@@ -177,7 +177,7 @@ pub fn report_content(
     }
     model_plots(&mut plots, model, region, lx, ly);
     let psd_map = calibration.psd_map.as_ref();
-    plots.extend(crate::reports::report_views::map_plots(
+    plots.extend(crate::reports::calibration_views::map_plots(
         &loaded.sensor,
         psd_map.and_then(|m| m.scan.as_ref()),
     ));
@@ -251,6 +251,6 @@ pub fn report_content(
     report.sources.push(region_text(region));
     report
         .sources
-        .extend(psd_map.map(crate::reports::report_views::map_text));
+        .extend(psd_map.map(crate::reports::calibration_views::map_text));
     Ok(report)
 }

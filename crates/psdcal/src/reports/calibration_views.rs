@@ -134,14 +134,14 @@ pub(crate) fn map_plots(sensor: &CalibratedSensor, scan: Option<&PsdMapScanRecor
         .iter()
         .map(|a| a.delta.0.hypot(a.delta.1))
         .fold(0.0, f64::max);
-    let scale = crate::reports::report_plots::arrow_scale_for(longest, 1.1 * lx.max(ly));
+    let scale = crate::reports::calibration_plots::arrow_scale_for(longest, 1.1 * lx.max(ly));
     let mut plots = vec![
         Plot {
             name: "psd_map_field",
             caption: format!(
                 "The PSD map (the sensor's own non-linearity, from a lensless scan): measured \
                  → corrected point, arrows scaled × {}, drawn where the scan reached",
-                crate::reports::report_plots::scale_text(scale)
+                crate::reports::calibration_plots::scale_text(scale)
             ),
             data: PlotData::DistortionField {
                 arrows,
@@ -150,7 +150,7 @@ pub(crate) fn map_plots(sensor: &CalibratedSensor, scan: Option<&PsdMapScanRecor
                 frame: Frame::sensor(
                     &format!(
                         "PSD map × {}",
-                        crate::reports::report_plots::scale_text(scale)
+                        crate::reports::calibration_plots::scale_text(scale)
                     ),
                     lx,
                     ly,
@@ -211,7 +211,7 @@ fn scan_plots(stage: &PsdMap, scan: &PsdMapScanRecord, lx: f64, ly: f64) -> Vec<
         .iter()
         .map(|a| a.delta.0.hypot(a.delta.1))
         .fold(0.0, f64::max);
-    let scale = crate::reports::report_plots::arrow_scale_for(longest, 1.1 * lx.max(ly));
+    let scale = crate::reports::calibration_plots::arrow_scale_for(longest, 1.1 * lx.max(ly));
     let boundary: Vec<Vec<(f64, f64)>> = stage
         .hull()
         .map(|h| {
@@ -237,7 +237,7 @@ fn scan_plots(stage: &PsdMap, scan: &PsdMapScanRecord, lx: f64, ly: f64) -> Vec<
                  {0} × {0} grid, arrows scaled × {1}, largest {2} µm; black: the scan's hull \
                  (the map's valid region)",
                 c.cells,
-                crate::reports::report_plots::scale_text(scale),
+                crate::reports::calibration_plots::scale_text(scale),
                 psdcal_report::num(1e3 * longest)
             ),
             data: PlotData::DistortionField {
@@ -247,7 +247,7 @@ fn scan_plots(stage: &PsdMap, scan: &PsdMapScanRecord, lx: f64, ly: f64) -> Vec<
                 frame: Frame::sensor(
                     &format!(
                         "PSD map scan residuals × {}",
-                        crate::reports::report_plots::scale_text(scale)
+                        crate::reports::calibration_plots::scale_text(scale)
                     ),
                     lx,
                     ly,
