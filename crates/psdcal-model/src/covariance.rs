@@ -82,6 +82,18 @@ pub enum CovarianceError {
         /// The variance.
         value: f64,
     },
+    /// A cross-covariance block does not match the two name sets.
+    #[error("the cross-covariance is {rows} x {cols}; expected {expected_rows} x {expected_cols}")]
+    CrossShape {
+        /// Rows found.
+        rows: usize,
+        /// Columns found.
+        cols: usize,
+        /// Rows expected (the second set's names).
+        expected_rows: usize,
+        /// Columns expected (the first set's names).
+        expected_cols: usize,
+    },
     /// A name is not in the set asked for (sub-blocks).
     #[error("the covariance has no parameter '{name}' (it has {available})")]
     UnknownName {
@@ -291,6 +303,59 @@ impl ParameterCovariance {
                 self.matrix[(rows[i], rows[j])]
             }),
         )
+    }
+
+    /// The block `Cov(a, b)` between the parameters `rows` and `cols`
+    /// (`rows.len() × cols.len()`), by name.
+    pub fn cross<S: AsRef<str>>(
+        &self,
+        rows: &[S],
+        cols: &[S],
+    ) -> Result<DMatrix<f64>, CovarianceError> {
+        let index = |names: &[S]| {
+            names
+                .iter()
+                .map(|n| {
+                    self.index(n.as_ref())
+                        .ok_or_else(|| CovarianceError::UnknownName {
+                            name: n.as_ref().to_string(),
+                            available: self.names.join(", "),
+                        })
+                })
+                .collect::<Result<Vec<usize>, _>>()
+        };
+        let (r, c) = (index(rows)?, index(cols)?);
+        Ok(DMatrix::from_fn(r.len(), c.len(), |i, j| {
+            self.matrix[(r[i], c[j])]
+        }))
+    }
+
+    /// The joint covariance of `self`'s parameters and `other`'s (names
+    /// disjoint), `[[Σ_a, Cᵀ], [C, Σ_b]]` with `cross = C = Cov(b, a)`
+    /// (`other.len() × self.len()`); the inverse of [`Self::sub`] and
+    /// [`Self::cross`] on the two name sets.
+    pub fn joint(&self, other: &Self, cross: &DMatrix<f64>) -> Result<Self, CovarianceError> {
+        let (na, nb) = (self.len(), other.len());
+        if cross.shape() != (nb, na) {
+            return Err(CovarianceError::CrossShape {
+                rows: cross.nrows(),
+                cols: cross.ncols(),
+                expected_rows: nb,
+                expected_cols: na,
+            });
+        }
+        let mut matrix = DMatrix::zeros(na + nb, na + nb);
+        matrix.view_mut((0, 0), (na, na)).copy_from(&self.matrix);
+        matrix.view_mut((na, na), (nb, nb)).copy_from(&other.matrix);
+        for i in 0..nb {
+            for j in 0..na {
+                let v = cross[(i, j)];
+                matrix[(na + i, j)] = v;
+                matrix[(j, na + i)] = v;
+            }
+        }
+        let names = self.names.iter().chain(&other.names).cloned().collect();
+        Self::new(names, matrix)
     }
 
     /// The covariance scaled by `k²` (k-σ bounds).

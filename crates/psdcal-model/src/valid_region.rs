@@ -50,9 +50,9 @@ use std::f64::consts::TAU;
 
 use nalgebra::Vector2;
 
-use crate::sensor::PsdGeometry;
 use crate::model::Model;
 use crate::params::SensorModel;
+use crate::sensor::PsdGeometry;
 use crate::ModelError;
 
 /// Rays of a region computed by [`ValidRegion::of_model`].

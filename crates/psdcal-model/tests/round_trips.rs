@@ -266,3 +266,33 @@ proptest! {
         prop_assert!((again.rotation() - rot).norm() < 1e-12);
     }
 }
+
+/// `joint` is the inverse of `sub` and `cross` on two disjoint name sets,
+/// and refuses a cross block of the wrong shape.
+#[test]
+fn joint_covariance_splits_back_into_its_blocks() {
+    use nalgebra::DMatrix;
+    use psdcal_model::ParameterCovariance;
+    let names = ["f", "cx", "m0", "m1", "m2"];
+    // A symmetric positive-definite matrix built as A Aᵀ + I.
+    let a = DMatrix::from_fn(5, 5, |i, j| ((i * 7 + j * 3) % 5) as f64 - 2.0);
+    let full = ParameterCovariance::new(
+        names.iter().map(|n| n.to_string()).collect(),
+        &a * a.transpose() + DMatrix::identity(5, 5),
+    )
+    .unwrap();
+    let (first, second) = (["f", "cx"], ["m0", "m1", "m2"]);
+    let cross = full.cross(&second, &first).unwrap();
+    assert_eq!(cross.shape(), (3, 2));
+    let joint = full
+        .sub(&first)
+        .unwrap()
+        .joint(&full.sub(&second).unwrap(), &cross)
+        .unwrap();
+    assert_eq!(joint, full);
+    let bad = full
+        .sub(&first)
+        .unwrap()
+        .joint(&full.sub(&second).unwrap(), &cross.transpose());
+    assert!(bad.is_err());
+}

@@ -192,26 +192,8 @@ pub(crate) fn sensor_with_map(
     let nt = estimated.len();
     let (stage, block) = map.to_stage(nt)?;
     let cm = map.map_covariance(&stage)?;
-    let nm = cm.len();
-    let mut joint = DMatrix::zeros(nt + nm, nt + nm);
-    joint
-        .view_mut((0, 0), (nt, nt))
-        .copy_from(estimated.matrix());
-    joint.view_mut((nt, nt), (nm, nm)).copy_from(cm.matrix());
-    for i in 0..nm {
-        for j in 0..nt {
-            let v = map.covariance.cross[i][j];
-            joint[(nt + i, j)] = v;
-            joint[(j, nt + i)] = v;
-        }
-    }
-    let names = estimated
-        .names()
-        .iter()
-        .chain(cm.names())
-        .cloned()
-        .collect();
-    let joint = ParameterCovariance::new(names, joint).map_err(|e| e.to_string())?;
+    let cross = DMatrix::from_fn(cm.len(), nt, |i, j| map.covariance.cross[i][j]);
+    let joint = estimated.joint(&cm, &cross).map_err(|e| e.to_string())?;
     let mut sensor = sensor
         .with_covariance(joint)
         .with_psd_map(SensorPsdMap { stage, block });
