@@ -80,13 +80,13 @@
 use nalgebra::Vector2;
 use psdcal_model::{Pose, SensorModel, MIN_POINTS_PER_IMAGE};
 
-use crate::focal_profile::{subset_images, Precision, Problem, Profile};
-use crate::homography::{fit_homography, HomographyOptions};
-use crate::preliminary::{
+use crate::refine::solve::CostKind;
+use crate::start::focal_profile::{subset_images, Precision, Problem, Profile};
+use crate::start::homography::{fit_homography, HomographyOptions};
+use crate::start::preliminary::{
     check_data, estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport,
 };
-use crate::refine::CostKind;
-use crate::zhang::{closed_form, ClosedFormSolution};
+use crate::start::zhang::{closed_form, ClosedFormSolution};
 use crate::{CalibError, CalibrationData, ImageObservations};
 
 /// Minimum number of images for a calibration (one definition, in psdcal-model).
@@ -424,7 +424,7 @@ pub fn initialize(
         let mut rms = homography_rms.clone();
         rms.sort_by(f64::total_cmp);
         let median = rms.get(rms.len() / 2).copied().unwrap_or(0.0);
-        crate::refine::total_cost(data, CostKind::Image, None, &(&p.model).into(), &p.poses)
+        crate::refine::solve::total_cost(data, CostKind::Image, None, &(&p.model).into(), &p.poses)
             .map(|c| (c / n_points).sqrt() <= median)
             .unwrap_or(false)
     };

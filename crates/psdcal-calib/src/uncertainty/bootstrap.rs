@@ -25,9 +25,9 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::covariance::{correlation_warnings, Covariance, CovarianceMethod};
 use crate::data::{CalibrationData, ImageObservations};
-use crate::refine::{refine, RefineOptions, Refined};
+use crate::refine::solve::{refine, RefineOptions, Refined};
+use crate::uncertainty::covariance::{correlation_warnings, Covariance, CovarianceMethod};
 use crate::CalibError;
 
 /// The fewest distinct images a resample holds.

@@ -12,9 +12,9 @@
 use psdcal_model::{Model, Pose};
 use serde::Serialize;
 
-use crate::calibration_problem::{CalibrationProblem, FitState};
 use crate::data::CalibrationData;
-use crate::refine::{CostKind, RobustLoss};
+use crate::problem::calibration_problem::{CalibrationProblem, FitState};
+use crate::refine::solve::{CostKind, RobustLoss};
 
 /// How many of the worst points a report lists.
 pub const WORST_POINTS: usize = 10;

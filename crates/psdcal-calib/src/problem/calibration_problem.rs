@@ -31,8 +31,8 @@ use psdcal_solver::normal_equations::{ResidualTerm, Step};
 use psdcal_solver::solver::Problem;
 
 use crate::data::CalibrationData;
-use crate::prior::Prior;
-use crate::weighting::PointWeights;
+use crate::problem::prior::Prior;
+use crate::problem::weighting::PointWeights;
 use crate::CalibError;
 
 /// One point's residual, `∂r/∂pose` and `∂r/∂m`.

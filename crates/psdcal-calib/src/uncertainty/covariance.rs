@@ -28,10 +28,10 @@ use nalgebra::{DMatrix, Matrix2, Matrix6, SMatrix};
 use psdcal_model::ParameterCovariance;
 use serde::Serialize;
 
-use crate::calibration_problem::{CalibrationProblem, FitState};
 use crate::data::CalibrationData;
-use crate::linearization::AtSolution;
-use crate::refine::{CostKind, RefineOptions, Refined};
+use crate::problem::calibration_problem::{CalibrationProblem, FitState};
+use crate::refine::linearization::AtSolution;
+use crate::refine::solve::{CostKind, RefineOptions, Refined};
 use crate::CalibError;
 use psdcal_solver::normal_equations::NormalEquations;
 
@@ -318,7 +318,12 @@ fn sandwich(
             let (r, pj, b) = problem
                 .linearize(state, i, k, &rotation, &mut jac, &mut a)
                 .map_err(|e| {
-                    crate::calibration_problem::point_error(data, i, image.points[k].led, e)
+                    crate::problem::calibration_problem::point_error(
+                        data,
+                        i,
+                        image.points[k].led,
+                        e,
+                    )
                 })?;
             let c = b * b.transpose();
             let c_inv = c.try_inverse().ok_or_else(|| CalibError::Numerical {

@@ -39,8 +39,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::initialize::{initialize, InitOptions};
-use crate::refine::{refine, RefineOptions, Refined};
+use crate::refine::solve::{refine, RefineOptions, Refined};
+use crate::start::initialize::{initialize, InitOptions};
 use crate::CalibError;
 
 /// Options of [`refine_global`].

@@ -46,7 +46,7 @@
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use psdcal_model::{Pose, SensorModel};
 
-use crate::homography::{null_vector, Homography};
+use crate::start::homography::{null_vector, Homography};
 use crate::CalibError;
 
 /// Image scale (mm) of the closed form's first pass.

@@ -1,32 +1,17 @@
-//! Levenberg–Marquardt refinement of the model's freed parameters and every
-//! pose (docs/model.md §4.6, the paper's (P29)): the cost of
-//! [`crate::calibration_problem`] minimised by the one solver
-//! ([`psdcal_solver::solver`]).
-//!
-//! The freed parameters are any of the model's, by name
-//! ([`RefineOptions::free`], the gains, other stages' parameters); a
-//! [`Prior`] may join the cost ([`crate::prior`]).
-//!
-//! With a noise model other than uniform, each residual is whitened
-//! ([`crate::weighting`]); because template-plane weights depend on the
-//! parameters, they are recomputed at the solution and the refinement
-//! repeated until the weighted cost settles (at most five passes).
-//!
-//! Stopping (the solver's): an *exact fit* when the RMS residual is below
-//! 1e-10 (mm; a few hundred times the rounding floor of the back-projection),
-//! a negligible step or cost change, saturated damping, or the iteration
-//! budget. A run that ends on the budget still returns its last state.
+//! One Levenberg–Marquardt refinement from a start, with its noise
+//! reweighting passes (the conventions are documented on [`crate::refine`]):
+//! [`refine`], the start model it completes, and the cost of a solution.
 
 use psdcal_model::stages::gains::GAIN_NAMES;
 use psdcal_model::stages::Gains;
 use psdcal_model::{Model, Param, Pose, SensorModel};
 use psdcal_solver::solver::{self, SolverOptions};
 
-pub use crate::calibration_problem::{CalibrationProblem, FitState};
 use crate::data::CalibrationData;
-use crate::linearization::Linearization;
-use crate::prior::Prior;
-use crate::weighting::{NoiseModel, PointWeights};
+pub use crate::problem::calibration_problem::{CalibrationProblem, FitState};
+use crate::problem::prior::Prior;
+use crate::problem::weighting::{NoiseModel, PointWeights};
+use crate::refine::linearization::Linearization;
 use crate::CalibError;
 
 pub use psdcal_solver::solver::{RobustLoss, SolverReport as RefineReport, Termination};

@@ -59,7 +59,7 @@ use psdcal_model::{Amplitudes, ChannelGains, Model, Pose, PsdGeometry};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::CostKind;
+use crate::refine::solve::CostKind;
 use crate::CalibError;
 
 /// Floor added to a point's covariance, relative to the variance of a point

@@ -8,12 +8,12 @@ use psdcal_model::stages::gains::GAIN_NAMES;
 use psdcal_model::Diagnostic;
 use serde::Serialize;
 
-use crate::calibrate::CalibrationResult;
-use crate::global::GlobalReport;
-use crate::initialize::InitRoute;
-use crate::refine::{CostKind, RobustLoss, Termination};
-use crate::report::FitStatistics;
-use crate::weighting::NoiseModel;
+use crate::calibrate::pipeline::CalibrationResult;
+use crate::diagnose::report::FitStatistics;
+use crate::problem::weighting::NoiseModel;
+use crate::refine::global::GlobalReport;
+use crate::refine::solve::{CostKind, RobustLoss, Termination};
+use crate::start::initialize::InitRoute;
 
 /// One parameter of a summary.
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -12,9 +12,9 @@ use psdcal_solver::normal_equations::NormalEquations;
 
 use psdcal_solver::solver;
 
-use crate::calibration_problem::{CalibrationProblem, FitState};
-use crate::refine::{RefineOptions, Refined};
-use crate::weighting::PointWeights;
+use crate::problem::calibration_problem::{CalibrationProblem, FitState};
+use crate::problem::weighting::PointWeights;
+use crate::refine::solve::{RefineOptions, Refined};
 use crate::{CalibError, CalibrationData};
 
 /// The undamped normal equations of a refinement at its solution, with
@@ -121,7 +121,7 @@ mod tests {
     //! its solution, and its invalidation when the solution is changed.
 
     use super::*;
-    use crate::refine::{refine, CostKind, RobustLoss};
+    use crate::refine::solve::{refine, CostKind, RobustLoss};
     use psdcal_model::{Param, PsdGeometry, SensorModel};
     use psdcal_solver::solver;
     use psdcal_testkit::{add_noise, covering_poses, image_points, perturbed, scatter, PointKind};

@@ -20,7 +20,7 @@
 use nalgebra::Vector2;
 
 use crate::data::CalibrationData;
-use crate::homography::{fit_homography, HomographyOptions};
+use crate::start::homography::{fit_homography, HomographyOptions};
 
 /// Fewest points of an image used by the check (one left out, six fitted:
 /// a homography with residual degrees of freedom).

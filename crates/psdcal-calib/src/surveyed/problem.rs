@@ -17,7 +17,7 @@ use psdcal_model::{Model, Param};
 use psdcal_solver::normal_equations::{ResidualTerm, Step};
 use psdcal_solver::solver::Problem;
 
-use crate::surveyed::SurveyedData;
+use crate::surveyed::fit::SurveyedData;
 use crate::CalibError;
 
 /// One point's residual, `∂r/∂pose` and `∂r/∂P`.
@@ -27,7 +27,7 @@ type PointLinearization = (Vector2<f64>, SMatrix<f64, 2, 6>, SMatrix<f64, 2, 3>)
 pub type DenseJacobians = (DMatrix<f64>, DVector<f64>, Vec<(usize, SMatrix<f64, 2, 3>)>);
 
 /// The model's parameters and one pose per image: the planar fit's state.
-pub type SurveyedState = crate::calibration_problem::FitState;
+pub type SurveyedState = crate::problem::calibration_problem::FitState;
 
 /// The image-plane cost of surveyed points as a solver [`Problem`].
 #[derive(Debug, Clone)]

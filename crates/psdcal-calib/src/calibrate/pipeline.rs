@@ -1,30 +1,7 @@
-//! The whole calibration, end to end (docs/model.md §4): the robust start
-//! ([`mod@crate::initialize`]: preliminary correction, normalised DLT, closed
-//! form or focal search), Levenberg–Marquardt on the template-plane cost
-//! (P29) with the global search over `l1` when it is freed
-//! ([`crate::global`]), the covariance ([`mod@crate::covariance`]) and the fit
-//! statistics ([`crate::report`]), then the diagnostics
-//! ([`crate::diagnostics`]: misfit, gain imbalance, local minima,
-//! unreliable uncertainty).
-//!
-//! With [`CalibrateOptions::prior`] (a PSD map refined with its scan's
-//! information, docs/model.md §8.3), the fit above runs with the prior's
-//! parameters held at their values in `base` (`μ`); then one more
-//! refinement frees them, starting from that solution, with the prior
-//! residuals `s L (m − μ)` ([`crate::prior`]), `s² = cost / dof` of the
-//! fit with them held (the data's variance per coordinate in cost units).
-//! The covariance, the linearity check and the bootstrap are then those of
-//! the joint fit (data and prior); the residual-structure diagnostics keep
-//! the prior's parameters held (at their refined values).
-//!
-//! Fixed parameters keep the values of [`CalibrateOptions::base`] (zero
-//! distortion by default, or e.g. an `l1` known from a PSD scan). Freed
-//! parameters start from the initialisation where it estimates them
-//! (`f, cx, cy, k1, k2`) and from `base` otherwise.
-//!
-//! A refinement that runs out of iterations is an error, never a result;
-//! so is a fit whose focal length has a standard deviation above
-//! [`MAX_RELATIVE_STD_F`] of its value (nearly parallel template poses).
+//! [`calibrate`](fn@super::calibrate) as a list of named steps: the start,
+//! the refinement (global search, gain starts, prior), the post-fit jobs
+//! shared with the helper thread, the checks on the uncertainty, and the
+//! warnings and diagnostics of the result (conventions in [`super`]).
 
 use psdcal_model::{
     ChannelGains, Diagnostic, DiagnosticCode, Model, Param, ParameterCovariance, Pose, SensorModel,
@@ -32,23 +9,22 @@ use psdcal_model::{
 };
 use std::sync::Arc;
 
-use crate::bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
-pub use crate::calibration_summary::{CalibrationSummary, ParameterSummary};
-use crate::covariance::{analytic_method, covariance_at, Covariance};
+use crate::calibrate::gain_starts::refine_from_gain_starts;
+use crate::calibrate::helper::Helper;
 use crate::data::CalibrationData;
-use crate::diagnostics::{diagnose_structure, diagnose_uncertainty, DiagnosticOptions};
-use crate::gain_starts::refine_from_gain_starts;
-use crate::global::{refine_global, GlobalOptions, GlobalReport};
-use crate::helper::Helper;
-use crate::initialize::{initialize, InitOptions, InitReport};
-use crate::linearity::{check_linearity_at, LinearityCheck, UncertaintyVerdict};
-use crate::linearization::AtSolution;
-use crate::misplaced::misplaced_led;
-use crate::prior::Prior;
-use crate::profile::profile_at_three_sigma;
-use crate::refine::{refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss};
-use crate::report::{fit_statistics, FitStatistics};
-use crate::weighting::NoiseModel;
+use crate::diagnose::diagnostics::{diagnose_structure, diagnose_uncertainty, DiagnosticOptions};
+use crate::diagnose::report::{fit_statistics, FitStatistics};
+use crate::problem::prior::Prior;
+use crate::problem::weighting::NoiseModel;
+use crate::refine::global::{refine_global, GlobalOptions, GlobalReport};
+use crate::refine::linearization::AtSolution;
+use crate::refine::solve::{refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss};
+use crate::start::initialize::{initialize, InitOptions, InitReport};
+use crate::start::misplaced::misplaced_led;
+use crate::uncertainty::bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
+use crate::uncertainty::covariance::{analytic_method, covariance_at, Covariance};
+use crate::uncertainty::linearity::{check_linearity_at, LinearityCheck, UncertaintyVerdict};
+use crate::uncertainty::profile::profile_at_three_sigma;
 use crate::CalibError;
 
 /// Largest relative standard deviation of a freed `f` accepted as a

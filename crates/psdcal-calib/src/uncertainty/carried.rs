@@ -19,9 +19,9 @@
 use nalgebra::DMatrix;
 use psdcal_model::{Model, ParameterCovariance, Pose};
 
-use crate::calibration_problem::{CalibrationProblem, FitState};
 use crate::data::CalibrationData;
-use crate::refine::RefineOptions;
+use crate::problem::calibration_problem::{CalibrationProblem, FitState};
+use crate::refine::solve::RefineOptions;
 use crate::CalibError;
 
 /// The estimate's covariance with a fixed block's carried in.

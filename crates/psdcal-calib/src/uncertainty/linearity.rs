@@ -27,11 +27,11 @@ use psdcal_solver::normal_equations::{NormalEquations, Step};
 use psdcal_solver::solver::{self, Problem};
 use serde::Serialize;
 
-use crate::calibration_problem::FitState;
 use crate::data::CalibrationData;
-use crate::linearization::AtSolution;
-use crate::profile::ParameterProfile;
-use crate::refine::{RefineOptions, Refined, RobustLoss};
+use crate::problem::calibration_problem::FitState;
+use crate::refine::linearization::AtSolution;
+use crate::refine::solve::{RefineOptions, Refined, RobustLoss};
+use crate::uncertainty::profile::ParameterProfile;
 use crate::CalibError;
 
 /// Largest accepted `|ρ − 1|` (module documentation): beyond it the

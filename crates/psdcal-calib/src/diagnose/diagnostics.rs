@@ -29,15 +29,15 @@ use psdcal_model::{Diagnostic, DiagnosticCode};
 use psdcal_solver::normal_equations::inverse_scaled;
 use serde::Serialize;
 
-use crate::calibration_problem::{CalibrationProblem, FitState};
-use crate::covariance::Covariance;
 use crate::data::CalibrationData;
-use crate::global::GlobalReport;
-use crate::refine::{CostKind, RefineOptions, Refined};
-pub use crate::residual_structure::{
+pub use crate::diagnose::residual_structure::{
     diagnose_residuals, FieldTest, ImagePlaneFit, GAIN_SHARE, MIN_EXPLAINED, MISFIT_RATIO,
     RANK_CUTOFF, SIGNIFICANCE_Z,
 };
+use crate::problem::calibration_problem::{CalibrationProblem, FitState};
+use crate::refine::global::GlobalReport;
+use crate::refine::solve::{CostKind, RefineOptions, Refined};
+use crate::uncertainty::covariance::Covariance;
 
 /// Condition number of the unit-diagonal information matrix above which the
 /// covariance is unreliable.

@@ -37,7 +37,7 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Vector2};
 use psdcal_solver::{solver, Problem, ResidualTerm, SolverOptions, Step, Termination};
 
-use crate::homography::{fast_homography_normalised, normalizing_transform};
+use crate::start::homography::{fast_homography_normalised, normalizing_transform};
 use crate::{CalibError, CalibrationData};
 
 /// Which preliminary correction to run.
@@ -394,7 +394,7 @@ pub fn estimate_preliminary(
     let method = match options.method {
         Preliminary::Off => return Ok(PreliminaryReport::off(centre)),
         Preliminary::Auto => {
-            if crate::straightness::usable_lines(data) > 0 {
+            if crate::start::straightness::usable_lines(data) > 0 {
                 Preliminary::Straightness
             } else {
                 Preliminary::HomographyConsistency
@@ -410,7 +410,7 @@ pub fn estimate_preliminary(
     }
     let (minimum, terms) = match method {
         Preliminary::Straightness => {
-            let cost = crate::straightness::StraightnessCost::new(data, centre, radius)?;
+            let cost = crate::start::straightness::StraightnessCost::new(data, centre, radius)?;
             let terms = cost.lines();
             (minimise(&cost, options.max_iterations)?, terms)
         }

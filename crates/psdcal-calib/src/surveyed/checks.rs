@@ -26,11 +26,14 @@
 use psdcal_model::{Model, ParameterCovariance, PsdGeometry};
 use psdcal_solver::solver;
 
-use crate::diagnostics::{
+use crate::diagnose::diagnostics::{
     diagnose_conditioning, diagnose_residuals, DiagnosticOptions, DiagnosticReport, ImagePlaneFit,
 };
-use crate::linearity::{check_quadratic, FitAtSolution, LinearityCheck, UncertaintyVerdict};
-use crate::surveyed::{SurveyedData, SurveyedOptions, SurveyedProblem, SurveyedState};
+use crate::surveyed::fit::{SurveyedData, SurveyedOptions};
+use crate::surveyed::problem::{SurveyedProblem, SurveyedState};
+use crate::uncertainty::linearity::{
+    check_quadratic, FitAtSolution, LinearityCheck, UncertaintyVerdict,
+};
 use crate::CalibError;
 
 /// What `gain_imbalance_suspected` tells the user of a 3-D fit to do.

@@ -69,8 +69,8 @@ use psdcal_solver::normal_equations::{ResidualTerm, Step};
 use psdcal_solver::solver::{self, Problem};
 use serde::Serialize;
 
-use crate::calibration_problem::{CalibrationProblem, FitState};
-use crate::diagnostics::{DiagnosticOptions, DiagnosticReport};
+use crate::diagnose::diagnostics::{DiagnosticOptions, DiagnosticReport};
+use crate::problem::calibration_problem::{CalibrationProblem, FitState};
 use crate::CalibError;
 
 /// One-sided standard-normal quantile of `p = 1e-6`: the level of every
@@ -146,7 +146,7 @@ impl ImagePlaneFit for CalibrationProblem<'_> {
         k: usize,
     ) -> Result<Vector2<f64>, CalibError> {
         self.measured(model, i, k).map(|(m, _)| m).map_err(|e| {
-            crate::calibration_problem::point_error(
+            crate::problem::calibration_problem::point_error(
                 self.data(),
                 i,
                 self.data().images[i].points[k].led,

@@ -15,11 +15,11 @@
 
 use psdcal_model::Model;
 
-use crate::calibrate::{start_model, CalibrateOptions};
+use crate::calibrate::pipeline::{start_model, CalibrateOptions};
 use crate::data::CalibrationData;
-use crate::global::{refine_global, GlobalOptions, GlobalReport};
-use crate::initialize::{initialize, InitOptions, InitRoute, Initialization};
-use crate::refine::{refine, RefineOptions, Refined};
+use crate::refine::global::{refine_global, GlobalOptions, GlobalReport};
+use crate::refine::solve::{refine, RefineOptions, Refined};
+use crate::start::initialize::{initialize, InitOptions, InitRoute, Initialization};
 use crate::CalibError;
 
 /// The refinement with the gains freed from the competing starts (module

@@ -18,11 +18,11 @@
 use psdcal_model::{Model, Pose, SensorModel};
 use psdcal_solver::{solver, SolverOptions};
 
-use crate::calibration_problem::{CalibrationProblem, FitState};
-use crate::homography::{fast_homography, Homography};
-use crate::initialize::{FocalSearchReport, REFINE_SUBSET_IMAGES};
-use crate::refine::CostKind;
-use crate::zhang::pose_from_homography;
+use crate::problem::calibration_problem::{CalibrationProblem, FitState};
+use crate::refine::solve::CostKind;
+use crate::start::homography::{fast_homography, Homography};
+use crate::start::initialize::{FocalSearchReport, REFINE_SUBSET_IMAGES};
+use crate::start::zhang::pose_from_homography;
 use crate::{CalibError, CalibrationData, ImageObservations};
 
 /// Initial damping of the whole set's refinement from the subset's
@@ -105,7 +105,7 @@ impl Problem {
     }
 
     pub(crate) fn sum_squares(&self, model: &SensorModel, poses: &[Pose]) -> f64 {
-        crate::refine::total_cost(&self.data, CostKind::Template, None, &model.into(), poses)
+        crate::refine::solve::total_cost(&self.data, CostKind::Template, None, &model.into(), poses)
             .ok()
             .filter(|c| c.is_finite())
             .unwrap_or(f64::INFINITY)

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::{refine, RefineOptions, Refined};
+use crate::refine::solve::{refine, RefineOptions, Refined};
 
 /// Smallest accepted profile rise `r` (module documentation).
 pub const MIN_PROFILE_RISE: f64 = 0.25;
