@@ -15,10 +15,12 @@
 
 use psdcal_model::Model;
 
-use crate::calibrate::pipeline::{start_model, CalibrateOptions};
+use crate::calibrate::options::{start_model, CalibrateOptions};
 use crate::data::CalibrationData;
 use crate::refine::global::{refine_global, GlobalOptions, GlobalReport};
-use crate::refine::solve::{refine, RefineOptions, Refined};
+use crate::refine::options::RefineOptions;
+use crate::refine::refined::Refined;
+use crate::refine::solve::refine;
 use crate::start::initialize::{initialize, InitOptions, InitRoute, Initialization};
 use crate::CalibError;
 

@@ -33,10 +33,12 @@
 
 mod gain_starts;
 mod helper;
+mod options;
 mod pipeline;
+mod result;
 mod summary;
 
-pub use pipeline::{
-    calibrate, CalibrateOptions, CalibrationResult, Uncertainty, MAX_RELATIVE_STD_F,
-};
+pub use options::{CalibrateOptions, Uncertainty};
+pub use pipeline::{calibrate, MAX_RELATIVE_STD_F};
+pub use result::CalibrationResult;
 pub use summary::{CalibrationSummary, ParameterSummary};

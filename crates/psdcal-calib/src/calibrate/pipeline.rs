@@ -3,130 +3,33 @@
 //! shared with the helper thread, the checks on the uncertainty, and the
 //! warnings and diagnostics of the result (conventions in [`super`]).
 
-use psdcal_model::{
-    ChannelGains, Diagnostic, DiagnosticCode, Model, Param, ParameterCovariance, Pose, SensorModel,
-    ValidRegion,
-};
+use psdcal_model::{Diagnostic, DiagnosticCode, ParameterCovariance, ValidRegion};
 use std::sync::Arc;
 
 use crate::calibrate::gain_starts::refine_from_gain_starts;
 use crate::calibrate::helper::Helper;
+use crate::calibrate::options::{start_model, CalibrateOptions, Uncertainty};
+use crate::calibrate::result::CalibrationResult;
 use crate::data::CalibrationData;
-use crate::diagnose::diagnostics::{diagnose_structure, diagnose_uncertainty, DiagnosticOptions};
-use crate::diagnose::report::{fit_statistics, FitStatistics};
+use crate::diagnose::diagnostics::{diagnose_structure, diagnose_uncertainty};
+use crate::diagnose::report::fit_statistics;
 use crate::problem::prior::Prior;
-use crate::problem::weighting::NoiseModel;
-use crate::refine::global::{refine_global, GlobalOptions, GlobalReport};
+use crate::refine::global::{refine_global, GlobalOptions};
 use crate::refine::linearization::AtSolution;
-use crate::refine::solve::{refine, CostKind, RefineOptions, RefineReport, Refined, RobustLoss};
-use crate::start::initialize::{initialize, InitOptions, InitReport};
+use crate::refine::options::RefineOptions;
+use crate::refine::refined::Refined;
+use crate::refine::solve::refine;
+use crate::start::initialize::initialize;
 use crate::start::misplaced::misplaced_led;
-use crate::uncertainty::bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
-use crate::uncertainty::covariance::{analytic_method, covariance_at, Covariance};
-use crate::uncertainty::linearity::{check_linearity_at, LinearityCheck, UncertaintyVerdict};
+use crate::uncertainty::bootstrap::bootstrap_covariance;
+use crate::uncertainty::covariance::{analytic_method, covariance_at};
+use crate::uncertainty::linearity::{check_linearity_at, UncertaintyVerdict};
 use crate::uncertainty::profile::profile_at_three_sigma;
 use crate::CalibError;
 
 /// Largest relative standard deviation of a freed `f` accepted as a
 /// calibration: beyond it the images do not determine the focal length.
 pub const MAX_RELATIVE_STD_F: f64 = 0.2;
-
-/// Options of [`calibrate`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct CalibrateOptions {
-    /// The start.
-    pub init: InitOptions,
-    /// The refinement (cost, freed parameters, robust loss, tolerances).
-    pub refine: RefineOptions,
-    /// The global search used when `l1` is freed.
-    pub global: GlobalOptions,
-    /// The model's stages and the values of the parameters that are not
-    /// freed (the standard chain with zero distortion by default; a chain
-    /// with more stages, e.g. a PSD map, carries them into the fit).
-    pub base: Model,
-    /// How the covariance is estimated (linear by default).
-    pub uncertainty: Uncertainty,
-    /// What the diagnostics may use beyond the fit (a known point noise).
-    pub diagnostics: DiagnosticOptions,
-    /// A Gaussian prior on parameters of `base` (a PSD map's coefficients
-    /// with their scan's covariance), its mean their values in `base`:
-    /// they are freed in a last refinement (module documentation). `None`
-    /// by default.
-    pub prior: Option<ParameterCovariance>,
-}
-
-/// How [`calibrate`] estimates the covariance.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Uncertainty {
-    /// Analytic ([`mod@crate::covariance`]): the sandwich for the unweighted
-    /// template-plane fit, `σ² (JᵀJ)⁻¹` otherwise.
-    #[default]
-    Linear,
-    /// Case bootstrap by image ([`crate::bootstrap`]).
-    Bootstrap(BootstrapOptions),
-}
-
-impl Default for CalibrateOptions {
-    /// The paper's defaults: template-plane cost, `f, cx, cy, k1, k2` freed,
-    /// every other parameter fixed at zero (`f` at 8 mm only matters if the
-    /// user fixes it).
-    fn default() -> Self {
-        Self {
-            init: InitOptions::default(),
-            refine: RefineOptions::default(),
-            global: GlobalOptions::default(),
-            base: Model::standard(&SensorModel::pinhole(8.0, 0.0, 0.0)),
-            uncertainty: Uncertainty::Linear,
-            diagnostics: DiagnosticOptions::default(),
-            prior: None,
-        }
-    }
-}
-
-/// A finished calibration.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CalibrationResult {
-    /// The estimated model (every stage; the gains when they were freed).
-    pub model: Model,
-    /// Where the estimated model's correction is one-to-one (docs/model.md §8.2).
-    pub valid_region: ValidRegion,
-    /// The estimated relative channel gains, when they were freed.
-    pub gains: Option<ChannelGains>,
-    /// Which start won the gain estimation, when the gains were freed.
-    pub gain_start: Option<String>,
-    /// One `sensor_from_template` pose per image.
-    pub poses: Vec<Pose>,
-    /// Names of the freed parameters, in covariance order.
-    pub free: Vec<String>,
-    /// The cost minimised.
-    pub cost_kind: CostKind,
-    /// The noise model that weighted it.
-    pub noise: NoiseModel,
-    /// The robust loss, if any.
-    pub robust: Option<RobustLoss>,
-    /// Final cost (weighted under a noise model other than uniform).
-    pub cost: f64,
-    /// How the start was found.
-    pub init: InitReport,
-    /// The refinement's report.
-    pub refine: RefineReport,
-    /// The global search's report (when `l1` was freed).
-    pub global: Option<GlobalReport>,
-    /// Uncertainty of the estimate.
-    pub covariance: Covariance,
-    /// Whether the linear covariance holds at ±3σ ([`crate::linearity`]):
-    /// the verdict behind the diagnostic `uncertainty_unreliable`.
-    pub linearity: LinearityCheck,
-    /// The bootstrap's report, when the covariance is a bootstrap's.
-    pub bootstrap: Option<BootstrapReport>,
-    /// Fit statistics.
-    pub statistics: FitStatistics,
-    /// Everything the user should know (identifiability, start, outliers).
-    pub warnings: Vec<String>,
-    /// What the fit noticed about itself, with stable codes
-    /// ([`crate::diagnostics`]; calibration.json's `diagnostics`).
-    pub diagnostics: Vec<Diagnostic>,
-}
 
 /// Calibrates a sensor from `data`.
 pub fn calibrate(
@@ -375,44 +278,4 @@ fn refine_with_prior(
     refined.report.iterations += held.report.iterations;
     refined.report.accepted += held.report.accepted;
     Ok((refined, joint))
-}
-
-/// The refinement's start: `options.base` with the freed parameters the
-/// initialisation estimates (`f, cx, cy, k1, k2`) taken from `init_model`.
-pub(crate) fn start_model(
-    options: &CalibrateOptions,
-    init_model: &SensorModel,
-) -> Result<Model, CalibError> {
-    let mut start = options.base.clone();
-    for p in [Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2] {
-        if options.refine.free.contains(&p) {
-            start.set(p.name(), init_model.get(p))?;
-        }
-    }
-    // A fixed f, cx or cy must have been given; the poses come from the start.
-    start.validate()?;
-    Ok(start)
-}
-
-impl CalibrationResult {
-    /// The fit's solution as a [`Refined`] (model, poses, cost and the
-    /// solver's report; the point weights are not kept), for the
-    /// post-fit functions that take one (covariance, diagnostics, profile).
-    pub fn refined(&self) -> Refined {
-        Refined {
-            model: self.model.clone(),
-            poses: self.poses.clone(),
-            cost: self.cost,
-            weights: None,
-            report: self.refine.clone(),
-            linearization: None,
-        }
-    }
-}
-
-impl CalibrationResult {
-    /// The standard parameters of the estimated model.
-    pub fn sensor_model(&self) -> SensorModel {
-        self.model.sensor_model()
-    }
 }

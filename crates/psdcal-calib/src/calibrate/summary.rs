@@ -8,12 +8,13 @@ use psdcal_model::stages::gains::GAIN_NAMES;
 use psdcal_model::Diagnostic;
 use serde::Serialize;
 
-use crate::calibrate::pipeline::CalibrationResult;
+use crate::calibrate::result::CalibrationResult;
 use crate::diagnose::report::FitStatistics;
 use crate::problem::weighting::NoiseModel;
 use crate::refine::global::GlobalReport;
-use crate::refine::solve::{CostKind, RobustLoss, Termination};
 use crate::start::initialize::InitRoute;
+use psdcal_model::CostKind;
+use psdcal_solver::solver::{RobustLoss, Termination};
 
 /// One parameter of a summary.
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -27,51 +27,22 @@
 use nalgebra::{DMatrix, SymmetricEigen};
 use psdcal_model::{Diagnostic, DiagnosticCode};
 use psdcal_solver::normal_equations::inverse_scaled;
-use serde::Serialize;
 
 use crate::data::CalibrationData;
 pub use crate::diagnose::residual_structure::{
-    diagnose_residuals, FieldTest, ImagePlaneFit, GAIN_SHARE, MIN_EXPLAINED, MISFIT_RATIO,
-    RANK_CUTOFF, SIGNIFICANCE_Z,
+    diagnose_residuals, DiagnosticOptions, DiagnosticReport, FieldTest, ImagePlaneFit, GAIN_SHARE,
+    MIN_EXPLAINED, MISFIT_RATIO, RANK_CUTOFF, SIGNIFICANCE_Z,
 };
 use crate::problem::calibration_problem::{CalibrationProblem, FitState};
 use crate::refine::global::GlobalReport;
-use crate::refine::solve::{CostKind, RefineOptions, Refined};
+use crate::refine::options::RefineOptions;
+use crate::refine::refined::Refined;
 use crate::uncertainty::covariance::Covariance;
+use psdcal_model::CostKind;
 
 /// Condition number of the unit-diagonal information matrix above which the
 /// covariance is unreliable.
 pub const MAX_CONDITION: f64 = 1e10;
-/// What the diagnostics may use beyond the fit.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct DiagnosticOptions {
-    /// Known standard deviation of each coordinate of a measured point, mm
-    /// (from the channels' SNR): enables the χ² test of the residual.
-    pub point_sigma_mm: Option<f64>,
-}
-
-/// The diagnostics and the statistics behind them.
-#[derive(Debug, Clone, PartialEq, Default, Serialize)]
-pub struct DiagnosticReport {
-    /// What the user should know.
-    pub diagnostics: Vec<Diagnostic>,
-    /// Cubic field against the model (`None`: not tested).
-    pub cubic: Option<FieldTest>,
-    /// Gain field against the model.
-    pub gain: Option<FieldTest>,
-    /// Cubic field against the model plus the gain field.
-    pub beyond_gain: Option<FieldTest>,
-    /// Condition number of the unit-diagonal information matrix.
-    pub condition: Option<f64>,
-}
-
-impl DiagnosticReport {
-    /// Whether a diagnostic with `code` was raised.
-    pub fn has(&self, code: DiagnosticCode) -> bool {
-        self.diagnostics.iter().any(|d| d.code == code)
-    }
-}
-
 /// What the user is told to do about a suspected gain imbalance, for a
 /// planar fit (whose gains can be fitted from signals.csv).
 pub const PLANAR_GAIN_ADVICE: &str = "fit the gains from the electrode signals (--signals \

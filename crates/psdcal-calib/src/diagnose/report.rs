@@ -14,7 +14,8 @@ use serde::Serialize;
 
 use crate::data::CalibrationData;
 use crate::problem::calibration_problem::{CalibrationProblem, FitState};
-use crate::refine::solve::{CostKind, RobustLoss};
+use psdcal_model::CostKind;
+use psdcal_solver::solver::RobustLoss;
 
 /// How many of the worst points a report lists.
 pub const WORST_POINTS: usize = 10;

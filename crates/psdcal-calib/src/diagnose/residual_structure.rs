@@ -69,7 +69,6 @@ use psdcal_solver::normal_equations::{ResidualTerm, Step};
 use psdcal_solver::solver::{self, Problem};
 use serde::Serialize;
 
-use crate::diagnose::diagnostics::{DiagnosticOptions, DiagnosticReport};
 use crate::problem::calibration_problem::{CalibrationProblem, FitState};
 use crate::CalibError;
 
@@ -111,6 +110,36 @@ impl FieldTest {
     /// Significant and large enough (module documentation).
     pub fn significant(&self) -> bool {
         self.df1 > 0 && self.z > SIGNIFICANCE_Z && self.explained >= MIN_EXPLAINED
+    }
+}
+
+/// What the diagnostics may use beyond the fit.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DiagnosticOptions {
+    /// Known standard deviation of each coordinate of a measured point, mm
+    /// (from the channels' SNR): enables the χ² test of the residual.
+    pub point_sigma_mm: Option<f64>,
+}
+
+/// The diagnostics and the statistics behind them.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct DiagnosticReport {
+    /// What the user should know.
+    pub diagnostics: Vec<Diagnostic>,
+    /// Cubic field against the model (`None`: not tested).
+    pub cubic: Option<FieldTest>,
+    /// Gain field against the model.
+    pub gain: Option<FieldTest>,
+    /// Cubic field against the model plus the gain field.
+    pub beyond_gain: Option<FieldTest>,
+    /// Condition number of the unit-diagonal information matrix.
+    pub condition: Option<f64>,
+}
+
+impl DiagnosticReport {
+    /// Whether a diagnostic with `code` was raised.
+    pub fn has(&self, code: DiagnosticCode) -> bool {
+        self.diagnostics.iter().any(|d| d.code == code)
     }
 }
 

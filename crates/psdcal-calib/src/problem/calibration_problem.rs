@@ -28,7 +28,7 @@
 use nalgebra::{Matrix2, Matrix2x3, SMatrix, Vector2};
 use psdcal_model::{ChainJacobian, CostKind, Model, ModelError, Pose};
 use psdcal_solver::normal_equations::{ResidualTerm, Step};
-use psdcal_solver::solver::Problem;
+use psdcal_solver::solver::{self, Problem, RobustLoss};
 
 use crate::data::CalibrationData;
 use crate::problem::prior::Prior;
@@ -414,4 +414,20 @@ pub(crate) fn point_error(
         stage: "refinement",
         reason: format!("image '{}', LED #{}: {e}", data.images[image].id, led + 1),
     }
+}
+
+/// Total cost of `(model, poses)` (robust when a loss is given).
+pub fn total_cost(
+    data: &CalibrationData,
+    cost: CostKind,
+    robust: Option<RobustLoss>,
+    model: &Model,
+    poses: &[Pose],
+) -> Result<f64, CalibError> {
+    let problem = CalibrationProblem::new(data, cost, model, &[], None)?;
+    let state = FitState {
+        model: model.clone(),
+        poses: poses.to_vec(),
+    };
+    solver::cost(&problem, &state, robust)
 }

@@ -59,8 +59,8 @@ use psdcal_model::{Amplitudes, ChannelGains, Model, Pose, PsdGeometry};
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::solve::CostKind;
 use crate::CalibError;
+use psdcal_model::CostKind;
 
 /// Floor added to a point's covariance, relative to the variance of a point
 /// at the sensor's centre under the same model.

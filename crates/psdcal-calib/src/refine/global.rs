@@ -39,7 +39,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::solve::{refine, RefineOptions, Refined};
+use crate::refine::options::RefineOptions;
+use crate::refine::refined::Refined;
+use crate::refine::solve::refine;
 use crate::start::initialize::{initialize, InitOptions};
 use crate::CalibError;
 

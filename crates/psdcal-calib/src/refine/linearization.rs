@@ -1,81 +1,17 @@
-//! The linearisation a refinement keeps: the solver's last undamped normal
-//! equations when they are at its solution (`psdcal_solver::Solution::
-//! normal_equations`), with everything they depend on. The covariance and
-//! the linearity check start from the normal equations at the solution
-//! ([`AtSolution`]); they take these instead of linearising
-//! again (one evaluation of every point) when asked for the same fit: the
-//! same options, data size, model, poses and weights. Anything else, or a
-//! refinement whose fields were changed since, is linearised afresh.
+//! The linearisation at a refinement's solution ([`AtSolution`]): its
+//! problem (the freed parameters of the options, the refinement's weights),
+//! its state and the undamped normal equations there, what the covariance and
+//! the linearity check start from. The normal equations are those the
+//! refinement kept ([`Linearization`]) when they are of the same fit, and
+//! computed afresh otherwise.
 
-use psdcal_model::{Model, Pose};
 use psdcal_solver::normal_equations::NormalEquations;
-
 use psdcal_solver::solver;
 
 use crate::problem::calibration_problem::{CalibrationProblem, FitState};
-use crate::problem::weighting::PointWeights;
-use crate::refine::solve::{RefineOptions, Refined};
+use crate::refine::options::RefineOptions;
+use crate::refine::refined::{Linearization, Refined};
 use crate::{CalibError, CalibrationData};
-
-/// The undamped normal equations of a refinement at its solution, with
-/// everything they depend on: [`AtSolution::new`] takes them instead of
-/// linearising again when asked for the same fit (same options, data size,
-/// model, poses and weights). A cache: it takes no part in comparisons.
-#[derive(Debug, Clone)]
-pub(crate) struct Linearization {
-    options: RefineOptions,
-    images: usize,
-    points: usize,
-    model: Model,
-    poses: Vec<Pose>,
-    weights: Option<PointWeights>,
-    ne: NormalEquations,
-}
-
-impl PartialEq for Linearization {
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-impl Linearization {
-    /// The normal equations `ne` of the fit of `data` with `options` at
-    /// `state`, weighted by `weights`.
-    pub(crate) fn new(
-        ne: NormalEquations,
-        options: &RefineOptions,
-        data: &CalibrationData,
-        state: &FitState,
-        weights: Option<&PointWeights>,
-    ) -> Self {
-        Self {
-            options: options.clone(),
-            images: data.images.len(),
-            points: data.point_count(),
-            model: state.model.clone(),
-            poses: state.poses.clone(),
-            weights: weights.cloned(),
-            ne,
-        }
-    }
-
-    /// The normal equations when they are those of `refined` for `options`
-    /// on `data`.
-    pub(crate) fn of(
-        refined: &Refined,
-        data: &CalibrationData,
-        options: &RefineOptions,
-    ) -> Option<NormalEquations> {
-        let l = refined.linearization.as_ref()?;
-        (l.options == *options
-            && l.images == data.images.len()
-            && l.points == data.point_count()
-            && l.model == refined.model
-            && l.poses == refined.poses
-            && l.weights == refined.weights)
-            .then(|| l.ne.clone())
-    }
-}
 
 /// The fit of a refinement at its solution: its problem (the freed
 /// parameters of the options, the refinement's weights), its state, and the
@@ -121,9 +57,11 @@ mod tests {
     //! its solution, and its invalidation when the solution is changed.
 
     use super::*;
-    use crate::refine::solve::{refine, CostKind, RobustLoss};
+    use crate::refine::solve::refine;
+    use psdcal_model::CostKind;
     use psdcal_model::{Param, PsdGeometry, SensorModel};
     use psdcal_solver::solver;
+    use psdcal_solver::solver::RobustLoss;
     use psdcal_testkit::{add_noise, covering_poses, image_points, perturbed, scatter, PointKind};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;

@@ -23,9 +23,16 @@
 
 pub mod global;
 pub(crate) mod linearization;
+pub(crate) mod options;
+pub(crate) mod refined;
 pub(crate) mod solve;
 
-pub use solve::{
-    refine, start_model, total_cost, CalibrationProblem, CostKind, FitState, RefineOptions,
-    RefineReport, Refined, RobustLoss, Termination,
-};
+pub use crate::problem::calibration_problem::{total_cost, CalibrationProblem, FitState};
+pub use options::RefineOptions;
+pub use psdcal_solver::solver::{RobustLoss, SolverReport as RefineReport, Termination};
+pub use refined::Refined;
+pub use solve::{refine, start_model};
+
+/// Which error the refinement minimises (defined once, in psdcal-model: the
+/// same enum is calibration.json's `fit.cost`).
+pub use psdcal_model::CostKind;

@@ -19,11 +19,40 @@ use psdcal_model::{Model, Pose, SensorModel};
 use psdcal_solver::{solver, SolverOptions};
 
 use crate::problem::calibration_problem::{CalibrationProblem, FitState};
-use crate::refine::solve::CostKind;
 use crate::start::homography::{fast_homography, Homography};
-use crate::start::initialize::{FocalSearchReport, REFINE_SUBSET_IMAGES};
 use crate::start::zhang::pose_from_homography;
 use crate::{CalibError, CalibrationData, ImageObservations};
+use psdcal_model::CostKind;
+
+/// Most images the refined closed form descends on before the whole set
+/// ([`Problem::refined`]).
+pub const REFINE_SUBSET_IMAGES: usize = 4;
+
+/// What the focal search did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FocalSearchReport {
+    /// Best focal length, mm.
+    pub f: f64,
+    /// Centre used, mm.
+    pub cx: f64,
+    /// Centre used, mm.
+    pub cy: f64,
+    /// `J` at the best `f`, mm².
+    pub cost: f64,
+    /// Searched interval, mm.
+    pub range: [f64; 2],
+    /// Grid points per centre.
+    pub grid_points: usize,
+    /// Golden-section iterations (winning centre).
+    pub golden_iterations: usize,
+    /// Evaluations of `J`, all centres.
+    pub evaluations: usize,
+    /// The best grid point was an end of the range (the optimum may lie
+    /// outside it).
+    pub at_boundary: bool,
+    /// The winning centre came from the closed form (otherwise `(0, 0)`).
+    pub centre_from_closed_form: bool,
+}
 
 /// Initial damping of the whole set's refinement from the subset's
 /// minimum: the start is close, and damping the strongly correlated
@@ -105,10 +134,16 @@ impl Problem {
     }
 
     pub(crate) fn sum_squares(&self, model: &SensorModel, poses: &[Pose]) -> f64 {
-        crate::refine::solve::total_cost(&self.data, CostKind::Template, None, &model.into(), poses)
-            .ok()
-            .filter(|c| c.is_finite())
-            .unwrap_or(f64::INFINITY)
+        crate::problem::calibration_problem::total_cost(
+            &self.data,
+            CostKind::Template,
+            None,
+            &model.into(),
+            poses,
+        )
+        .ok()
+        .filter(|c| c.is_finite())
+        .unwrap_or(f64::INFINITY)
     }
 
     /// Minimises the template-plane error over the `free` parameters and

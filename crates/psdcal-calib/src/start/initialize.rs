@@ -80,14 +80,15 @@
 use nalgebra::Vector2;
 use psdcal_model::{Pose, SensorModel, MIN_POINTS_PER_IMAGE};
 
-use crate::refine::solve::CostKind;
 use crate::start::focal_profile::{subset_images, Precision, Problem, Profile};
+pub use crate::start::focal_profile::{FocalSearchReport, REFINE_SUBSET_IMAGES};
 use crate::start::homography::{fit_homography, HomographyOptions};
 use crate::start::preliminary::{
     check_data, estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport,
 };
 use crate::start::zhang::{closed_form, ClosedFormSolution};
 use crate::{CalibError, CalibrationData, ImageObservations};
+use psdcal_model::CostKind;
 
 /// Minimum number of images for a calibration (one definition, in psdcal-model).
 pub use psdcal_model::MIN_IMAGES;
@@ -109,10 +110,6 @@ pub const PRELIMINARY_IMAGES: usize = 8;
 /// Most images the basin check of the refined closed form evaluates: it
 /// compares values a factor two apart, which a few images decide.
 pub const CHECK_IMAGES: usize = 6;
-
-/// Most images the refined closed form descends on before the whole set
-/// (`focal_profile::Problem::refined`).
-pub const REFINE_SUBSET_IMAGES: usize = 4;
 
 /// Options of [`initialize`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -163,32 +160,6 @@ pub enum InitRoute {
     FocalSearch,
     /// The narrow search around the focal guess.
     FocalGuess,
-}
-
-/// What the focal search did.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FocalSearchReport {
-    /// Best focal length, mm.
-    pub f: f64,
-    /// Centre used, mm.
-    pub cx: f64,
-    /// Centre used, mm.
-    pub cy: f64,
-    /// `J` at the best `f`, mm².
-    pub cost: f64,
-    /// Searched interval, mm.
-    pub range: [f64; 2],
-    /// Grid points per centre.
-    pub grid_points: usize,
-    /// Golden-section iterations (winning centre).
-    pub golden_iterations: usize,
-    /// Evaluations of `J`, all centres.
-    pub evaluations: usize,
-    /// The best grid point was an end of the range (the optimum may lie
-    /// outside it).
-    pub at_boundary: bool,
-    /// The winning centre came from the closed form (otherwise `(0, 0)`).
-    pub centre_from_closed_form: bool,
 }
 
 /// What [`initialize`] did.
@@ -424,9 +395,15 @@ pub fn initialize(
         let mut rms = homography_rms.clone();
         rms.sort_by(f64::total_cmp);
         let median = rms.get(rms.len() / 2).copied().unwrap_or(0.0);
-        crate::refine::solve::total_cost(data, CostKind::Image, None, &(&p.model).into(), &p.poses)
-            .map(|c| (c / n_points).sqrt() <= median)
-            .unwrap_or(false)
+        crate::problem::calibration_problem::total_cost(
+            data,
+            CostKind::Image,
+            None,
+            &(&p.model).into(),
+            &p.poses,
+        )
+        .map(|c| (c / n_points).sqrt() <= median)
+        .unwrap_or(false)
     };
     let well_fitted = closed_profile.as_ref().is_some_and(explains_data);
     if let Some((f, cx, cy, here)) = candidate.filter(|_| options.refine_start && !well_fitted) {

@@ -10,6 +10,7 @@
 //! cost it compares starts with is the calibration problem's
 //! ([`crate::problem`]).
 
+pub(crate) mod correction_cost;
 mod focal_profile;
 pub mod homography;
 pub mod initialize;

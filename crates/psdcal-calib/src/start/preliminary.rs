@@ -34,9 +34,10 @@
 //! (analytic Jacobian for straightness, central differences for homography
 //! consistency).
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector2};
+use nalgebra::{DVector, Matrix3, Vector2};
 use psdcal_solver::{solver, Problem, ResidualTerm, SolverOptions, Step, Termination};
 
+use crate::start::correction_cost::TwoParameterCost;
 use crate::start::homography::{fast_homography_normalised, normalizing_transform};
 use crate::{CalibError, CalibrationData};
 
@@ -167,32 +168,6 @@ pub fn radial_correct(
 /// Checks the data for what every routine relies on ([`CalibrationData::check`]).
 pub fn check_data(data: &CalibrationData) -> Result<(), CalibError> {
     data.check()
-}
-
-/// A scale-free least-squares cost in the two dimensionless parameters
-/// `u = (k1 R², k2 R⁴)`.
-pub(crate) trait TwoParameterCost {
-    /// The residual vector (fixed length for a given problem).
-    fn residuals(&self, u: [f64; 2]) -> Result<DVector<f64>, CalibError>;
-
-    /// Its Jacobian (n × 2) at `u`, where the residuals are `r`: forward
-    /// differences (two more evaluations; a rough correction does not need
-    /// the last digits) unless overridden.
-    fn jacobian(&self, u: [f64; 2], r: &DVector<f64>) -> Result<DMatrix<f64>, CalibError> {
-        const H: f64 = 1e-7;
-        let mut cols = Vec::with_capacity(2);
-        for k in 0..2 {
-            let mut up = u;
-            up[k] += H;
-            cols.push((self.residuals(up)? - r) / H);
-        }
-        Ok(DMatrix::from_columns(&cols))
-    }
-
-    /// Residual evaluations one [`Self::jacobian`] costs.
-    fn jacobian_evaluations(&self) -> usize {
-        2
-    }
 }
 
 /// Whether `1 + 3 u1 s + 5 u2 s² > 0.1` for `s ∈ [0, 1]` (monotone correction

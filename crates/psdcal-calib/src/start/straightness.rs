@@ -29,7 +29,7 @@
 
 use nalgebra::{DMatrix, DVector, Vector2};
 
-use crate::start::preliminary::TwoParameterCost;
+use crate::start::correction_cost::TwoParameterCost;
 use crate::{CalibError, CalibrationData};
 
 /// One line seen in one image: its measured points.

@@ -26,10 +26,11 @@
 use psdcal_model::{Model, ParameterCovariance, PsdGeometry};
 use psdcal_solver::solver;
 
-use crate::diagnose::diagnostics::{
-    diagnose_conditioning, diagnose_residuals, DiagnosticOptions, DiagnosticReport, ImagePlaneFit,
+use crate::diagnose::diagnostics::diagnose_conditioning;
+use crate::diagnose::residual_structure::{
+    diagnose_residuals, DiagnosticOptions, DiagnosticReport, ImagePlaneFit,
 };
-use crate::surveyed::fit::{SurveyedData, SurveyedOptions};
+use crate::surveyed::input::{SurveyedData, SurveyedOptions};
 use crate::surveyed::problem::{SurveyedProblem, SurveyedState};
 use crate::uncertainty::linearity::{
     check_quadratic, FitAtSolution, LinearityCheck, UncertaintyVerdict,

@@ -4,12 +4,12 @@
 //! covariance with survey noise, `Cov(x) = σ_m² S⁻¹ + σ_s² S⁻¹ G Gᵀ S⁻¹`.
 
 use nalgebra::{DMatrix, SMatrix, Vector2, Vector3};
-use psdcal_model::{Model, Param, ParameterCovariance, Pose, PsdGeometry, SensorModel};
+use psdcal_model::{Model, Param, ParameterCovariance, Pose, SensorModel};
 use psdcal_solver::solver::{self, SolverOptions, SolverReport};
 
-use crate::data::ImageObservations;
-use crate::diagnose::diagnostics::DiagnosticReport;
+use crate::diagnose::residual_structure::DiagnosticReport;
 use crate::surveyed::checks::check_surveyed;
+use crate::surveyed::input::{SurveyedData, SurveyedOptions};
 use crate::surveyed::problem::{dense_jacobians, SurveyedProblem, SurveyedState};
 use crate::surveyed::projection_dlt::relative_reprojection;
 use crate::surveyed::projection_dlt::{
@@ -21,45 +21,6 @@ use crate::CalibError;
 /// Smallest ratio of the point cloud's third to first principal spread
 /// (its flatness) accepted by the DLT start in a single image.
 pub const MIN_DEPTH_RATIO: f64 = 0.02;
-
-/// The input: surveyed points and the images that see them.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SurveyedData {
-    /// Surveyed positions `(X, Y, Z)`, mm (one frame: the room's).
-    pub points: Vec<Vector3<f64>>,
-    /// Names of the points (for messages), as in the files.
-    pub names: Vec<String>,
-    /// Per image (sensor orientation), the measured points (`led` indexes
-    /// `points`).
-    pub images: Vec<ImageObservations>,
-    /// The PSD's active area.
-    pub geometry: PsdGeometry,
-}
-
-/// Options of [`calibrate_surveyed`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct SurveyedOptions {
-    /// The freed standard parameters (`f, cx, cy, k1, k2` by default, as
-    /// [`crate::RefineOptions`]).
-    pub free: Vec<Param>,
-    /// The survey's standard deviation per coordinate, mm (0: exact points).
-    pub survey_sigma_mm: f64,
-    /// The model's values of the parameters that are not freed.
-    pub base: SensorModel,
-    /// Iteration budget of the refinement.
-    pub max_iterations: usize,
-}
-
-impl Default for SurveyedOptions {
-    fn default() -> Self {
-        Self {
-            free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2],
-            survey_sigma_mm: 0.0,
-            base: SensorModel::pinhole(8.0, 0.0, 0.0),
-            max_iterations: 500,
-        }
-    }
-}
 
 /// A finished calibration from surveyed points.
 #[derive(Debug, Clone, PartialEq)]

@@ -43,12 +43,14 @@
 
 pub mod checks;
 mod fit;
+mod input;
 pub mod problem;
 pub mod projection_dlt;
 
 pub use fit::{
     calibrate_surveyed, finish_refined, preliminary_k1, refine_surveyed, survey_covariance,
-    RefinedSurveyed, SurveyedCalibration, SurveyedData, SurveyedOptions, MIN_DEPTH_RATIO,
+    RefinedSurveyed, SurveyedCalibration, MIN_DEPTH_RATIO,
 };
+pub use input::{SurveyedData, SurveyedOptions};
 pub use problem::{dense_jacobians, DenseJacobians, SurveyedProblem, SurveyedState};
 pub use projection_dlt::{decompose_projection, dlt_projection, flatness, MIN_SURVEYED_POINTS};

@@ -17,7 +17,7 @@ use psdcal_model::{Model, Param};
 use psdcal_solver::normal_equations::{ResidualTerm, Step};
 use psdcal_solver::solver::Problem;
 
-use crate::surveyed::fit::SurveyedData;
+use crate::surveyed::input::SurveyedData;
 use crate::CalibError;
 
 /// One point's residual, `∂r/∂pose` and `∂r/∂P`.

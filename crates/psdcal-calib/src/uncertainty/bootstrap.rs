@@ -26,7 +26,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::data::{CalibrationData, ImageObservations};
-use crate::refine::solve::{refine, RefineOptions, Refined};
+use crate::refine::options::RefineOptions;
+use crate::refine::refined::Refined;
+use crate::refine::solve::refine;
 use crate::uncertainty::covariance::{correlation_warnings, Covariance, CovarianceMethod};
 use crate::CalibError;
 

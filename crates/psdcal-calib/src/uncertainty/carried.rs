@@ -21,7 +21,7 @@ use psdcal_model::{Model, ParameterCovariance, Pose};
 
 use crate::data::CalibrationData;
 use crate::problem::calibration_problem::{CalibrationProblem, FitState};
-use crate::refine::solve::RefineOptions;
+use crate::refine::options::RefineOptions;
 use crate::CalibError;
 
 /// The estimate's covariance with a fixed block's carried in.

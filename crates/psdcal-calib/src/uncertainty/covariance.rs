@@ -31,8 +31,10 @@ use serde::Serialize;
 use crate::data::CalibrationData;
 use crate::problem::calibration_problem::{CalibrationProblem, FitState};
 use crate::refine::linearization::AtSolution;
-use crate::refine::solve::{CostKind, RefineOptions, Refined};
+use crate::refine::options::RefineOptions;
+use crate::refine::refined::Refined;
 use crate::CalibError;
+use psdcal_model::CostKind;
 use psdcal_solver::normal_equations::NormalEquations;
 
 use psdcal_model::stages::gains::GAIN_NAMES;

@@ -30,9 +30,11 @@ use serde::Serialize;
 use crate::data::CalibrationData;
 use crate::problem::calibration_problem::FitState;
 use crate::refine::linearization::AtSolution;
-use crate::refine::solve::{RefineOptions, Refined, RobustLoss};
+use crate::refine::options::RefineOptions;
+use crate::refine::refined::Refined;
 use crate::uncertainty::profile::ParameterProfile;
 use crate::CalibError;
+use psdcal_solver::solver::RobustLoss;
 
 /// Largest accepted `|ρ − 1|` (module documentation): beyond it the
 /// profile is asked. From the coverage experiment (EXPERIMENTS.md,

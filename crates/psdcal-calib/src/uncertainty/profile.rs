@@ -26,7 +26,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::data::CalibrationData;
-use crate::refine::solve::{refine, RefineOptions, Refined};
+use crate::refine::options::RefineOptions;
+use crate::refine::refined::Refined;
+use crate::refine::solve::refine;
 
 /// Smallest accepted profile rise `r` (module documentation).
 pub const MIN_PROFILE_RISE: f64 = 0.25;
