@@ -78,7 +78,7 @@
 //! `k2` the preliminary estimate (0 when off); `k3, p1, p2, l1, l2, skew` zero.
 
 use nalgebra::Vector2;
-use psdcal_model::{Pose, SensorModel, MIN_POINTS_PER_IMAGE};
+use psdcal_model::{Pose, PsdGeometry, SensorModel, MIN_POINTS_PER_IMAGE};
 
 use crate::start::focal_profile::{subset_images, Precision, Problem, Profile};
 pub use crate::start::focal_profile::{FocalSearchReport, REFINE_SUBSET_IMAGES};
@@ -222,6 +222,46 @@ pub fn initialize(
     data: &CalibrationData,
     options: &InitOptions,
 ) -> Result<Initialization, CalibError> {
+    check_input(data, options)?;
+    let (preliminary, preliminary_note) = preliminary_correction(data, options)?;
+    let (problem, homography_rms) = homography_problem(data, options, &preliminary)?;
+    let mut closed = closed_form_start(&problem, options, &data.geometry);
+    check_basin(data, &problem, options, &homography_rms, &mut closed);
+    let search = focal_search(&problem, options, &data.geometry, &closed)?;
+    let (route, f, cx, cy) = choose_route(options, &closed, search)?;
+    if route == InitRoute::ClosedForm {
+        closed.rejection = None;
+    }
+    let start = starting_profile(&problem, options, route, &mut closed, (f, cx, cy))?;
+    let focal_sensitivity = if route != InitRoute::ClosedForm {
+        focal_sensitivity(data, &problem, &start, (f, cx, cy))?
+    } else {
+        f64::NAN
+    };
+    start.model.validate()?;
+    let n_points = data.point_count() as f64;
+    Ok(Initialization {
+        model: start.model,
+        poses: start.poses,
+        report: InitReport {
+            route,
+            closed_form: closed.solution,
+            closed_form_cost: closed.cost,
+            closed_form_rejection: closed.rejection,
+            search,
+            preliminary,
+            preliminary_note,
+            homography_rms,
+            cost: start.cost,
+            rms_template_mm: (start.cost / n_points).sqrt(),
+            focal_sensitivity,
+        },
+    })
+}
+
+/// 1. The checks of the module documentation: enough images of enough
+/// points, a valid focal guess and active area.
+fn check_input(data: &CalibrationData, options: &InitOptions) -> Result<(), CalibError> {
     check_data(data)?;
     let usable = data
         .images
@@ -261,8 +301,15 @@ pub fn initialize(
             reason: "the PSD's active area must be finite and positive".into(),
         });
     }
+    Ok(())
+}
 
-    // 2. Preliminary correction.
+/// 2. The preliminary correction, with the note of an `Auto` correction
+/// that could not run (then none).
+fn preliminary_correction(
+    data: &CalibrationData,
+    options: &InitOptions,
+) -> Result<(PreliminaryReport, Option<String>), CalibError> {
     let prelim_options = PreliminaryOptions {
         method: options.preliminary,
         centre: options.preliminary_centre,
@@ -278,17 +325,23 @@ pub fn initialize(
     } else {
         subset_images(data, PRELIMINARY_IMAGES, &|_| true)
     };
-    let (preliminary, preliminary_note) =
-        match estimate_preliminary(&preliminary_data, &prelim_options) {
-            Ok(r) => (r, None),
-            Err(e) if options.preliminary == Preliminary::Auto => (
-                PreliminaryReport::off(options.preliminary_centre),
-                Some(format!("automatic preliminary correction skipped: {e}")),
-            ),
-            Err(e) => return Err(e),
-        };
+    match estimate_preliminary(&preliminary_data, &prelim_options) {
+        Ok(r) => Ok((r, None)),
+        Err(e) if options.preliminary == Preliminary::Auto => Ok((
+            PreliminaryReport::off(options.preliminary_centre),
+            Some(format!("automatic preliminary correction skipped: {e}")),
+        )),
+        Err(e) => Err(e),
+    }
+}
 
-    // 3. Homographies of the corrected points.
+/// 3. The homographies of the corrected points, and the start's objective
+/// `J` on them (with each image's RMS transfer error).
+fn homography_problem(
+    data: &CalibrationData,
+    options: &InitOptions,
+    preliminary: &PreliminaryReport,
+) -> Result<(Problem, Vec<f64>), CalibError> {
     let corrected = preliminary.correct_data(data);
     let template: Vec<Vec<_>> = data
         .images
@@ -314,14 +367,42 @@ pub fn initialize(
         k2: preliminary.k2,
         floor: n_points * (1e-9 * tpl_scale).powi(2),
     };
+    Ok((problem, homography_rms))
+}
 
-    // 4. Closed-form candidate.
+/// The closed form as a start (steps 4 and 6): the solution, and its cost
+/// and refined profile when it is a candidate, or why it is not.
+struct ClosedFormStart {
+    /// The closed-form solution, also when rejected.
+    solution: Option<ClosedFormSolution>,
+    /// `J` at the refined closed form, when it is a candidate.
+    cost: Option<f64>,
+    /// Why it was rejected.
+    rejection: Option<String>,
+    /// `(f, cx, cy, J)` of the candidate (`J` NaN when not refined).
+    candidate: Option<(f64, f64, f64, f64)>,
+    /// The refined closed form, while it is the candidate.
+    profile: Option<Profile>,
+}
+
+/// Whether the centre `(cx, cy)` lies on the active area.
+fn on_area(geometry: &PsdGeometry, cx: f64, cy: f64) -> bool {
+    cx.abs() <= 0.5 * geometry.lx && cy.abs() <= 0.5 * geometry.ly
+}
+
+/// 4. The closed-form candidate: plausible `f` and centre, refined over
+/// `f, cx, cy, k1` and the poses (unless `refine_start` is off).
+fn closed_form_start(
+    problem: &Problem,
+    options: &InitOptions,
+    geometry: &PsdGeometry,
+) -> ClosedFormStart {
     let diagonal = geometry.lx.hypot(geometry.ly);
     let (f_lo, f_hi) = match options.focal_guess {
         Some(g) => (0.5 * g, 2.0 * g),
         None => (0.2 * diagonal, 50.0 * diagonal),
     };
-    let on_area = |cx: f64, cy: f64| cx.abs() <= 0.5 * geometry.lx && cy.abs() <= 0.5 * geometry.ly;
+    let on_area = |cx: f64, cy: f64| on_area(geometry, cx, cy);
     let mut closed: Option<ClosedFormSolution> = None;
     let mut closed_cost = None;
     let mut rejection: Option<String> = None;
@@ -375,15 +456,25 @@ pub fn initialize(
     } else {
         rejection = Some("closed form not tried (use_closed_form = false)".into());
     }
+    ClosedFormStart {
+        solution: closed,
+        cost: closed_cost,
+        rejection,
+        candidate,
+        profile: closed_profile,
+    }
+}
 
-    // 6. Focal search, when the closed form gives no plausible candidate (or
-    // is not wanted). On large sets it runs on at most SEARCH_IMAGES images
-    // spread over the set: f is a global quantity, and the start only needs
-    // to fall in the right basin.
-    let (s_lo, s_hi, s_n) = match options.focal_guess {
-        Some(g) => (0.5 * g, 2.0 * g, 13),
-        None => (1.0, 1000.0, 41),
-    };
+/// 6, the basin check: the refined closed form must also be the lowest
+/// basin at the scale of its own error, else it is no candidate.
+fn check_basin(
+    data: &CalibrationData,
+    problem: &Problem,
+    options: &InitOptions,
+    homography_rms: &[f64],
+    closed: &mut ClosedFormStart,
+) {
+    let n_points = data.point_count() as f64;
     // The refined closed form must also be the lowest basin at the scale of
     // its own error: J at 0.5, 0.7, 1.4 and 2 × its f (its centre) and at its
     // f with the centre at (0, 0), on the subset, none below half its cost.
@@ -392,7 +483,7 @@ pub fn initialize(
     // plane RMS at most the median homography RMS): a basin whose cost is
     // twice the global minimum's cannot.
     let explains_data = |p: &Profile| {
-        let mut rms = homography_rms.clone();
+        let mut rms = homography_rms.to_vec();
         rms.sort_by(f64::total_cmp);
         let median = rms.get(rms.len() / 2).copied().unwrap_or(0.0);
         crate::problem::calibration_problem::total_cost(
@@ -405,8 +496,11 @@ pub fn initialize(
         .map(|c| (c / n_points).sqrt() <= median)
         .unwrap_or(false)
     };
-    let well_fitted = closed_profile.as_ref().is_some_and(explains_data);
-    if let Some((f, cx, cy, here)) = candidate.filter(|_| options.refine_start && !well_fitted) {
+    let well_fitted = closed.profile.as_ref().is_some_and(explains_data);
+    if let Some((f, cx, cy, here)) = closed
+        .candidate
+        .filter(|_| options.refine_start && !well_fitted)
+    {
         let subset = problem.subset(CHECK_IMAGES);
         let scale = subset.data.point_count() as f64 / problem.data.point_count() as f64;
         let here = here * scale;
@@ -422,29 +516,54 @@ pub fn initialize(
             }
         }
         if best.2 < 0.5 * here {
-            rejection = Some(format!(
+            closed.rejection = Some(format!(
                 "closed-form start f = {f:.4} mm, centre ({cx:.3}, {cy:.3}) mm is not the lowest \
                  basin of the template-plane error: f = {:.4} mm, centre ({:.3}, {:.3}) mm lowers \
                  it from {here:.4e} to {:.4e} mm²",
                 best.0, best.1 .0, best.1 .1, best.2
             ));
-            candidate = None;
-            closed_profile = None;
+            closed.candidate = None;
+            closed.profile = None;
         }
     }
+}
+
+/// The searched interval of `f` (mm) and its number of grid points.
+fn search_range(options: &InitOptions) -> (f64, f64, usize) {
+    match options.focal_guess {
+        Some(g) => (0.5 * g, 2.0 * g, 13),
+        None => (1.0, 1000.0, 41),
+    }
+}
+
+/// 6. The focal search, when the closed form gives no plausible candidate
+/// (or is not wanted): an error when the search is off.
+fn focal_search(
+    problem: &Problem,
+    options: &InitOptions,
+    geometry: &PsdGeometry,
+    closed: &ClosedFormStart,
+) -> Result<Option<FocalSearchReport>, CalibError> {
+    // On large sets it runs on at most SEARCH_IMAGES images spread over the
+    // set: f is a global quantity, and the start only needs to fall in the
+    // right basin.
+    let (s_lo, s_hi, s_n) = search_range(options);
     let mut search: Option<FocalSearchReport> = None;
-    if candidate.is_none() && !options.search_fallback {
+    if closed.candidate.is_none() && !options.search_fallback {
         return Err(CalibError::Degenerate {
             reason: format!(
                 "no plausible closed-form start ({}) and the focal search is off",
-                rejection.unwrap_or_default()
+                closed.rejection.clone().unwrap_or_default()
             ),
         });
     }
-    if candidate.is_none() {
+    if closed.candidate.is_none() {
         let subset = problem.subset(SEARCH_IMAGES);
         let mut centres = vec![(0.0, 0.0, false)];
-        if let Some(sol) = closed.filter(|s| s.f_squared > 0.0 && on_area(s.cx, s.cy)) {
+        if let Some(sol) = closed
+            .solution
+            .filter(|s| s.f_squared > 0.0 && on_area(geometry, s.cx, s.cy))
+        {
             centres.push((sol.cx, sol.cy, true));
         }
         let mut evaluations = 0;
@@ -461,87 +580,91 @@ pub fn initialize(
             s.evaluations = evaluations;
         }
     }
+    Ok(search)
+}
+
+/// The route and its intrinsics `(f, cx, cy)`: the closed form when it is
+/// a candidate, else the search's best.
+fn choose_route(
+    options: &InitOptions,
+    closed: &ClosedFormStart,
+    search: Option<FocalSearchReport>,
+) -> Result<(InitRoute, f64, f64, f64), CalibError> {
+    let (s_lo, s_hi, _) = search_range(options);
     let searched_route = if options.focal_guess.is_some() {
         InitRoute::FocalGuess
     } else {
         InitRoute::FocalSearch
     };
-    let (route, f, cx, cy) = match (candidate, search) {
-        (Some((f, cx, cy, _)), _) => (InitRoute::ClosedForm, f, cx, cy),
-        (None, Some(s)) => (searched_route, s.f, s.cx, s.cy),
-        (None, None) => {
-            return Err(CalibError::Degenerate {
-                reason: format!(
-                    "no focal length in [{s_lo}, {s_hi}] mm puts every template pose in front of \
-                     the sensor (closed form: {})",
-                    rejection.unwrap_or_default()
-                ),
-            })
-        }
-    };
-    if route == InitRoute::ClosedForm {
-        rejection = None;
+    match (closed.candidate, search) {
+        (Some((f, cx, cy, _)), _) => Ok((InitRoute::ClosedForm, f, cx, cy)),
+        (None, Some(s)) => Ok((searched_route, s.f, s.cx, s.cy)),
+        (None, None) => Err(CalibError::Degenerate {
+            reason: format!(
+                "no focal length in [{s_lo}, {s_hi}] mm puts every template pose in front of \
+                 the sensor (closed form: {})",
+                closed.rejection.clone().unwrap_or_default()
+            ),
+        }),
     }
+}
 
-    // 7. The start, and a check that f is determined at all: with every
-    // template pose parallel to the sensor the profile is flat (to rounding)
-    // in f. With noise, the covariance of the refined fit judges instead
-    // (crate::calibrate).
-    let start = match (route, candidate) {
+/// 7. The start at the route's intrinsics: the refined closed form (or the
+/// paper's unrefined start), else `J`'s minimiser at `(f, cx, cy)`.
+fn starting_profile(
+    problem: &Problem,
+    options: &InitOptions,
+    route: InitRoute,
+    closed: &mut ClosedFormStart,
+    (f, cx, cy): (f64, f64, f64),
+) -> Result<Profile, CalibError> {
+    let start = match (route, closed.candidate) {
         (InitRoute::ClosedForm, Some(_)) if !options.refine_start => problem
             .plain_start(f, cx, cy)
             .ok()
             .filter(|p| p.cost.is_finite())
-            .or(closed_profile.take()),
-        (InitRoute::ClosedForm, Some(_)) => closed_profile.take(),
+            .or(closed.profile.take()),
+        (InitRoute::ClosedForm, Some(_)) => closed.profile.take(),
         _ => None,
     };
-    let start = match start {
-        Some(p) => p,
-        None => problem.profile(f, cx, cy, Precision::Fine)?,
-    };
-    let mut focal_sensitivity = f64::NAN;
-    if route != InitRoute::ClosedForm {
-        let neighbour = problem
-            .cost_or_inf(0.5 * f, cx, cy, Precision::Fine)
-            .min(problem.cost_or_inf(2.0 * f, cx, cy, Precision::Fine));
-        let increase = neighbour - start.cost;
-        let dof = (2 * data.point_count())
-            .saturating_sub(6 * data.images.len() + 4)
-            .max(1) as f64;
-        let variance = start.cost / dof;
-        focal_sensitivity = if variance > 0.0 {
-            increase / variance
-        } else {
-            f64::INFINITY
-        };
-        if increase <= FLAT_PROFILE * start.cost + problem.floor {
-            return Err(CalibError::Degenerate {
-                reason: format!(
-                    "the focal length is not determined: halving or doubling it (from f = {f:.4} mm) \
-                     changes the template-plane error by only {increase:.3e} mm² — the template \
-                     poses are (nearly) all parallel to the sensor; tilt the template 10°–40° in \
-                     several directions"
-                ),
-            });
-        }
+    match start {
+        Some(p) => Ok(p),
+        None => problem.profile(f, cx, cy, Precision::Fine),
     }
-    start.model.validate()?;
-    Ok(Initialization {
-        model: start.model,
-        poses: start.poses,
-        report: InitReport {
-            route,
-            closed_form: closed,
-            closed_form_cost: closed_cost,
-            closed_form_rejection: rejection,
-            search,
-            preliminary,
-            preliminary_note,
-            homography_rms,
-            cost: start.cost,
-            rms_template_mm: (start.cost / n_points).sqrt(),
-            focal_sensitivity,
-        },
-    })
+}
+
+/// 7. After a search, the check that `f` is determined at all: with every
+/// template pose parallel to the sensor the profile is flat (to rounding)
+/// in `f`. With noise, the covariance of the refined fit judges instead
+/// ([`mod@crate::calibrate`]). Returns the focal sensitivity.
+fn focal_sensitivity(
+    data: &CalibrationData,
+    problem: &Problem,
+    start: &Profile,
+    (f, cx, cy): (f64, f64, f64),
+) -> Result<f64, CalibError> {
+    let neighbour = problem
+        .cost_or_inf(0.5 * f, cx, cy, Precision::Fine)
+        .min(problem.cost_or_inf(2.0 * f, cx, cy, Precision::Fine));
+    let increase = neighbour - start.cost;
+    let dof = (2 * data.point_count())
+        .saturating_sub(6 * data.images.len() + 4)
+        .max(1) as f64;
+    let variance = start.cost / dof;
+    let focal_sensitivity = if variance > 0.0 {
+        increase / variance
+    } else {
+        f64::INFINITY
+    };
+    if increase <= FLAT_PROFILE * start.cost + problem.floor {
+        return Err(CalibError::Degenerate {
+            reason: format!(
+                "the focal length is not determined: halving or doubling it (from f = {f:.4} mm) \
+                 changes the template-plane error by only {increase:.3e} mm² — the template \
+                 poses are (nearly) all parallel to the sensor; tilt the template 10°–40° in \
+                 several directions"
+            ),
+        });
+    }
+    Ok(focal_sensitivity)
 }
