@@ -12,18 +12,19 @@ use crate::calibrate::options::{start_model, CalibrateOptions, Uncertainty};
 use crate::calibrate::result::CalibrationResult;
 use crate::data::CalibrationData;
 use crate::diagnose::diagnostics::{diagnose_structure, diagnose_uncertainty};
-use crate::diagnose::report::fit_statistics;
+use crate::diagnose::report::{fit_statistics, FitStatistics};
+use crate::diagnose::residual_structure::DiagnosticReport;
 use crate::problem::prior::Prior;
-use crate::refine::global::{refine_global, GlobalOptions};
+use crate::refine::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::refine::linearization::AtSolution;
 use crate::refine::options::RefineOptions;
 use crate::refine::refined::Refined;
 use crate::refine::solve::refine;
-use crate::start::initialize::initialize;
+use crate::start::initialize::{initialize, Initialization};
 use crate::start::misplaced::misplaced_led;
-use crate::uncertainty::bootstrap::bootstrap_covariance;
-use crate::uncertainty::covariance::{analytic_method, covariance_at};
-use crate::uncertainty::linearity::{check_linearity_at, UncertaintyVerdict};
+use crate::uncertainty::bootstrap::{bootstrap_covariance, BootstrapReport};
+use crate::uncertainty::covariance::{analytic_method, covariance_at, Covariance};
+use crate::uncertainty::linearity::{check_linearity_at, LinearityCheck, UncertaintyVerdict};
 use crate::uncertainty::profile::profile_at_three_sigma;
 use crate::CalibError;
 
@@ -65,23 +66,10 @@ fn calibrate_as_given(
     data: &CalibrationData,
     options: &CalibrateOptions,
 ) -> Result<CalibrationResult, CalibError> {
-    // The post-fit work's second thread starts now ([`crate::helper`]).
+    // The post-fit work's second thread starts now ([`crate::calibrate::helper`]).
     let mut helper = Helper::spawn();
     let init = initialize(data, &options.init)?;
-    // The global search's cold starts use the same start options.
-    let global_options = GlobalOptions {
-        init: options.init,
-        ..options.global.clone()
-    };
-    let global_options = &global_options;
-    let start = start_model(options, &init.model)?;
-    let (refined, global, gain_start) = if options.refine.fit_gains {
-        let (r, g, name) = refine_from_gain_starts(data, &init, &start, options, global_options)?;
-        (r, g, Some(name))
-    } else {
-        let (r, g) = refine_global(data, &start, &init.poses, &options.refine, global_options)?;
-        (r, g, None)
-    };
+    let (refined, global, gain_start) = refine_from_start(data, options, &init)?;
     check_converged(&refined)?;
     let (refined, refine_options) = match &options.prior {
         None => (refined, options.refine.clone()),
@@ -90,12 +78,103 @@ fn calibrate_as_given(
     let refine_options = &refine_options;
     let free = refine_options.free_names();
     let fitted_gains = refined.model.gains();
-    // What the finished fit is asked is four independent jobs
-    // ([`crate::helper`]): the covariance and the linearity check (from the
-    // refinement's last linearisation), the valid region and the fit
-    // statistics are posted for the second thread, on a copy of the data and
-    // the solution; this thread runs the residual-structure tests, the
-    // largest, then takes back what the other has not started, last first.
+    let after_fit = post_fit(&mut helper, data, &refined, options, refine_options)?;
+    check_focal_length(&after_fit.covariance, &refined)?;
+    let (covariance, bootstrap) = final_covariance(
+        data,
+        &refined,
+        refine_options,
+        options,
+        after_fit.covariance,
+    )?;
+    let linearity = profiled_linearity(
+        data,
+        &refined,
+        refine_options,
+        &free,
+        &covariance,
+        after_fit.linearity,
+    );
+    let statistics = after_fit.statistics;
+    let warnings = result_warnings(&covariance, &init, &statistics, global.as_ref());
+    let mut diagnosed = after_fit.diagnosed;
+    diagnose_uncertainty(&mut diagnosed, &covariance, global.as_ref());
+    let diagnostics = result_diagnostics(diagnosed.diagnostics, &linearity, &statistics);
+    Ok(CalibrationResult {
+        gains: fitted_gains,
+        gain_start,
+        model: refined.model,
+        valid_region: after_fit.valid_region,
+        poses: refined.poses,
+        free,
+        cost_kind: options.refine.cost,
+        noise: options.refine.noise,
+        robust: options.refine.robust,
+        cost: refined.cost,
+        init: init.report,
+        refine: refined.report,
+        global,
+        covariance,
+        linearity,
+        bootstrap,
+        statistics,
+        warnings,
+        diagnostics,
+    })
+}
+
+/// The refinement from the initialisation: with the gains freed, from the
+/// competing gain starts ([`crate::calibrate::gain_starts`]); otherwise with
+/// the global search over `l1` when it is freed. Returns the fit, the global
+/// search's report and the winning gain start's name.
+fn refine_from_start(
+    data: &CalibrationData,
+    options: &CalibrateOptions,
+    init: &Initialization,
+) -> Result<(Refined, Option<GlobalReport>, Option<String>), CalibError> {
+    // The global search's cold starts use the same start options.
+    let global_options = GlobalOptions {
+        init: options.init,
+        ..options.global.clone()
+    };
+    let global_options = &global_options;
+    let start = start_model(options, &init.model)?;
+    if options.refine.fit_gains {
+        let (r, g, name) = refine_from_gain_starts(data, init, &start, options, global_options)?;
+        Ok((r, g, Some(name)))
+    } else {
+        let (r, g) = refine_global(data, &start, &init.poses, &options.refine, global_options)?;
+        Ok((r, g, None))
+    }
+}
+
+/// What the post-fit jobs return.
+struct AfterFit {
+    /// The analytic covariance.
+    covariance: Covariance,
+    /// The linearity check at ±3σ of that covariance.
+    linearity: LinearityCheck,
+    /// Where the fitted model's correction is one-to-one.
+    valid_region: ValidRegion,
+    /// The fit statistics.
+    statistics: FitStatistics,
+    /// The residual-structure diagnostics.
+    diagnosed: DiagnosticReport,
+}
+
+/// What the finished fit is asked: four independent jobs
+/// ([`crate::calibrate::helper`]). The covariance and the linearity check
+/// (from the refinement's last linearisation), the valid region and the fit
+/// statistics are posted for the second thread, on a copy of the data and
+/// the solution; this thread runs the residual-structure tests, the
+/// largest, then takes back what the other has not started, last first.
+fn post_fit(
+    helper: &mut Helper,
+    data: &CalibrationData,
+    refined: &Refined,
+    options: &CalibrateOptions,
+    refine_options: &RefineOptions,
+) -> Result<AfterFit, CalibError> {
     let shared = Arc::new((data.clone(), refined.clone(), refine_options.clone()));
     let after_fit = helper.run({
         let shared = shared.clone();
@@ -118,11 +197,23 @@ fn calibrate_as_given(
         let (data, refined, _) = &*shared;
         fit_statistics(data, &refined.model, &refined.poses, cost, robust)
     });
-    let mut diagnosed = diagnose_structure(data, &refined, &options.refine, &options.diagnostics);
+    let diagnosed = diagnose_structure(data, refined, &options.refine, &options.diagnostics);
     let statistics = statistics.wait();
     let valid_region = valid_region.wait();
     let after_fit = after_fit.wait();
     let (covariance, linearity) = after_fit?;
+    Ok(AfterFit {
+        covariance,
+        linearity,
+        valid_region,
+        statistics,
+        diagnosed,
+    })
+}
+
+/// A fit whose focal length has a standard deviation above
+/// [`MAX_RELATIVE_STD_F`] of its value is an error.
+fn check_focal_length(covariance: &Covariance, refined: &Refined) -> Result<(), CalibError> {
     if let Some(sd) = covariance.std("f") {
         let f = refined.model.get("f").unwrap_or(f64::NAN);
         if sd > MAX_RELATIVE_STD_F * f {
@@ -135,31 +226,89 @@ fn calibrate_as_given(
             });
         }
     }
-    let (covariance, bootstrap) = match options.uncertainty {
-        Uncertainty::Linear => (covariance, None),
+    Ok(())
+}
+
+/// The reported covariance: the analytic one, or the bootstrap's when asked
+/// (with its report).
+fn final_covariance(
+    data: &CalibrationData,
+    refined: &Refined,
+    refine_options: &RefineOptions,
+    options: &CalibrateOptions,
+    analytic: Covariance,
+) -> Result<(Covariance, Option<BootstrapReport>), CalibError> {
+    match options.uncertainty {
+        Uncertainty::Linear => Ok((analytic, None)),
         Uncertainty::Bootstrap(boot) => {
             let (c, report) =
-                bootstrap_covariance(data, &refined, refine_options, &covariance, &boot)?;
-            (c, Some(report))
+                bootstrap_covariance(data, refined, refine_options, &analytic, &boot)?;
+            Ok((c, Some(report)))
         }
-    };
-    // Where the walk finds the cost not quadratic at ±3σ, the profile
-    // decides whether the reported σ understates the uncertainty.
-    let linearity = if linearity.verdict.is_reliable() {
+    }
+}
+
+/// The linearity check, with the profile at ±3σ where the walk finds the
+/// cost not quadratic: it decides whether the reported σ understates the
+/// uncertainty.
+fn profiled_linearity(
+    data: &CalibrationData,
+    refined: &Refined,
+    refine_options: &RefineOptions,
+    free: &[String],
+    covariance: &Covariance,
+    linearity: LinearityCheck,
+) -> LinearityCheck {
+    if linearity.verdict.is_reliable() {
         linearity
     } else {
         let std: Vec<f64> = free
             .iter()
             .map(|n| covariance.std(n).unwrap_or(f64::NAN))
             .collect();
-        linearity.with_profile(profile_at_three_sigma(data, &refined, refine_options, &std))
-    };
+        linearity.with_profile(profile_at_three_sigma(data, refined, refine_options, &std))
+    }
+}
+
+/// The result's warnings: the covariance's, the skipped preliminary
+/// correction, the robust loss's outliers, competing minima over `l1`.
+fn result_warnings(
+    covariance: &Covariance,
+    init: &Initialization,
+    statistics: &FitStatistics,
+    global: Option<&GlobalReport>,
+) -> Vec<String> {
     let mut warnings = covariance.warnings.clone();
     if let Some(note) = &init.report.preliminary_note {
         warnings.push(note.clone());
     }
-    diagnose_uncertainty(&mut diagnosed, &covariance, global.as_ref());
-    let mut diagnostics = diagnosed.diagnostics;
+    if !statistics.outliers.is_empty() {
+        warnings.push(format!(
+            "{} point(s) down-weighted as outliers by the robust loss",
+            statistics.outliers.len()
+        ));
+    }
+    if let Some(g) = global {
+        if g.minima.len() > 1 {
+            warnings.push(format!(
+                "the cost has {} local minima over l1; the lowest ({:.4e}) was kept, the next is {:.4e}",
+                g.minima.len(),
+                g.minima[0].cost,
+                g.minima[1].cost
+            ));
+        }
+    }
+    warnings
+}
+
+/// The result's diagnostics: `diagnostics` (residual structure, local
+/// minima, conditioning), then an unreliable linearity verdict and points
+/// outside the valid region.
+fn result_diagnostics(
+    mut diagnostics: Vec<Diagnostic>,
+    linearity: &LinearityCheck,
+    statistics: &FitStatistics,
+) -> Vec<Diagnostic> {
     if let UncertaintyVerdict::Unreliable { reason } = &linearity.verdict {
         if !diagnostics
             .iter()
@@ -180,43 +329,7 @@ fn calibrate_as_given(
             ),
         ));
     }
-    if !statistics.outliers.is_empty() {
-        warnings.push(format!(
-            "{} point(s) down-weighted as outliers by the robust loss",
-            statistics.outliers.len()
-        ));
-    }
-    if let Some(g) = &global {
-        if g.minima.len() > 1 {
-            warnings.push(format!(
-                "the cost has {} local minima over l1; the lowest ({:.4e}) was kept, the next is {:.4e}",
-                g.minima.len(),
-                g.minima[0].cost,
-                g.minima[1].cost
-            ));
-        }
-    }
-    Ok(CalibrationResult {
-        gains: fitted_gains,
-        gain_start,
-        model: refined.model,
-        valid_region,
-        poses: refined.poses,
-        free,
-        cost_kind: options.refine.cost,
-        noise: options.refine.noise,
-        robust: options.refine.robust,
-        cost: refined.cost,
-        init: init.report,
-        refine: refined.report,
-        global,
-        covariance,
-        linearity,
-        bootstrap,
-        statistics,
-        warnings,
-        diagnostics,
-    })
+    diagnostics
 }
 
 /// A refinement that ran out of iterations is an error.
