@@ -182,124 +182,23 @@ pub fn refine_global(
             reason: "the l1 grid of the global search must be non-empty and ascending".into(),
         });
     }
-    let search = Search {
-        data,
-        model: &model,
-        options,
-        profile_options: RefineOptions {
-            free: options
-                .free
-                .iter()
-                .copied()
-                .filter(|p| *p != Param::L1)
-                .collect(),
-            cost_tolerance: PROFILE_TOLERANCE,
-            max_iterations: PROFILE_ITERATIONS,
-            ..options.clone()
-        },
-        refinements: AtomicUsize::new(0),
-    };
+    let search = Search::new(data, &model, options);
     // The independent fits of each step run in parallel (rayon); each is
     // deterministic and the results are combined in grid order, so the
     // answer does not depend on the number of threads.
-    // 1. Cold starts.
-    let cold: Vec<Option<Refined>> = (0..grid.len())
-        .into_par_iter()
-        .map(|k| {
-            (k % global.cold_every.max(1) == 0 || k + 1 == grid.len())
-                .then(|| search.cold(grid[k], &global.init))
-                .flatten()
-        })
-        .collect();
+    let cold = search.cold_starts(grid, global);
     let cold_starts = cold.iter().filter(|c| c.is_some()).count();
-    // 2. Two sweeps over the grid; the plain start enters at its nearest
-    // grid point.
-    let l1_start = model.get("l1").unwrap_or(0.0);
-    let nearest = (0..grid.len())
-        .min_by(|&a, &b| {
-            (grid[a] - l1_start)
-                .abs()
-                .total_cmp(&(grid[b] - l1_start).abs())
-        })
-        .unwrap_or(0);
-    let plain = search.fixed_at(&model, poses, grid[nearest]);
-    let (up, down) = rayon::join(
-        || search.sweep(grid, (0..grid.len()).collect(), &cold, (nearest, &plain)),
-        || {
-            search.sweep(
-                grid,
-                (0..grid.len()).rev().collect(),
-                &cold,
-                (nearest, &plain),
-            )
-        },
-    );
-    let profile: Vec<Option<Refined>> =
-        up.into_iter().zip(down).map(|(a, b)| lower(a, b)).collect();
+    let profile = search.profile(grid, &cold, poses);
     let costs: Vec<f64> = profile
         .iter()
         .map(|r| r.as_ref().map_or(f64::INFINITY, |r| r.cost))
         .collect();
-    // 3. Restarts from the profile's local minima and lowest points.
-    let mut seeds: Vec<usize> = (0..grid.len())
-        .filter(|&k| {
-            costs[k].is_finite()
-                && (k == 0 || costs[k] <= costs[k - 1])
-                && (k + 1 == grid.len() || costs[k] <= costs[k + 1])
-        })
-        .collect();
     let mut order: Vec<usize> = (0..grid.len()).filter(|&k| costs[k].is_finite()).collect();
     order.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
-    // The lowest points that are not next to a seed already (a neighbour of
-    // a profile minimum lies in its basin); the plain start is in the
-    // profile at its grid point.
-    for &k in &order {
-        if seeds.len() > global.restarts.max(1) {
-            break;
-        }
-        if !seeds.iter().any(|&s| s.abs_diff(k) <= 1) {
-            seeds.push(k);
-        }
-    }
-    seeds.sort_unstable();
-    let mut finals: Vec<Refined> = seeds
-        .par_iter()
-        .filter_map(|&k| {
-            profile[k]
-                .as_ref()
-                .and_then(|p| search.free(&p.model, &p.poses))
-        })
-        .collect();
-    // 4. Final check: no profile point (l1 held) may lie below the winner.
-    let mut final_check_restarts = 0;
-    for _ in 0..FINAL_CHECK_ROUNDS {
-        let best = finals.iter().map(|r| r.cost).fold(f64::INFINITY, f64::min);
-        let beaten: Vec<usize> = order
-            .iter()
-            .copied()
-            .filter(|&k| !seeds.contains(&k) && costs[k] < best * (1.0 - FINAL_CHECK_MARGIN))
-            .collect();
-        if beaten.is_empty() {
-            break;
-        }
-        seeds.extend(&beaten);
-        final_check_restarts += beaten.len();
-        let restarted: Vec<Refined> = beaten
-            .par_iter()
-            .filter_map(|&k| {
-                let start = profile[k].as_ref()?;
-                match search.free(&start.model, &start.poses) {
-                    Some(r) if r.cost <= start.cost * (1.0 + FINAL_CHECK_MARGIN) => Some(r),
-                    // A free fit above its own fixed-l1 start (the solver
-                    // stopped early in the valley): the profile point itself
-                    // is the better answer, refined once more with l1 free
-                    // from a tighter start.
-                    _ => search.free_tight(&start.model, &start.poses),
-                }
-            })
-            .collect();
-        finals.extend(restarted);
-    }
+    let mut seeds = restart_seeds(&costs, &order, global.restarts);
+    let mut finals = search.restarts(&profile, &seeds);
+    let final_check_restarts =
+        search.final_check(&profile, &costs, &order, &mut seeds, &mut finals);
     finals.sort_by(|a, b| a.cost.total_cmp(&b.cost));
     let minima = distinct_minima(&finals);
     let best = finals
@@ -322,6 +221,32 @@ pub fn refine_global(
     Ok((best, Some(report)))
 }
 
+/// 3. The restarts' grid points: the profile's local minima, then the
+/// lowest points (`order`: the finite ones by cost) that are not next to a
+/// seed already (a neighbour of a profile minimum lies in its basin), up to
+/// `restarts` more than one; in grid order. The plain start is in the
+/// profile at its grid point.
+fn restart_seeds(costs: &[f64], order: &[usize], restarts: usize) -> Vec<usize> {
+    let n = costs.len();
+    let mut seeds: Vec<usize> = (0..n)
+        .filter(|&k| {
+            costs[k].is_finite()
+                && (k == 0 || costs[k] <= costs[k - 1])
+                && (k + 1 == n || costs[k] <= costs[k + 1])
+        })
+        .collect();
+    for &k in order {
+        if seeds.len() > restarts.max(1) {
+            break;
+        }
+        if !seeds.iter().any(|&s| s.abs_diff(k) <= 1) {
+            seeds.push(k);
+        }
+    }
+    seeds.sort_unstable();
+    seeds
+}
+
 /// The refinements of one search (counted).
 struct Search<'a> {
     data: &'a CalibrationData,
@@ -331,7 +256,129 @@ struct Search<'a> {
     refinements: AtomicUsize,
 }
 
-impl Search<'_> {
+impl<'a> Search<'a> {
+    /// The search from `model` for `options`: its profile fits hold `l1`
+    /// and stop at a looser tolerance.
+    fn new(data: &'a CalibrationData, model: &'a Model, options: &'a RefineOptions) -> Self {
+        Search {
+            data,
+            model,
+            options,
+            profile_options: RefineOptions {
+                free: options
+                    .free
+                    .iter()
+                    .copied()
+                    .filter(|p| *p != Param::L1)
+                    .collect(),
+                cost_tolerance: PROFILE_TOLERANCE,
+                max_iterations: PROFILE_ITERATIONS,
+                ..options.clone()
+            },
+            refinements: AtomicUsize::new(0),
+        }
+    }
+
+    /// 1. The cold starts, at every `cold_every`-th grid point and the last.
+    fn cold_starts(&self, grid: &[f64], global: &GlobalOptions) -> Vec<Option<Refined>> {
+        (0..grid.len())
+            .into_par_iter()
+            .map(|k| {
+                (k % global.cold_every.max(1) == 0 || k + 1 == grid.len())
+                    .then(|| self.cold(grid[k], &global.init))
+                    .flatten()
+            })
+            .collect()
+    }
+
+    /// 2. The profile: two sweeps over the grid, the lower at each point;
+    /// the plain start (`self.model`, `poses`) enters at its nearest grid
+    /// point.
+    fn profile(
+        &self,
+        grid: &[f64],
+        cold: &[Option<Refined>],
+        poses: &[Pose],
+    ) -> Vec<Option<Refined>> {
+        let l1_start = self.model.get("l1").unwrap_or(0.0);
+        let nearest = (0..grid.len())
+            .min_by(|&a, &b| {
+                (grid[a] - l1_start)
+                    .abs()
+                    .total_cmp(&(grid[b] - l1_start).abs())
+            })
+            .unwrap_or(0);
+        let plain = self.fixed_at(self.model, poses, grid[nearest]);
+        let (up, down) = rayon::join(
+            || self.sweep(grid, (0..grid.len()).collect(), cold, (nearest, &plain)),
+            || {
+                self.sweep(
+                    grid,
+                    (0..grid.len()).rev().collect(),
+                    cold,
+                    (nearest, &plain),
+                )
+            },
+        );
+        up.into_iter().zip(down).map(|(a, b)| lower(a, b)).collect()
+    }
+
+    /// 3. The full refinements from the profile at `seeds`.
+    fn restarts(&self, profile: &[Option<Refined>], seeds: &[usize]) -> Vec<Refined> {
+        seeds
+            .par_iter()
+            .filter_map(|&k| {
+                profile[k]
+                    .as_ref()
+                    .and_then(|p| self.free(&p.model, &p.poses))
+            })
+            .collect()
+    }
+
+    /// 4. The final check: no profile point (`l1` held) may lie below the
+    /// winner among `finals`; those that do are restarted (added to `seeds`,
+    /// their fits to `finals`), for at most [`FINAL_CHECK_ROUNDS`] rounds.
+    /// Returns how many were restarted.
+    fn final_check(
+        &self,
+        profile: &[Option<Refined>],
+        costs: &[f64],
+        order: &[usize],
+        seeds: &mut Vec<usize>,
+        finals: &mut Vec<Refined>,
+    ) -> usize {
+        let mut final_check_restarts = 0;
+        for _ in 0..FINAL_CHECK_ROUNDS {
+            let best = finals.iter().map(|r| r.cost).fold(f64::INFINITY, f64::min);
+            let beaten: Vec<usize> = order
+                .iter()
+                .copied()
+                .filter(|&k| !seeds.contains(&k) && costs[k] < best * (1.0 - FINAL_CHECK_MARGIN))
+                .collect();
+            if beaten.is_empty() {
+                break;
+            }
+            seeds.extend(&beaten);
+            final_check_restarts += beaten.len();
+            let restarted: Vec<Refined> = beaten
+                .par_iter()
+                .filter_map(|&k| {
+                    let start = profile[k].as_ref()?;
+                    match self.free(&start.model, &start.poses) {
+                        Some(r) if r.cost <= start.cost * (1.0 + FINAL_CHECK_MARGIN) => Some(r),
+                        // A free fit above its own fixed-l1 start (the solver
+                        // stopped early in the valley): the profile point itself
+                        // is the better answer, refined once more with l1 free
+                        // from a tighter start.
+                        _ => self.free_tight(&start.model, &start.poses),
+                    }
+                })
+                .collect();
+            finals.extend(restarted);
+        }
+        final_check_restarts
+    }
+
     /// The fit with `l1` held at `l1`, from `(model, poses)` with `k1`
     /// shifted so that `k1 + l1` is kept.
     fn fixed_at(&self, model: &Model, poses: &[Pose], l1: f64) -> Option<Refined> {
