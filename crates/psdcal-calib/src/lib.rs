@@ -15,7 +15,7 @@
 //! - [`start`]: preliminary correction, homographies, closed form, focal search;
 //! - [`mod@refine`]: Levenberg–Marquardt and the global search over `l1`;
 //! - [`uncertainty`]: covariance, linearity check, profile, bootstrap;
-//! - [`diagnose`]: fit statistics, residual structure, diagnostics;
+//! - [`mod@diagnose`]: fit statistics, residual structure, diagnostics;
 //! - [`surveyed`]: the calibration from surveyed 3-D points;
 //! - [`mod@calibrate`]: the whole calibration, end to end;
 //! - [`plan`]: pose planning, predicted before any data exist.

@@ -221,7 +221,7 @@ pub fn refine_global(
     Ok((best, Some(report)))
 }
 
-/// 3. The restarts' grid points: the profile's local minima, then the
+/// Step 3, the restarts' grid points: the profile's local minima, then the
 /// lowest points (`order`: the finite ones by cost) that are not next to a
 /// seed already (a neighbour of a profile minimum lies in its basin), up to
 /// `restarts` more than one; in grid order. The plain start is in the
@@ -279,7 +279,7 @@ impl<'a> Search<'a> {
         }
     }
 
-    /// 1. The cold starts, at every `cold_every`-th grid point and the last.
+    /// Step 1, the cold starts, at every `cold_every`-th grid point and the last.
     fn cold_starts(&self, grid: &[f64], global: &GlobalOptions) -> Vec<Option<Refined>> {
         (0..grid.len())
             .into_par_iter()
@@ -291,7 +291,7 @@ impl<'a> Search<'a> {
             .collect()
     }
 
-    /// 2. The profile: two sweeps over the grid, the lower at each point;
+    /// Step 2, the profile: two sweeps over the grid, the lower at each point;
     /// the plain start (`self.model`, `poses`) enters at its nearest grid
     /// point.
     fn profile(
@@ -323,7 +323,7 @@ impl<'a> Search<'a> {
         up.into_iter().zip(down).map(|(a, b)| lower(a, b)).collect()
     }
 
-    /// 3. The full refinements from the profile at `seeds`.
+    /// Step 3, the full refinements from the profile at `seeds`.
     fn restarts(&self, profile: &[Option<Refined>], seeds: &[usize]) -> Vec<Refined> {
         seeds
             .par_iter()
@@ -335,7 +335,7 @@ impl<'a> Search<'a> {
             .collect()
     }
 
-    /// 4. The final check: no profile point (`l1` held) may lie below the
+    /// Step 4, the final check: no profile point (`l1` held) may lie below the
     /// winner among `finals`; those that do are restarted (added to `seeds`,
     /// their fits to `finals`), for at most [`FINAL_CHECK_ROUNDS`] rounds.
     /// Returns how many were restarted.

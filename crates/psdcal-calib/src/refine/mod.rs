@@ -5,7 +5,7 @@
 //!
 //! The freed parameters are any of the model's, by name
 //! ([`RefineOptions::free`], the gains, other stages' parameters); a
-//! [`Prior`] may join the cost ([`crate::prior`]).
+//! [`Prior`](crate::Prior) may join the cost ([`crate::prior`]).
 //!
 //! With a noise model other than uniform, each residual is whitened
 //! ([`crate::weighting`]); because template-plane weights depend on the

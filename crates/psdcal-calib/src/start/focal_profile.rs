@@ -25,7 +25,7 @@ use crate::{CalibError, CalibrationData, ImageObservations};
 use psdcal_model::CostKind;
 
 /// Most images the refined closed form descends on before the whole set
-/// ([`Problem::refined`]).
+/// (`focal_profile::Problem::refined`).
 pub const REFINE_SUBSET_IMAGES: usize = 4;
 
 /// What the focal search did.

@@ -259,7 +259,7 @@ pub fn initialize(
     })
 }
 
-/// 1. The checks of the module documentation: enough images of enough
+/// Step 1, the checks of the module documentation: enough images of enough
 /// points, a valid focal guess and active area.
 fn check_input(data: &CalibrationData, options: &InitOptions) -> Result<(), CalibError> {
     check_data(data)?;
@@ -304,7 +304,7 @@ fn check_input(data: &CalibrationData, options: &InitOptions) -> Result<(), Cali
     Ok(())
 }
 
-/// 2. The preliminary correction, with the note of an `Auto` correction
+/// Step 2, the preliminary correction, with the note of an `Auto` correction
 /// that could not run (then none).
 fn preliminary_correction(
     data: &CalibrationData,
@@ -335,7 +335,7 @@ fn preliminary_correction(
     }
 }
 
-/// 3. The homographies of the corrected points, and the start's objective
+/// Step 3, the homographies of the corrected points, and the start's objective
 /// `J` on them (with each image's RMS transfer error).
 fn homography_problem(
     data: &CalibrationData,
@@ -390,7 +390,7 @@ fn on_area(geometry: &PsdGeometry, cx: f64, cy: f64) -> bool {
     cx.abs() <= 0.5 * geometry.lx && cy.abs() <= 0.5 * geometry.ly
 }
 
-/// 4. The closed-form candidate: plausible `f` and centre, refined over
+/// Step 4, the closed-form candidate: plausible `f` and centre, refined over
 /// `f, cx, cy, k1` and the poses (unless `refine_start` is off).
 fn closed_form_start(
     problem: &Problem,
@@ -465,7 +465,7 @@ fn closed_form_start(
     }
 }
 
-/// 6, the basin check: the refined closed form must also be the lowest
+/// Step 6, the basin check: the refined closed form must also be the lowest
 /// basin at the scale of its own error, else it is no candidate.
 fn check_basin(
     data: &CalibrationData,
@@ -536,7 +536,7 @@ fn search_range(options: &InitOptions) -> (f64, f64, usize) {
     }
 }
 
-/// 6. The focal search, when the closed form gives no plausible candidate
+/// Step 6, the focal search, when the closed form gives no plausible candidate
 /// (or is not wanted): an error when the search is off.
 fn focal_search(
     problem: &Problem,
@@ -609,7 +609,7 @@ fn choose_route(
     }
 }
 
-/// 7. The start at the route's intrinsics: the refined closed form (or the
+/// Step 7, the start at the route's intrinsics: the refined closed form (or the
 /// paper's unrefined start), else `J`'s minimiser at `(f, cx, cy)`.
 fn starting_profile(
     problem: &Problem,
@@ -633,7 +633,7 @@ fn starting_profile(
     }
 }
 
-/// 7. After a search, the check that `f` is determined at all: with every
+/// Step 7: after a search, the check that `f` is determined at all: with every
 /// template pose parallel to the sensor the profile is flat (to rounding)
 /// in `f`. With noise, the covariance of the refined fit judges instead
 /// ([`mod@crate::calibrate`]). Returns the focal sensitivity.

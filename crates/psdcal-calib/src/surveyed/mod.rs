@@ -13,7 +13,7 @@
 //! start at the median over the images, the distortion at zero.
 //!
 //! *Refinement*: the image-plane error of the model's chain (the same
-//! [`Model`] and the same solver as [`mod@crate::refine`]),
+//! [`Model`](psdcal_model::Model) and the same solver as [`mod@crate::refine`]),
 //! `r_ij = project(θ, pose_i, P_j) − m_ij` (mm on the sensor), over the
 //! freed model parameters and one `sensor_from_template` pose per image
 //! ([`crate::surveyed_problem`]).
