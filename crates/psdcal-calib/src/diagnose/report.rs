@@ -71,6 +71,10 @@ pub struct FitStatistics {
     pub unprojectable: usize,
 }
 
+/// Per point: (template error, image error, image index, point index);
+/// the ids are cloned only for the points reported.
+type Scored = (f64, Option<f64>, usize, usize);
+
 /// Computes the fit statistics of `(model, poses)` on `data` (the points
 /// recomputed from the amplitudes when the model owns the gains). `cost`
 /// and `robust` say what was minimised (to flag outliers in the right units).
@@ -91,9 +95,6 @@ pub fn fit_statistics(
         // Only a gains stage without amplitudes fails here: nothing to measure.
         return FitStatistics::empty(data);
     };
-    // Per point: (template error, image error, image index, point index);
-    // the ids are cloned only for the points reported.
-    type Scored = (f64, Option<f64>, usize, usize);
     let mut all: Vec<Scored> = Vec::with_capacity(data.point_count());
     let mut outliers: Vec<Scored> = Vec::new();
     let mut per_image = Vec::with_capacity(data.images.len());
@@ -145,6 +146,31 @@ pub fn fit_statistics(
         n_m += img_n_m;
     }
     let points = data.point_count();
+    let (all, outliers) = worst_named(data, all, outliers);
+    FitStatistics {
+        residual_mm2: sum_t,
+        rms_template_mm: (sum_t / points.max(1) as f64).sqrt(),
+        rms_image_mm: if n_m > 0 {
+            (sum_m / n_m as f64).sqrt()
+        } else {
+            f64::INFINITY
+        },
+        points,
+        images: data.images.len(),
+        per_image,
+        worst_points: all,
+        outliers,
+        unprojectable,
+    }
+}
+
+/// The [`WORST_POINTS`] largest template-plane errors of `all` and every
+/// outlier, each worst first, with their image ids and LEDs.
+fn worst_named(
+    data: &CalibrationData,
+    mut all: Vec<Scored>,
+    mut outliers: Vec<Scored>,
+) -> (Vec<PointError>, Vec<PointError>) {
     let worst_first = |list: &mut Vec<Scored>| {
         list.sort_by(|a, b| b.0.total_cmp(&a.0));
     };
@@ -161,22 +187,7 @@ pub fn fit_statistics(
     worst_first(&mut all);
     all.truncate(WORST_POINTS);
     worst_first(&mut outliers);
-    let (all, outliers) = (named(&all), named(&outliers));
-    FitStatistics {
-        residual_mm2: sum_t,
-        rms_template_mm: (sum_t / points.max(1) as f64).sqrt(),
-        rms_image_mm: if n_m > 0 {
-            (sum_m / n_m as f64).sqrt()
-        } else {
-            f64::INFINITY
-        },
-        points,
-        images: data.images.len(),
-        per_image,
-        worst_points: all,
-        outliers,
-        unprojectable,
-    }
+    (named(&all), named(&outliers))
 }
 
 impl FitStatistics {

@@ -299,6 +299,44 @@ fn sandwich(
     s_inv: &DMatrix<f64>,
     dof: f64,
 ) -> Result<Sandwich, CalibError> {
+    let points = point_terms(problem, state, ne)?;
+    let sigma2 = points.weighted_sum / dof;
+    let (meat, sums) = meat_and_sums(problem, &points, sigma2);
+    let k = s_inv * meat * s_inv;
+    let mut blocks = Vec::with_capacity(points.images.len());
+    for (i, (terms, u)) in points.images.iter().zip(&sums).enumerate() {
+        let x = s_inv * u;
+        let mut y = Matrix6::zeros();
+        for t in terms {
+            y += t.p.transpose() * t.c * t.p;
+        }
+        let w = &ne.w[i];
+        let inner = w.transpose() * &k * w - w.transpose() * &x - x.transpose() * w;
+        let inner = Matrix6::from_iterator(inner.iter().copied()) + y;
+        blocks.push(points.v_inv[i] * inner * points.v_inv[i] * sigma2);
+    }
+    Ok((k * sigma2, blocks, sigma2))
+}
+
+/// Every point's linearisation for [`sandwich`], image after image.
+struct PointTerms {
+    /// Per image, its points' `P_j` and `C̃_j`.
+    images: Vec<Vec<PointTerm>>,
+    /// Every point's `Ã_j` (2 × p, column-major), one after the other.
+    a_tilde: Vec<f64>,
+    /// Per image, `V_i⁻¹`.
+    v_inv: Vec<Matrix6<f64>>,
+    /// `Σ r_jᵀ C̃_j⁻¹ r_j`.
+    weighted_sum: f64,
+}
+
+/// Linearises every point at `state`: `Ã_j = A_j − P_j V_i⁻¹ W_iᵀ`, `P_j`,
+/// `C̃_j = B_j B_jᵀ`, and the weighted sum of squares `Σ r_jᵀ C̃_j⁻¹ r_j`.
+fn point_terms(
+    problem: &CalibrationProblem<'_>,
+    state: &FitState,
+    ne: &NormalEquations,
+) -> Result<PointTerms, CalibError> {
     let p = problem.columns().len();
     let data = problem.data();
     let mut jac = problem.jacobian_buffer(&state.model);
@@ -351,7 +389,23 @@ fn sandwich(
         images.push(terms);
         v_inv.push(vi);
     }
-    let sigma2 = weighted_sum / dof;
+    Ok(PointTerms {
+        images,
+        a_tilde,
+        v_inv,
+        weighted_sum,
+    })
+}
+
+/// The sandwich's meat `Σ Ãᵀ C̃ Ã` (in units of `σ_m²`, a prior's gradient
+/// variance `s⁴ Σ⁻¹ = s² P` added) and, per image, `Σ_{j∈i} Ãᵀ C̃ P_j`.
+fn meat_and_sums(
+    problem: &CalibrationProblem<'_>,
+    points: &PointTerms,
+    sigma2: f64,
+) -> (DMatrix<f64>, Vec<DMatrix<f64>>) {
+    let p = problem.columns().len();
+    let images = &points.images;
     // K = Σ g C̃ gᵀ with g = S⁻¹ Ãᵀ, i.e. S⁻¹ (Σ Ãᵀ C̃ Ã) S⁻¹; a prior's
     // gradient adds s⁴ Σ⁻¹ = s² P to the meat (in units of σ_m²). Per
     // image, X_i = S⁻¹ Σ_{j∈i} Ãᵀ C̃ P_j.
@@ -363,11 +417,11 @@ fn sandwich(
     };
     let mut ac = vec![0.0; 2 * p]; // C̃ Ã (2 × p, column-major)
     let mut sums: Vec<DMatrix<f64>> = Vec::with_capacity(images.len());
-    let mut points = a_tilde.chunks_exact(2 * p);
-    for terms in &images {
+    let mut a_tilde = points.a_tilde.chunks_exact(2 * p);
+    for terms in images {
         let mut u = DMatrix::<f64>::zeros(p, 6); // Σ Ãᵀ C̃ P
         for t in terms {
-            let at = points.next().expect("one Ã per point");
+            let at = a_tilde.next().expect("one Ã per point");
             for col in 0..p {
                 let (x, y) = (at[2 * col], at[2 * col + 1]);
                 ac[2 * col] = t.c[(0, 0)] * x + t.c[(0, 1)] * y;
@@ -387,18 +441,5 @@ fn sandwich(
         }
         sums.push(u);
     }
-    let k = s_inv * meat * s_inv;
-    let mut blocks = Vec::with_capacity(images.len());
-    for (i, (terms, u)) in images.iter().zip(&sums).enumerate() {
-        let x = s_inv * u;
-        let mut y = Matrix6::zeros();
-        for t in terms {
-            y += t.p.transpose() * t.c * t.p;
-        }
-        let w = &ne.w[i];
-        let inner = w.transpose() * &k * w - w.transpose() * &x - x.transpose() * w;
-        let inner = Matrix6::from_iterator(inner.iter().copied()) + y;
-        blocks.push(v_inv[i] * inner * v_inv[i] * sigma2);
-    }
-    Ok((k * sigma2, blocks, sigma2))
+    (meat, sums)
 }
