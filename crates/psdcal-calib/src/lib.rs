@@ -5,67 +5,73 @@
 //! correction, data normalisation, homographies by DLT, the constrained closed
 //! form, and Levenberg–Marquardt refinement on the template-plane error (P29),
 //! with the parameters' covariance.
+//!
+//! The modules, one concept each, lower ones first (a module uses only those
+//! above it in this list, and its own folder's lower files):
+//!
+//! - [`data`], [`CalibError`], [`electrical`]: the input, the errors, the
+//!   electrical gain calibration;
+//! - [`problem`]: the cost (P29), its noise weighting and prior;
+//! - [`start`]: preliminary correction, homographies, closed form, focal search;
+//! - [`mod@refine`]: Levenberg–Marquardt and the global search over `l1`;
+//! - [`uncertainty`]: covariance, linearity check, profile, bootstrap;
+//! - [`mod@diagnose`]: fit statistics, residual structure, diagnostics;
+//! - [`surveyed`]: the calibration from surveyed 3-D points;
+//! - [`mod@calibrate`]: the whole calibration, end to end;
+//! - [`plan`]: pose planning, predicted before any data exist.
+//!
+//! The former flat module paths (`psdcal_calib::homography`,
+//! `psdcal_calib::covariance`, …) are kept as re-exports of the moved modules.
 #![warn(missing_docs)]
 
-pub mod data;
-mod error;
-mod focal_profile;
-pub mod homography;
-pub mod initialize;
-pub mod preliminary;
-pub mod straightness;
-pub mod zhang;
-
-pub use data::{CalibrationData, ImageObservations, Observation};
-pub use error::CalibError;
-pub use homography::{fit_homography, Homography, HomographyFit, HomographyOptions};
-pub use initialize::{initialize, InitOptions, InitReport, InitRoute, Initialization};
-pub use preliminary::{estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport};
-pub use zhang::{closed_form, pose_from_homography, ClosedFormSolution};
-pub mod bootstrap;
-pub mod calibration_problem;
-pub mod carried;
-pub mod covariance;
-pub mod diagnostics;
-pub mod electrical;
-mod gain_starts;
-pub mod global;
-mod helper;
-pub mod linearity;
-mod linearization;
-pub mod misplaced;
-pub mod plan;
-pub mod prior;
-pub mod profile;
-pub mod projection_dlt;
-pub mod refine;
-pub mod report;
-pub mod residual_structure;
-pub mod surveyed;
-pub mod surveyed_checks;
-pub mod surveyed_problem;
-pub mod weighting;
-
-pub use bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
-pub use carried::{carry_fixed_covariance, CarriedCovariance};
-pub use covariance::{covariance, Covariance, CovarianceMethod};
-pub use diagnostics::{diagnose, DiagnosticOptions, DiagnosticReport};
-pub use electrical::{equal_current_gains, GainEstimate};
-pub use global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
-pub use linearity::{check_linearity, LinearityCheck, ParameterLinearity, UncertaintyVerdict};
-pub use prior::Prior;
-pub use psdcal_solver::{self as solver, normal_equations};
-pub use psdcal_solver::{Problem, Solution, SolverOptions, SolverReport};
-pub use refine::{
-    refine, CalibrationProblem, CostKind, FitState, RefineOptions, RefineReport, Refined,
-    RobustLoss, Termination,
-};
-pub use report::{fit_statistics, FitStatistics, ImageStats, PointError};
-pub use weighting::{point_covariance, NoiseModel, PointWeights};
 pub mod calibrate;
-mod calibration_summary;
+pub mod data;
+pub mod diagnose;
+pub mod electrical;
+mod error;
+pub mod plan;
+pub mod problem;
+pub mod refine;
+pub mod start;
+pub mod surveyed;
+pub mod uncertainty;
+
+// The former flat module paths.
+pub use diagnose::{diagnostics, report, residual_structure};
+pub use problem::{calibration_problem, prior, weighting};
+pub use refine::global;
+pub use start::{homography, initialize, misplaced, preliminary, straightness, zhang};
+pub use surveyed::{checks as surveyed_checks, problem as surveyed_problem, projection_dlt};
+pub use uncertainty::{bootstrap, carried, covariance, linearity, profile};
+
 pub use calibrate::{
     calibrate, CalibrateOptions, CalibrationResult, CalibrationSummary, ParameterSummary,
     Uncertainty,
 };
+pub use data::{CalibrationData, ImageObservations, Observation};
+pub use diagnose::diagnostics::{diagnose, DiagnosticOptions, DiagnosticReport};
+pub use diagnose::report::{fit_statistics, FitStatistics, ImageStats, PointError};
+pub use electrical::{equal_current_gains, GainEstimate};
+pub use error::CalibError;
+pub use problem::prior::Prior;
+pub use problem::weighting::{point_covariance, NoiseModel, PointWeights};
+pub use psdcal_solver::{self as solver, normal_equations};
+pub use psdcal_solver::{Problem, Solution, SolverOptions, SolverReport};
+pub use refine::global::{refine_global, GlobalOptions, GlobalReport, LocalMinimum};
+pub use refine::{
+    refine, CalibrationProblem, CostKind, FitState, RefineOptions, RefineReport, Refined,
+    RobustLoss, Termination,
+};
+pub use start::homography::{fit_homography, Homography, HomographyFit, HomographyOptions};
+pub use start::initialize::{initialize, InitOptions, InitReport, InitRoute, Initialization};
+pub use start::preliminary::{
+    estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport,
+};
+pub use start::zhang::{closed_form, pose_from_homography, ClosedFormSolution};
 pub use surveyed::{calibrate_surveyed, SurveyedCalibration, SurveyedData, SurveyedOptions};
+pub use uncertainty::bootstrap::{bootstrap_covariance, BootstrapOptions, BootstrapReport};
+pub use uncertainty::carried::{carry_fixed_covariance, CarriedCovariance};
+pub use uncertainty::covariance::{covariance, Covariance, CovarianceMethod};
+pub use uncertainty::linearity::{
+    check_linearity, LinearityCheck, ParameterLinearity, UncertaintyVerdict,
+};

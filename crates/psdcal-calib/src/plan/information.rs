@@ -39,9 +39,9 @@ use nalgebra::{DMatrix, Matrix2, SMatrix};
 use psdcal_model::sensor::electrode_currents;
 use psdcal_model::{Amplitudes, CostKind, Model, Pose, PsdGeometry};
 
-use crate::calibration_problem::{CalibrationProblem, FitState};
 use crate::data::CalibrationData;
-use crate::weighting::{point_covariance, NoiseModel};
+use crate::problem::calibration_problem::{CalibrationProblem, FitState};
+use crate::problem::weighting::{point_covariance, NoiseModel};
 use crate::CalibError;
 
 /// What the planner knows of the sensor and the template.
@@ -143,7 +143,9 @@ pub fn point_jacobians(setup: &PlanSetup, pose: &Pose) -> Result<Vec<PointJacobi
         .map(|(k, obs)| {
             let (_, wrt_pose, b) = problem
                 .linearize(&state, 0, k, &rotation, &mut jac, &mut a)
-                .map_err(|e| crate::calibration_problem::point_error(&data, 0, obs.led, e))?;
+                .map_err(|e| {
+                    crate::problem::calibration_problem::point_error(&data, 0, obs.led, e)
+                })?;
             Ok(PointJacobians {
                 wrt_free: DMatrix::from_column_slice(2, p, &a),
                 wrt_pose,
