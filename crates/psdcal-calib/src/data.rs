@@ -163,3 +163,15 @@ impl CalibrationData {
         self.images.iter().map(|i| i.points.len()).sum()
     }
 }
+
+/// One measured point of the data: its image and its place in the image's
+/// points (indices into [`CalibrationData::images`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DataPoint {
+    /// The image's index.
+    pub image: usize,
+    /// The point's index in the image.
+    pub point: usize,
+    /// The measured point, mm.
+    pub measured: Vector2<f64>,
+}

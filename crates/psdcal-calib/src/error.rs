@@ -1,6 +1,8 @@
 //! The error type of the calibration crate.
 
 use psdcal_model::ModelError;
+
+use crate::data::DataPoint;
 use thiserror::Error;
 
 /// Everything that can make a calibration fail. Each message names the cause
@@ -93,5 +95,41 @@ pub enum CalibError {
     NonPositiveFocalSquared {
         /// The computed `f²`, mm².
         f_squared: f64,
+    },
+    /// Measured points outside the domain of the model's first stage (a
+    /// PSD map is known only inside its scan's hull, docs/model.md §8.3).
+    #[error(
+        "{outside} of {points} data points lie outside the domain of the model's first stage \
+         (first: image {}, point {}, at ({:.4}, {:.4}) mm)",
+        first.image, first.point, first.measured.x, first.measured.y
+    )]
+    DataOutsideDomain {
+        /// Points outside.
+        outside: usize,
+        /// Points of the data.
+        points: usize,
+        /// The first point outside.
+        first: DataPoint,
+    },
+    /// The fitted correction folds over inside its own data: points lie
+    /// outside the valid region (docs/model.md §8.2).
+    #[error(
+        "the distortion correction folds over inside its own data ({outside} of {points} \
+         points lie outside its valid region, the nearest fold {fold_mm:.3} mm from the optical \
+         centre)"
+    )]
+    DataOutsideValidRegion {
+        /// Points outside.
+        outside: usize,
+        /// Points of the data.
+        points: usize,
+        /// Distance of the nearest fold from the optical centre, mm.
+        fold_mm: f64,
+        /// The first point outside.
+        first: DataPoint,
+        /// Its distance from the optical centre, mm.
+        distance_mm: f64,
+        /// Where the region ends in its direction, mm.
+        limit_mm: f64,
     },
 }

@@ -45,10 +45,10 @@ pub use surveyed::{checks as surveyed_checks, problem as surveyed_problem, proje
 pub use uncertainty::{bootstrap, carried, covariance, linearity, profile};
 
 pub use calibrate::{
-    calibrate, CalibrateOptions, CalibrationResult, CalibrationSummary, ParameterSummary,
-    Uncertainty,
+    calibrate, BlockCovariance, CalibrateOptions, CalibrationResult, CalibrationSummary,
+    ParameterSummary, Uncertainty,
 };
-pub use data::{CalibrationData, ImageObservations, Observation};
+pub use data::{CalibrationData, DataPoint, ImageObservations, Observation};
 pub use diagnose::diagnostics::{diagnose, DiagnosticOptions, DiagnosticReport};
 pub use diagnose::report::{fit_statistics, FitStatistics, ImageStats, PointError};
 pub use electrical::{equal_current_gains, GainEstimate};

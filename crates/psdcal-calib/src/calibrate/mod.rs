@@ -31,6 +31,7 @@
 //! (`gain_starts`), the second thread of the post-fit work (`helper`), and the
 //! serialisable summary ([`CalibrationSummary`]).
 
+mod finish;
 mod gain_starts;
 mod helper;
 mod options;
@@ -40,5 +41,5 @@ mod summary;
 
 pub use options::{CalibrateOptions, Uncertainty};
 pub use pipeline::{calibrate, MAX_RELATIVE_STD_F};
-pub use result::CalibrationResult;
+pub use result::{BlockCovariance, CalibrationResult};
 pub use summary::{CalibrationSummary, ParameterSummary};

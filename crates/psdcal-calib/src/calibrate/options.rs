@@ -36,6 +36,12 @@ pub struct CalibrateOptions {
     /// they are freed in a last refinement (module documentation). `None`
     /// by default.
     pub prior: Option<ParameterCovariance>,
+    /// The covariance of a block of `base` held fixed (a PSD map's
+    /// coefficients with their scan's covariance), carried into the
+    /// estimate's after the fit (`C_θ + G C_m Gᵀ`, docs/model.md §8.3).
+    /// Ignored with a [`Self::prior`], which frees the block. `None` by
+    /// default.
+    pub fixed_covariance: Option<ParameterCovariance>,
 }
 
 /// How [`calibrate`](fn@crate::calibrate) estimates the covariance
@@ -65,6 +71,7 @@ impl Default for CalibrateOptions {
             uncertainty: Uncertainty::Linear,
             diagnostics: DiagnosticOptions::default(),
             prior: None,
+            fixed_covariance: None,
         }
     }
 }

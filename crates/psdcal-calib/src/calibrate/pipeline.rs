@@ -6,6 +6,7 @@
 use psdcal_model::{Diagnostic, DiagnosticCode, ParameterCovariance, ValidRegion};
 use std::sync::Arc;
 
+use crate::calibrate::finish::{check_data_in_domain, check_data_in_region, settle_block};
 use crate::calibrate::gain_starts::refine_from_gain_starts;
 use crate::calibrate::helper::Helper;
 use crate::calibrate::options::{start_model, CalibrateOptions, Uncertainty};
@@ -37,7 +38,11 @@ pub fn calibrate(
     data: &CalibrationData,
     options: &CalibrateOptions,
 ) -> Result<CalibrationResult, CalibError> {
-    calibrate_as_given(data, options).map_err(|e| blame_misplaced_led(data, e))
+    check_data_in_domain(data, options)?;
+    let mut result = calibrate_as_given(data, options).map_err(|e| blame_misplaced_led(data, e))?;
+    check_data_in_region(&result, data)?;
+    settle_block(&mut result, data, options)?;
+    Ok(result)
 }
 
 /// A failure that a misplaced LED explains is reported as such
@@ -120,6 +125,7 @@ fn calibrate_as_given(
         statistics,
         warnings,
         diagnostics,
+        block: None,
     })
 }
 

@@ -4,6 +4,7 @@
 //! global search, the covariance with its linearity check (and bootstrap),
 //! the fit statistics, warnings and diagnostics.
 
+use nalgebra::DMatrix;
 use psdcal_model::{ChannelGains, CostKind, Diagnostic, Model, Pose, SensorModel, ValidRegion};
 use psdcal_solver::solver::{RobustLoss, SolverReport as RefineReport};
 
@@ -56,6 +57,14 @@ pub struct CalibrationResult {
     pub statistics: FitStatistics,
     /// Everything the user should know (identifiability, start, outliers).
     pub warnings: Vec<String>,
+    /// A block of the model with a known covariance (a PSD map's
+    /// coefficients), held fixed with its covariance carried or refined
+    /// with it as the prior ([`CalibrateOptions::fixed_covariance`],
+    /// [`CalibrateOptions::prior`]); `None` without one.
+    ///
+    /// [`CalibrateOptions::fixed_covariance`]: crate::CalibrateOptions::fixed_covariance
+    /// [`CalibrateOptions::prior`]: crate::CalibrateOptions::prior
+    pub block: Option<BlockCovariance>,
     /// What the fit noticed about itself, with stable codes
     /// ([`crate::diagnostics`]; calibration.json's `diagnostics`).
     pub diagnostics: Vec<Diagnostic>,
@@ -82,4 +91,18 @@ impl CalibrationResult {
     pub fn sensor_model(&self) -> SensorModel {
         self.model.sensor_model()
     }
+}
+
+/// A block of the model with a known covariance after the calibration
+/// (docs/model.md §8.3).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlockCovariance {
+    /// The block's parameters and their values in the fitted model.
+    pub parameters: Vec<(String, f64)>,
+    /// Its own covariance when refined (`None` when held fixed: the known
+    /// covariance stands).
+    pub matrix: Option<DMatrix<f64>>,
+    /// Its covariance with the estimated parameters: rows the block's
+    /// parameters, columns the result's covariance names.
+    pub cross: DMatrix<f64>,
 }

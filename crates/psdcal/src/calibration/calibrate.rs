@@ -4,11 +4,9 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
-use nalgebra::Vector2;
 use psdcal_calib::CalibError;
-use psdcal_calib::{CalibrationData, CalibrationResult};
+use psdcal_calib::{CalibrationData, CalibrationResult, DataPoint};
 use psdcal_io::{write_calibration, Calibration, ValidRegionRecord};
-use psdcal_model::ValidRegion;
 
 use crate::base::error::{Error, Result};
 use crate::base::options::CalibrationOptions;
@@ -61,59 +59,19 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
         None => None,
     };
     let mut calibrate_options = convert::calibrate_options(options);
-    if let (Some(map), Some(path)) = (&map, &options.psd_map) {
-        let points: Vec<_> = data
-            .images
-            .iter()
-            .flat_map(|image| {
-                image.points.iter().map(|obs| {
-                    let led = set
-                        .template
-                        .leds
-                        .get(obs.led)
-                        .map_or_else(|| format!("#{}", obs.led), |l| l.id.clone());
-                    (image.id.as_str(), led, obs.measured)
-                })
-            })
-            .collect();
-        calibrate_map::check_data_in_hull(map, path, &points)?;
-    }
     if let Some(map) = &map {
         calibrate_options.base = calibrate_map::with_map(&calibrate_options.base, map)?;
         if options.refine_psd_map {
             calibrate_options.prior = Some(map.loaded.covariance.clone());
+        } else {
+            calibrate_options.fixed_covariance = Some(map.loaded.covariance.clone());
         }
     }
-    let mut result = psdcal_calib::calibrate(&data, &calibrate_options).map_err(|e| match e {
-        CalibError::MisplacedLed {
-            led,
-            score,
-            next_score,
-            images,
-            cause,
-        } if led < set.template.leds.len() => Error::MisplacedLed {
-            led: set.template.leds[led].id.clone(),
-            template: set.template.source.clone(),
-            line: set.template.leds[led].line_no,
-            score,
-            next_score,
-            images,
-            cause,
-        },
-        e => Error::Calibrate(e),
-    })?;
-    check_data_in_region(&result, &data, set, &result.valid_region)?;
-    let map_stage = match &map {
-        Some(map) if options.refine_psd_map => {
-            Some(calibrate_map::refined_stage(&mut result, map)?)
-        }
-        Some(map) => Some(calibrate_map::carry(
-            &mut result,
-            &data,
-            &calibrate_options,
-            map,
-        )?),
-        None => None,
+    let result = psdcal_calib::calibrate(&data, &calibrate_options)
+        .map_err(|e| calibration_error(e, set, &data, options))?;
+    let map_stage = match (&map, &result.block) {
+        (Some(map), Some(block)) => Some(calibrate_map::stage_record(map, block)),
+        _ => None,
     };
     let mut record = convert::record(&result, &data, set, options);
     record.valid_region = Some(ValidRegionRecord::from_region(&result.valid_region));
@@ -129,60 +87,74 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
     })
 }
 
-/// Refuses a calibration whose valid region does not contain the measured
-/// points it was fitted to (with fitted gains, the points recomputed from the
-/// amplitudes through them).
-fn check_data_in_region(
-    result: &CalibrationResult,
-    data: &CalibrationData,
+/// psdcal-calib's refusal in the data set's own names: the misplaced LED
+/// by identifier and line, a point by its image and LED.
+fn calibration_error(
+    e: CalibError,
     set: &DataSet,
-    region: &ValidRegion,
-) -> Result<()> {
-    let mut points = Vec::new();
-    for (i, image) in data.images.iter().enumerate() {
-        for (j, obs) in image.points.iter().enumerate() {
-            let amplitudes = data.amplitudes.as_ref().and_then(|a| a.get(i)?.get(j));
-            let measured = match (result.model.gains_stage(), amplitudes) {
-                (Some(_), Some(a)) => result
-                    .model
-                    .measured_from_amplitudes(a)
-                    .unwrap_or(obs.measured),
-                _ => obs.measured,
-            };
-            let led = set
-                .template
-                .leds
-                .get(obs.led)
-                .map_or_else(|| format!("#{}", obs.led), |l| l.id.clone());
-            points.push((image.id.as_str(), led, measured));
-        }
-    }
-    refuse_points_outside(region, &points)
-}
-
-/// [`Error::DataOutsideValidRegion`] when a point `(image, LED, measured)`
-/// lies outside `region`.
-fn refuse_points_outside(
-    region: &ValidRegion,
-    points: &[(&str, String, Vector2<f64>)],
-) -> Result<()> {
-    let outside: Vec<_> = points
-        .iter()
-        .filter_map(|(image, led, m)| region.check(m).err().map(|o| (image, led, m, o)))
-        .collect();
-    let Some((image, led, m, o)) = outside.first() else {
-        return Ok(());
+    data: &CalibrationData,
+    options: &CalibrationOptions,
+) -> Error {
+    let point_text = |p: &DataPoint| {
+        let image = &data.images[p.image];
+        let led = image.points[p.point].led;
+        let led = set
+            .template
+            .leds
+            .get(led)
+            .map_or_else(|| format!("#{led}"), |l| l.id.clone());
+        format!(
+            "image {}, LED {led} at ({:.4}, {:.4}) mm",
+            image.id, p.measured.x, p.measured.y
+        )
     };
-    Err(Error::DataOutsideValidRegion {
-        outside: outside.len(),
-        points: points.len(),
-        fold_mm: region.nearest_fold_mm().unwrap_or(o.limit_mm),
-        first: format!(
-            "image {image}, LED {led} at ({:.4}, {:.4}) mm, {:.4} mm from the centre where the \
-             region ends at {:.4} mm",
-            m.x, m.y, o.distance_mm, o.limit_mm
-        ),
-    })
+    match e {
+        CalibError::MisplacedLed {
+            led,
+            score,
+            next_score,
+            images,
+            cause,
+        } if led < set.template.leds.len() => Error::MisplacedLed {
+            led: set.template.leds[led].id.clone(),
+            template: set.template.source.clone(),
+            line: set.template.leds[led].line_no,
+            score,
+            next_score,
+            images,
+            cause,
+        },
+        CalibError::DataOutsideDomain {
+            outside,
+            points,
+            first,
+        } => match &options.psd_map {
+            Some(map) => Error::DataOutsidePsdMap {
+                map: map.display().to_string(),
+                outside,
+                points,
+                first: point_text(&first),
+            },
+            None => Error::Calibrate(e),
+        },
+        CalibError::DataOutsideValidRegion {
+            outside,
+            points,
+            fold_mm,
+            first,
+            distance_mm,
+            limit_mm,
+        } => Error::DataOutsideValidRegion {
+            outside,
+            points,
+            fold_mm,
+            first: format!(
+                "{}, {distance_mm:.4} mm from the centre where the region ends at {limit_mm:.4} mm",
+                point_text(&first)
+            ),
+        },
+        e => Error::Calibrate(e),
+    }
 }
 
 impl Calibrated {
@@ -240,55 +212,5 @@ impl Calibrated {
             .wrote(std::iter::once(out).chain(residuals))
             .warn(&self.report.warnings)
             .warn(diagnostics))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use psdcal_model::{PsdGeometry, SensorModel};
-
-    use super::*;
-
-    /// Data past the fold of k1 = −0.02 mm⁻² about (0.5, −0.7) (r* =
-    /// 1/√(3 · 0.02) = 4.08 mm) are refused with the count and the first
-    /// point; data inside pass.
-    #[test]
-    fn data_past_the_fold_are_refused() {
-        let mut model = SensorModel::pinhole(8.0, 0.5, -0.7);
-        model.distortion.k1 = -0.02;
-        let region = ValidRegion::of_sensor_model(&model, &PsdGeometry::default());
-        let inside = vec![
-            ("1", "a".to_string(), Vector2::new(0.5, -0.7)),
-            ("1", "b".to_string(), Vector2::new(3.0, 1.0)),
-        ];
-        assert!(refuse_points_outside(&region, &inside).is_ok());
-        let mut data = inside.clone();
-        data.push(("2", "c".to_string(), Vector2::new(-4.5, 4.5)));
-        data.push(("3", "d".to_string(), Vector2::new(4.5, -4.5)));
-        let e = refuse_points_outside(&region, &data).unwrap_err();
-        let Error::DataOutsideValidRegion {
-            outside,
-            points,
-            fold_mm,
-            ..
-        } = &e
-        else {
-            panic!("{e}")
-        };
-        assert_eq!((*outside, *points), (2, 4));
-        assert!((fold_mm - 1.0 / (3.0f64 * 0.02).sqrt()).abs() < 1e-9);
-        let text = e.to_string();
-        assert!(
-            text.contains("2 of 4 points lie outside its valid region"),
-            "{text}"
-        );
-        assert!(
-            text.contains("image 2, LED c at (-4.5000, 4.5000) mm, 7.2139 mm"),
-            "{text}"
-        );
-        // A non-folding calibration accepts the same data.
-        let plain =
-            ValidRegion::of_sensor_model(&SensorModel::paper_lens2(), &PsdGeometry::default());
-        assert!(refuse_points_outside(&plain, &data).is_ok());
     }
 }

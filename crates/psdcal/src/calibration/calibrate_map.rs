@@ -10,7 +10,7 @@
 use std::path::Path;
 
 use nalgebra::DMatrix;
-use psdcal_calib::{CalibrateOptions, CalibrationData, CalibrationResult};
+use psdcal_calib::BlockCovariance;
 use psdcal_io::{
     psd_map_from_reader, Calibration, LoadedPsdMap, PsdMapFile, PsdMapStageCovariance,
     PsdMapStageRecord,
@@ -18,7 +18,7 @@ use psdcal_io::{
 use psdcal_locate::{CalibratedSensor, SensorPsdMap};
 use psdcal_model::{Model, ParameterCovariance, PsdGeometry, Stage};
 
-use crate::base::error::{Error, Result};
+use crate::base::error::Result;
 use crate::base::provenance::InputHashes;
 
 /// A map file read for a calibration.
@@ -40,28 +40,6 @@ pub(crate) fn load(
     Ok(MapInput { file, loaded })
 }
 
-/// Refuses data points outside the map's hull (`points`: image, LED,
-/// measured point).
-pub(crate) fn check_data_in_hull(
-    map: &MapInput,
-    path: &Path,
-    points: &[(&str, String, nalgebra::Vector2<f64>)],
-) -> Result<()> {
-    let outside: Vec<_> = points
-        .iter()
-        .filter(|(_, _, m)| !map.loaded.stage.contains_input(m))
-        .collect();
-    match outside.first() {
-        None => Ok(()),
-        Some((image, led, m)) => Err(Error::DataOutsidePsdMap {
-            map: path.display().to_string(),
-            outside: outside.len(),
-            points: points.len(),
-            first: format!("image {image}, LED {led} at ({:.4}, {:.4}) mm", m.x, m.y),
-        }),
-    }
-}
-
 /// `base` with the map first among its distortion stages, at its values.
 pub(crate) fn with_map(base: &Model, map: &MapInput) -> Result<Model> {
     let stage = &map.loaded.stage;
@@ -72,112 +50,31 @@ pub(crate) fn with_map(base: &Model, map: &MapInput) -> Result<Model> {
     Ok(model)
 }
 
-/// The refined map's stage of calibration.json: its coefficients from
-/// `result`'s model, `matrix` their block of the joint covariance and
-/// `cross` their covariance with the other estimated parameters, to which
-/// `result`'s covariance is narrowed (the record's `covariance` names the
-/// model's scalar parameters only).
-pub(crate) fn refined_stage(
-    result: &mut CalibrationResult,
-    map: &MapInput,
-) -> Result<PsdMapStageRecord> {
+/// The map's stage of calibration.json from the calibration's settled
+/// block: held fixed (its covariance carried: `cross` only) or refined
+/// (`matrix` its block of the joint covariance, `cross` with the other
+/// estimated parameters).
+pub(crate) fn stage_record(map: &MapInput, block: &BlockCovariance) -> PsdMapStageRecord {
     let stage = &map.loaded.stage;
-    let names: Vec<String> = stage.parameters().iter().map(|p| p.name.clone()).collect();
-    let joint = &result.covariance.parameters;
-    let others: Vec<String> = joint
-        .names()
-        .iter()
-        .filter(|n| !names.contains(n))
-        .cloned()
-        .collect();
-    let index = |n: &String| {
-        joint
-            .index(n)
-            .ok_or_else(|| Error::Input(format!("the refined map's '{n}' has no covariance")))
-    };
-    let (rows, cols) = (
-        names.iter().map(index).collect::<Result<Vec<_>>>()?,
-        others.iter().map(index).collect::<Result<Vec<_>>>()?,
-    );
-    let m = joint.matrix();
-    let table = |a: &[usize], b: &[usize]| -> Vec<Vec<f64>> {
-        a.iter()
-            .map(|i| b.iter().map(|j| m[(*i, *j)]).collect())
+    let c = &map.file.covariance;
+    let rows = |m: &DMatrix<f64>| -> Vec<Vec<f64>> {
+        (0..m.nrows())
+            .map(|i| m.row(i).iter().copied().collect())
             .collect()
     };
-    let (matrix, cross) = (table(&rows, &rows), table(&rows, &cols));
-    let parameters = names
-        .iter()
-        .map(|n| {
-            result
-                .model
-                .get(n)
-                .map(|v| (n.clone(), v))
-                .ok_or_else(|| Error::Input(format!("the refined model has no '{n}'")))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let narrowed = ParameterCovariance::new(
-        others.clone(),
-        DMatrix::from_fn(cols.len(), cols.len(), |i, j| m[(cols[i], cols[j])]),
-    )
-    .map_err(|e| Error::Input(format!("the calibration's covariance: {e}")))?;
-    result.covariance.parameters = narrowed;
-    let c = &map.file.covariance;
-    Ok(PsdMapStageRecord {
+    PsdMapStageRecord {
         configuration: stage.configuration(),
-        parameters,
+        parameters: block.parameters.clone(),
         covariance: PsdMapStageCovariance {
             sigma_x_mm: c.sigma_x_mm,
             sigma_y_mm: c.sigma_y_mm,
             unit: c.unit.clone(),
-            cross,
-            matrix: Some(matrix),
+            cross: rows(&block.cross),
+            matrix: block.matrix.as_ref().map(rows),
         },
-        estimated: true,
+        estimated: block.matrix.is_some(),
         scan: Some(crate::psd_map::from_scan::scan_summary(&map.file, stage)),
-    })
-}
-
-/// Carries the map's covariance into `result`'s and returns the
-/// calibration.json stage of the map (with the cross-covariance).
-pub(crate) fn carry(
-    result: &mut CalibrationResult,
-    data: &CalibrationData,
-    options: &CalibrateOptions,
-    map: &MapInput,
-) -> Result<PsdMapStageRecord> {
-    let carried = psdcal_calib::carry_fixed_covariance(
-        data,
-        &result.model,
-        &result.poses,
-        &options.refine,
-        &result.covariance.parameters,
-        &map.loaded.covariance,
-    )
-    .map_err(Error::Calibrate)?;
-    result.covariance.parameters = carried.parameters;
-    let stage = &map.loaded.stage;
-    let c = &map.file.covariance;
-    Ok(PsdMapStageRecord {
-        configuration: stage.configuration(),
-        parameters: stage
-            .parameters()
-            .iter()
-            .map(|p| p.name.clone())
-            .zip(map.loaded.block.iter().copied())
-            .collect(),
-        covariance: PsdMapStageCovariance {
-            sigma_x_mm: c.sigma_x_mm,
-            sigma_y_mm: c.sigma_y_mm,
-            unit: c.unit.clone(),
-            cross: (0..carried.cross.nrows())
-                .map(|i| carried.cross.row(i).iter().copied().collect())
-                .collect(),
-            matrix: None,
-        },
-        estimated: false,
-        scan: Some(crate::psd_map::from_scan::scan_summary(&map.file, stage)),
-    })
+    }
 }
 
 /// The sensor of a calibration with a map: the map first, the joint
