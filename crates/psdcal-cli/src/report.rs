@@ -15,7 +15,7 @@ pub enum Output {
 }
 
 /// At most this many warnings are printed one by one.
-const MAX_WARNINGS: usize = 50;
+pub const MAX_WARNINGS: usize = 50;
 
 /// The error the library wrapped, so that its message and hint are the
 /// lower crate's own.
