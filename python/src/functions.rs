@@ -314,6 +314,7 @@ pub fn demodulate<'py>(
             full_scale_v: full_scale,
             ..psdcal::DemodConfig::default()
         },
+        limits: psdcal::ReadLimits::default(),
     };
     let done = py
         .detach(|| psdcal::demodulate(&request))

@@ -3,15 +3,13 @@
 
 use std::path::PathBuf;
 
-use clap::{ArgGroup, Args, CommandFactory, Parser, Subcommand};
-use psdcal::option_text::{
-    parse_assignment, parse_fit, parse_robust, parse_uncertainty, positive_mm, side_mm, FitList,
-};
+use clap::{CommandFactory, Parser, Subcommand};
+use psdcal::option_text::FitList;
 pub use psdcal::PointSource;
-use psdcal::{
-    CalibrationOptions, CostKind, DataSetFiles, LoadOptions, NoiseModel, Param, Preliminary,
-    PsdGeometry, RobustLoss, Uncertainty,
-};
+use psdcal::{CalibrationOptions, DataSetFiles, LoadOptions, ReadLimits};
+
+use crate::args::{CalibrateArgs, CalibrateConfig, CorrectArgs, DataSetArgs};
+use crate::report::Output;
 
 /// psdcal: calibrate infrared position-sensitive-device (PSD) sensors.
 #[derive(Debug, Parser)]
@@ -103,129 +101,6 @@ pub enum Command {
     FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
 }
 
-// Also the data-set arguments of `calibrate` and `calibrate-in-situ`.
-/// Validate a calibration data set and summarise images, points and sensor coverage
-#[derive(Debug, Clone, PartialEq, Args)]
-#[command(group(ArgGroup::new("input").required(true).args(["observations", "signals"])))]
-pub struct DataSetArgs {
-    /// Template: led, X_mm, Y_mm[, lines]
-    #[arg(long, short = 't', value_name = "FILE")]
-    pub template: PathBuf,
-    /// Measured impact points: image, led, x_mm, y_mm
-    #[arg(long, short = 'o', value_name = "FILE")]
-    pub observations: Option<PathBuf>,
-    /// Electrode amplitudes instead of impact points: image, led, vx1, vx2, vy1, vy2
-    #[arg(long, short = 's', value_name = "FILE")]
-    pub signals: Option<PathBuf>,
-    /// Active area side along x, mm
-    #[arg(long, value_name = "MM", default_value = "9", value_parser = side_mm, allow_negative_numbers = true)]
-    pub lx: f64,
-    /// Active area side along y, mm
-    #[arg(long, value_name = "MM", default_value = "9", value_parser = side_mm, allow_negative_numbers = true)]
-    pub ly: f64,
-    /// Treat every data warning as an error instead of dropping the data
-    #[arg(long)]
-    pub strict: bool,
-}
-
-/// Calibrate a sensor from images of an LED template (adapted Zhang method + Levenberg-Marquardt)
-#[derive(Debug, Args)]
-pub struct CalibrateArgs {
-    #[command(flatten)]
-    pub data: DataSetArgs,
-    /// Where to write calibration.json (atomically)
-    #[arg(long, value_name = "FILE")]
-    pub out: PathBuf,
-    /// Parameters to estimate, comma-separated (the others stay fixed); add
-    /// `gains` to self-calibrate the amplifier gains (needs --signals)
-    #[arg(long, value_name = "LIST", default_value = "f,cx,cy,k1,k2", value_parser = parse_fit)]
-    pub fit: FitList,
-    /// Nominal focal length of the lens, mm (narrows the start's search)
-    #[arg(long, value_name = "MM", value_parser = positive_mm)]
-    pub focal_guess: Option<f64>,
-    /// Cost to minimise: template (the paper's template-plane error) or image
-    #[arg(long, value_name = "KIND", value_enum, default_value_t = CostKind::Template)]
-    pub cost: CostKind,
-    /// Noise weighting of the cost: uniform (unweighted, the paper's),
-    /// channel-snr (the same SNR on every electrode channel, each record's own
-    /// from signals.csv's snr_db when given: points near the electrodes weigh
-    /// more) or channel-floor (the same absolute noise on
-    /// every channel: brighter spots weigh more)
-    #[arg(long, value_name = "MODEL", value_enum, default_value_t = NoiseModel::Uniform)]
-    pub noise: NoiseModel,
-    /// Preliminary distortion correction before the linear stage: auto (line
-    /// straightness when the template declares lines, else homography
-    /// consistency), straightness, homography, or off
-    #[arg(long, value_name = "METHOD", value_enum, default_value_t = Preliminary::Auto)]
-    pub preliminary: Preliminary,
-    /// Skip the preliminary distortion correction (same as --preliminary off)
-    #[arg(long, conflicts_with = "preliminary")]
-    pub no_preliminary: bool,
-    /// Skip the data normalisation of the homographies
-    #[arg(long)]
-    pub no_normalize: bool,
-    /// Robust loss: huber:SCALE or cauchy:SCALE (SCALE in mm of the cost)
-    #[arg(long, value_name = "LOSS:SCALE", value_parser = parse_robust)]
-    pub robust: Option<RobustLoss>,
-    /// Covariance of the estimate: linear (analytic, the default) or
-    /// bootstrap:N[:SEED] (N ≥ 10 refits of images resampled with
-    /// replacement; seed 1 by default), where the linear one is not enough
-    #[arg(long, value_name = "METHOD", default_value = "linear", value_parser = parse_uncertainty)]
-    pub uncertainty: Uncertainty,
-    /// The PSD's non-linearity map from `psdcal psd-map`, first in the
-    /// model and held fixed (its uncertainty carried)
-    #[arg(long, value_name = "FILE")]
-    pub psd_map: Option<PathBuf>,
-    /// Refine the PSD map's coefficients too, its scan's covariance as their prior
-    #[arg(long, requires = "psd_map")]
-    pub refine_psd_map: bool,
-    /// Value of a fixed parameter, NAME=VALUE (repeatable), e.g. l1=-1.3058e-3
-    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_assignment, allow_negative_numbers = true)]
-    pub set: Vec<(Param, f64)>,
-    /// Channel gains from `psdcal gains` (gains.json), divided out of the
-    /// amplitudes and held fixed (needs --signals)
-    #[arg(long, value_name = "FILE")]
-    pub gains: Option<PathBuf>,
-    /// Also write every point's residuals to this CSV
-    #[arg(long, value_name = "FILE")]
-    pub residuals: Option<PathBuf>,
-}
-
-/// Correct measured points (or electrode amplitudes) to ideal points with a calibration
-#[derive(Debug, Clone, PartialEq, Args)]
-pub struct CorrectArgs {
-    /// Calibration written by psdcal (calibration.json)
-    #[arg(long, short = 'c', value_name = "FILE")]
-    pub calibration: PathBuf,
-    /// Points to correct: x_mm, y_mm (or vx1, vx2, vy1, vy2), other columns kept
-    #[arg(long, short = 'p', value_name = "FILE")]
-    pub points: PathBuf,
-    /// Output CSV (written atomically); standard output when absent
-    #[arg(long, value_name = "FILE")]
-    pub out: Option<PathBuf>,
-}
-
-/// How results are shown.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Output {
-    /// Human-readable summary on standard output.
-    Text,
-    /// No summary.
-    Quiet,
-    /// JSON on standard output.
-    Json,
-}
-
-/// Validated configuration of `psdcal calibrate`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CalibrateConfig {
-    pub files: DataSetFiles,
-    pub load: LoadOptions,
-    pub out: PathBuf,
-    pub residuals: Option<PathBuf>,
-    pub options: CalibrationOptions,
-}
-
 /// What to run.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Job {
@@ -254,9 +129,16 @@ pub enum Job {
 }
 
 impl Cli {
+    /// The bounds of the files read whole (`--max-input-mb`).
+    pub fn read_limits(&self) -> ReadLimits {
+        self.max_input_mb
+            .map_or_else(ReadLimits::default, ReadLimits::from_mib)
+    }
+
     /// The output mode and the job; a combination clap cannot express is a
     /// usage error (exit 2).
     pub fn into_job(self) -> Result<(Output, Job), clap::Error> {
+        let limits = self.read_limits();
         let output = if self.json {
             Output::Json
         } else if self.quiet {
@@ -266,7 +148,7 @@ impl Cli {
         };
         let job = match self.command {
             Command::Check(args) => {
-                let (files, load) = args.into_files(None)?;
+                let (files, load) = args.into_files(None, limits)?;
                 Job::Check(files, load)
             }
             Command::Gains(args) => Job::Gains(args),
@@ -281,7 +163,7 @@ impl Cli {
             }
             Command::Locate(args) => Job::Locate(args.into_config(output)?),
             Command::Map(args) => {
-                let (request, out) = args.into_config(output)?;
+                let (request, out) = args.into_config(output, limits)?;
                 Job::Map(request, out)
             }
             Command::Report(args) => Job::Report(args),
@@ -295,7 +177,7 @@ impl Cli {
             Command::FocalCheck(args) => Job::FocalCheck(args),
             Command::CalibrateInSitu(args) => Job::CalibrateInSitu(args),
             Command::Calibrate(args) => {
-                let (files, load) = args.data.into_files(args.gains)?;
+                let (files, load) = args.data.into_files(args.gains, limits)?;
                 let FitList(free, fit_gains) = args.fit;
                 let options = CalibrationOptions {
                     free,
@@ -305,7 +187,7 @@ impl Cli {
                     cost: args.cost,
                     noise: args.noise,
                     preliminary: if args.no_preliminary {
-                        Preliminary::Off
+                        psdcal::Preliminary::Off
                     } else {
                         args.preliminary
                     },
@@ -333,40 +215,5 @@ impl Cli {
             }
         };
         Ok((output, job))
-    }
-}
-
-impl DataSetArgs {
-    /// The files (with `gains`) and load options; the points come from
-    /// exactly one of `--observations` and `--signals` (clap's group makes
-    /// one required; this refuses both).
-    pub(crate) fn into_files(
-        self,
-        gains: Option<PathBuf>,
-    ) -> Result<(DataSetFiles, LoadOptions), clap::Error> {
-        let points = match (self.observations, self.signals) {
-            (Some(path), None) => PointSource::Observations(path),
-            (None, Some(path)) => PointSource::Signals(path),
-            _ => {
-                return Err(Cli::command().error(
-                    clap::error::ErrorKind::ArgumentConflict,
-                    "give exactly one of --observations and --signals",
-                ))
-            }
-        };
-        let files = DataSetFiles {
-            template: self.template,
-            points,
-            gains,
-        };
-        let geometry = PsdGeometry {
-            lx: self.lx,
-            ly: self.ly,
-        };
-        let load = LoadOptions {
-            geometry,
-            strict: self.strict,
-        };
-        Ok((files, load))
     }
 }

@@ -3,16 +3,16 @@
 
 use std::path::PathBuf;
 
-use clap::{ArgGroup, Args, CommandFactory};
+use clap::{ArgGroup, Args};
 use psdcal::option_text::{
     angle_deg, grid_size, non_negative_mm, parse_error_list, parse_plane, positive_mm,
     within_k_sigma,
 };
-use psdcal::{LocateOptions, MapRequest, Param, Plane};
+use psdcal::{LocateOptions, MapRequest, Param, Plane, ReadLimits};
 pub use psdcal::{LocateTarget, MapModel, MapSource};
 
 use crate::choice::LensArg;
-use crate::cli::{Cli, Output};
+use crate::report::Output;
 
 /// Angles of arrival of measured points (or amplitudes) with their uncertainty
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -115,7 +115,7 @@ pub struct LocateConfig {
 }
 
 fn usage(kind: clap::error::ErrorKind, message: impl std::fmt::Display) -> clap::Error {
-    Cli::command().error(kind, message)
+    clap::Error::raw(kind, message)
 }
 
 pub(crate) fn json_needs_out(
@@ -173,8 +173,13 @@ impl LocateArgs {
 }
 
 impl MapArgs {
-    /// The map's request and where its table goes.
-    pub fn into_config(self, output: Output) -> Result<(MapRequest, Option<PathBuf>), clap::Error> {
+    /// The map's request (its calibration read within `limits`) and where
+    /// its table goes.
+    pub fn into_config(
+        self,
+        output: Output,
+        limits: ReadLimits,
+    ) -> Result<(MapRequest, Option<PathBuf>), clap::Error> {
         json_needs_out("map", &self.out, output)?;
         let conflict = |m: &str| usage(clap::error::ErrorKind::ArgumentConflict, m);
         if self.k_sigma.is_some() && self.calibration.is_none() {
@@ -208,6 +213,7 @@ impl MapArgs {
             distance_mm: self.distance,
             grid: self.grid,
             paper: self.paper,
+            limits,
         };
         Ok((request, self.out))
     }

@@ -3,7 +3,8 @@
 
 use psdcal::{calibrate, DataSet};
 
-use crate::cli::{CalibrateConfig, Output};
+use crate::args::CalibrateConfig;
+use crate::report::Output;
 use crate::report::{emit, print_warnings};
 
 /// Runs `calibrate`.

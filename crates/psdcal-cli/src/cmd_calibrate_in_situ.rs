@@ -9,7 +9,7 @@ use clap::Args;
 use psdcal::option_text::non_negative_mm;
 use psdcal::DataSet;
 
-use crate::cli::Output;
+use crate::report::Output;
 
 /// Calibrate a mounted sensor in situ from emitters at surveyed 3-D positions (its pose in the room too)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -17,7 +17,7 @@ pub struct InSituArgs {
     /// The surveyed emitters (template.csv with Z_mm, room frame) and the
     /// measured points, one image per sensor orientation
     #[command(flatten)]
-    pub data: crate::cli::DataSetArgs,
+    pub data: crate::args::DataSetArgs,
     /// The survey's standard deviation per coordinate, mm
     #[arg(long, value_name = "MM", default_value_t = 0.0, value_parser = non_negative_mm, allow_negative_numbers = true)]
     pub survey_sigma: f64,
@@ -33,8 +33,9 @@ pub struct InSituArgs {
 }
 
 /// Runs `calibrate-in-situ`.
-pub fn run(config: &InSituArgs, output: Output) -> anyhow::Result<()> {
-    let (files, load) = config.data.clone().into_files(config.gains.clone())?;
+pub fn run(config: &InSituArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+    let gains = config.gains.clone();
+    let (files, load) = config.data.clone().into_files(gains, limits)?;
     let set = DataSet::from_files(&files, &load)?;
     crate::report::print_warnings(set.warnings());
     let mut result = psdcal::calibrate_in_situ(&set, config.survey_sigma)?;

@@ -2,8 +2,8 @@
 
 use psdcal::{DataSet, DataSetFiles, LoadOptions};
 
-use crate::cli::Output;
 use crate::report::print_warnings;
+use crate::report::Output;
 
 /// Runs `check`.
 pub fn run(files: &DataSetFiles, load: &LoadOptions, output: Output) -> anyhow::Result<()> {

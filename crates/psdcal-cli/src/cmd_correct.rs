@@ -1,12 +1,13 @@
 //! `psdcal correct`: measured points (or amplitudes) → ideal points, with
 //! a status per row.
 
-use crate::cli::{CorrectArgs, Output};
+use crate::args::CorrectArgs;
+use crate::report::Output;
 
 /// Runs `correct`.
-pub fn run(args: &CorrectArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(args: &CorrectArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let out = args.out.as_deref();
-    let corrected = psdcal::correct(&args.calibration, &args.points, out)?;
+    let corrected = psdcal::correct(&args.calibration, &args.points, out, limits)?;
     let summary = corrected.answer.summary(
         "correct",
         "corrected",

@@ -1,8 +1,8 @@
 //! `psdcal demo`: the main job on built-in data (the library's `demo`),
 //! printed.
 
-use crate::cli::Output;
 use crate::cli_sim::DemoArgs;
+use crate::report::Output;
 
 /// Runs `demo`.
 pub fn run(args: &DemoArgs, output: Output) -> anyhow::Result<()> {

@@ -5,7 +5,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::cli::Output;
+use crate::report::Output;
+use psdcal::ReadLimits;
 
 /// Demodulate a raw recording (raw.csv, raw.npy) into signals.csv with a per-record SNR
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -37,7 +38,7 @@ pub struct DemodulateArgs {
 }
 
 /// Runs `demodulate`.
-pub fn run(args: &DemodulateArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(args: &DemodulateArgs, output: Output, limits: ReadLimits) -> anyhow::Result<()> {
     let request = psdcal::DemodulateRequest {
         raw: args.raw.clone(),
         rate_hz: args.rate,
@@ -50,6 +51,7 @@ pub fn run(args: &DemodulateArgs, output: Output) -> anyhow::Result<()> {
             ..psdcal::DemodConfig::default()
         },
         channels: args.channels.clone(),
+        limits,
     };
     let done = psdcal::demodulate(&request)?;
     let summary = psdcal::Summary::new(done.summary(&args.out), done.to_json());

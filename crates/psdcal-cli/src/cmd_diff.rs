@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::cli::Output;
+use crate::report::Output;
 
 /// Two calibrations of one sensor compared in angles over the active area (did it drift?)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -28,13 +28,14 @@ pub struct DiffArgs {
 }
 
 /// Runs `diff`.
-pub fn run(args: &DiffArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(args: &DiffArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let done = psdcal::diff(&psdcal::DiffRequest {
         a: args.a.clone(),
         b: args.b.clone(),
         grid: args.grid,
         out: args.out.clone(),
         report: args.report.clone(),
+        limits,
     })?;
     let summary = psdcal::Summary::new(done.summary(), done.to_json());
     crate::report::emit(output, &summary.warn(&done.warnings))

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::cli::Output;
+use crate::report::Output;
 
 /// Judge estimated positions against a surveyed truth (mean, RMS, 75th/95th percentiles, CE95, SE95, honest error bars)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -25,11 +25,12 @@ pub struct EvaluateArgs {
 }
 
 /// Runs `evaluate`.
-pub fn run(args: &EvaluateArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(args: &EvaluateArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let evaluation = psdcal::evaluate(&psdcal::EvaluateRequest {
         truth: args.truth.clone(),
         estimates: args.estimates.clone(),
         rig: args.rig.clone(),
+        limits,
     })?;
     let files = match &args.report {
         Some(dir) => evaluation.write_report(dir)?,

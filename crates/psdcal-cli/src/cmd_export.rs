@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::choice::ExportTo;
-use crate::cli::Output;
+use crate::report::Output;
 
 /// A calibration as an OpenCV, mrcal or ROS camera model (fitted, with its error)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -29,13 +29,14 @@ pub struct ExportArgs {
 }
 
 /// Runs `export`.
-pub fn run(args: &ExportArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(args: &ExportArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let done = psdcal::export(&psdcal::ExportRequest {
         calibration: args.calibration.clone(),
         target: args.to.into(),
         pixel_um: args.pixel_um,
         max_error_deg: args.max_error_deg,
         out: args.out.clone(),
+        limits,
     })?;
     let summary = psdcal::Summary::new(done.summary(), done.to_json());
     crate::report::emit(output, &summary.warn(&done.warnings))

@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use crate::report::Output;
 use clap::Args;
 use psdcal::option_text::{parse_sides_mm, positive_mm};
 
@@ -28,13 +29,14 @@ pub struct FocalCheckArgs {
 }
 
 /// Runs `focal-check`.
-pub fn run(a: &FocalCheckArgs, output: crate::cli::Output) -> anyhow::Result<()> {
+pub fn run(a: &FocalCheckArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let check = psdcal::focal_check(&psdcal::FocalCheckRequest {
         calibration: a.calibration.clone(),
         points: a.points.clone(),
         distance_mm: a.distance,
         distance_sigma_mm: a.distance_sigma,
         size_mm: a.size,
+        limits,
     })?;
     let summary = psdcal::Summary::new(check.text.clone(), check.json.clone());
     crate::report::emit(output, &summary)

@@ -1,7 +1,7 @@
 //! `psdcal gains`: relative channel gains from equal-current records.
 
 use crate::choice::GainsMethodArg;
-use crate::cli::Output;
+use crate::report::Output;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -20,8 +20,8 @@ pub struct GainsArgs {
 }
 
 /// Runs `gains` (without `--out`, gains.json goes to standard output).
-pub fn run(args: &GainsArgs, output: Output) -> anyhow::Result<()> {
-    let file = psdcal::estimate_gains(&args.signals, args.method.into())?;
+pub fn run(args: &GainsArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+    let file = psdcal::estimate_gains(&args.signals, args.method.into(), limits)?;
     match &args.out {
         Some(path) => psdcal_io::write_gains(path, &file)?,
         None if output != Output::Json => {

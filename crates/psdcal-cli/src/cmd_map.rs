@@ -5,7 +5,7 @@ use std::path::Path;
 
 use psdcal::MapRequest;
 
-use crate::cli::Output;
+use crate::report::Output;
 
 /// Runs `map`.
 pub fn run(request: &MapRequest, out: Option<&Path>, output: Output) -> anyhow::Result<()> {

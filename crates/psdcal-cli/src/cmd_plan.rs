@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use crate::report::Output;
 use clap::Args;
 use psdcal::option_text::{
     parse_assignment, parse_fit, parse_images, parse_range_mm, parse_sides_mm, parse_snr,
@@ -68,7 +69,7 @@ pub struct PlanArgs {
 }
 
 /// Runs `plan`.
-pub fn run(a: &PlanArgs, output: crate::cli::Output) -> anyhow::Result<()> {
+pub fn run(a: &PlanArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let planned = psdcal::plan_poses(&psdcal::PlanRequest {
         f_mm: a.f,
         template: a.template.clone(),
@@ -88,6 +89,7 @@ pub fn run(a: &PlanArgs, output: crate::cli::Output) -> anyhow::Result<()> {
         next: a.calibration.clone().filter(|_| a.next),
         out: a.out.clone(),
         report: a.report.clone(),
+        limits,
     })?;
     let summary = psdcal::Summary::new(planned.text.clone(), planned.json.clone());
     crate::report::emit(output, &summary)

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use psdcal::{PsdGeometry, PsdMapModel, PsdMapRequest};
 
-use crate::cli::Output;
+use crate::report::Output;
 use psdcal::option_text::side_mm;
 
 /// The PSD's own non-linearity map from a lensless scan (psd_map.json for calibrate --psd-map)
@@ -36,7 +36,7 @@ pub struct PsdMapArgs {
 }
 
 /// Runs `psd-map`.
-pub fn run(args: &PsdMapArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(args: &PsdMapArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let request = PsdMapRequest {
         scan: args.scan.clone(),
         model: args.model,
@@ -47,6 +47,7 @@ pub fn run(args: &PsdMapArgs, output: Output) -> anyhow::Result<()> {
         seed: args.seed,
         command: std::env::args().collect::<Vec<_>>().join(" "),
         report: args.report.clone(),
+        limits,
     };
     let outcome = psdcal::psd_map_from_scan(&request)?;
     outcome.write(&args.out)?;

@@ -5,7 +5,7 @@ use clap::Args;
 use psdcal::ReportRequest;
 use std::path::PathBuf;
 
-use crate::cli::Output;
+use crate::report::Output;
 
 /// A self-contained HTML report of a calibration with its plots (SVG and PNG)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -25,11 +25,12 @@ pub struct ReportArgs {
 }
 
 /// Runs `report`.
-pub fn run(args: &ReportArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(args: &ReportArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let written = psdcal::write_report(&ReportRequest {
         calibration: args.calibration.clone(),
         data: args.template.clone().zip(args.observations.clone()),
         out: args.out.clone(),
+        limits,
     })?;
     crate::report::emit(output, &written.summary(&args.out))
 }

@@ -3,11 +3,11 @@
 
 use psdcal::SimulateRequest;
 
-use crate::cli::Output;
 use crate::cli_sim::SimulateArgs;
+use crate::report::Output;
 
 /// Runs `simulate`.
-pub fn run(args: &SimulateArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(args: &SimulateArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let request = SimulateRequest {
         lens: args.lens.into(),
         snr_db: args.snr,
@@ -22,7 +22,7 @@ pub fn run(args: &SimulateArgs, output: Output) -> anyhow::Result<()> {
     };
     let (written, files) = match (args.raw, &args.poses) {
         (None, Some(poses)) => (
-            psdcal::simulate_files_at_poses(&request, poses)?,
+            psdcal::simulate_files_at_poses(&request, poses, limits)?,
             Vec::new(),
         ),
         (None, None) => (psdcal::simulate_files(&request)?, Vec::new()),

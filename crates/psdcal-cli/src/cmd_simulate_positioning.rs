@@ -7,7 +7,7 @@ use clap::Args;
 use psdcal::{PositioningRequest, RoomOptions};
 
 use crate::choice::{choice, LensArg};
-use crate::cli::Output;
+use crate::report::Output;
 use psdcal::option_text::positive_mm;
 use psdcal::option_text::{parse_images, parse_snr};
 

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use psdcal::{PsdGeometry, ScanRequest};
 
-use crate::cli::Output;
+use crate::report::Output;
 use psdcal::option_text::side_mm;
 
 /// Simulate a lensless raster scan of the PSD (scan.csv for psd-map)

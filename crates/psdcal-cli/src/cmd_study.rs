@@ -11,7 +11,7 @@ use std::sync::Arc;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use psdcal::StudyRequest;
 
-use crate::cli::Output;
+use crate::report::Output;
 
 /// Runs `study`.
 pub fn run(config: &StudyRequest, output: Output) -> anyhow::Result<()> {

@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use crate::report::Output;
 use clap::Args;
 
 /// Angles of arrival per window and LED from raw samples on standard input (live)
@@ -38,7 +39,7 @@ pub struct TrackArgs {
 }
 
 /// Runs `track` (a summary on standard error unless quiet).
-pub fn run(args: &TrackArgs, output: crate::cli::Output) -> anyhow::Result<()> {
+pub fn run(args: &TrackArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let target = match (&args.rig, &args.calibration) {
         (Some(rig), _) => psdcal::TrackTarget::Rig(rig.clone()),
         (None, Some(c)) => psdcal::TrackTarget::Sensor(c.clone()),
@@ -52,9 +53,10 @@ pub fn run(args: &TrackArgs, output: crate::cli::Output) -> anyhow::Result<()> {
         config: psdcal::DemodConfig::default(),
         raw: args.raw.clone(),
         channels: args.channels.clone(),
+        limits,
     };
     let summary = psdcal::track(&request, std::io::stdin().lock(), std::io::stdout().lock())?;
-    if output != crate::cli::Output::Quiet {
+    if output != Output::Quiet {
         eprintln!(
             "track: {} samples, {} windows, {} malformed lines",
             summary.samples, summary.windows, summary.malformed

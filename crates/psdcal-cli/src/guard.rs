@@ -15,7 +15,11 @@ use clap::{ArgMatches, Command};
 
 /// Refuses a command whose output is one of its inputs (or two outputs that
 /// are one file); `command` is the definition `matches` were parsed with.
-pub fn check(command: &Command, matches: &ArgMatches) -> Result<(), psdcal::IoError> {
+pub fn check(
+    command: &Command,
+    matches: &ArgMatches,
+    limits: psdcal::ReadLimits,
+) -> Result<(), psdcal::IoError> {
     let Some((name, given)) = matches.subcommand() else {
         return Ok(());
     };
@@ -47,7 +51,7 @@ pub fn check(command: &Command, matches: &ArgMatches) -> Result<(), psdcal::IoEr
                 }
                 (_, true) => {
                     if id == "rig" {
-                        inputs.extend(listed_calibrations(&path));
+                        inputs.extend(listed_calibrations(&path, limits));
                     }
                     inputs.push((option.clone(), path));
                 }
@@ -60,8 +64,8 @@ pub fn check(command: &Command, matches: &ArgMatches) -> Result<(), psdcal::IoEr
 
 /// The calibrations a rig file lists (none when it cannot be read: that is
 /// the command's own error, reported when it runs).
-fn listed_calibrations(rig: &Path) -> Vec<(String, PathBuf)> {
-    psdcal_io::read_rig(rig).map_or_else(
+fn listed_calibrations(rig: &Path, limits: psdcal::ReadLimits) -> Vec<(String, PathBuf)> {
+    psdcal_io::read_rig_with(rig, limits).map_or_else(
         |_| Vec::new(),
         |file| {
             file.sensors

@@ -5,6 +5,7 @@
 //! Exit codes: 0 success, 1 failure (one `error: ...` line on stderr),
 //! 2 usage error (clap, or an output that is one of the inputs).
 
+pub mod args;
 pub mod choice;
 pub mod cli;
 pub mod cli_locate;
@@ -32,7 +33,7 @@ pub mod cmd_simulate_scan;
 mod cmd_study;
 pub mod cmd_track;
 mod guard;
-mod report;
+pub mod report;
 
 use std::process::ExitCode;
 
@@ -43,49 +44,47 @@ use crate::cli::{Cli, Job};
 /// Parses the arguments, runs the job and prints; the process's exit code.
 pub fn main() -> ExitCode {
     // Parsed in its own scope: the job reuses clap's ~150 KB once it is freed.
-    let (output, job) = {
+    let (output, job, limits) = {
         let mut command = Cli::command();
         let matches = command.get_matches_mut();
         let cli = match Cli::from_arg_matches(&matches) {
             Ok(cli) => cli,
             Err(usage) => usage.exit(),
         };
-        if let Some(mb) = cli.max_input_mb {
-            psdcal_io::set_max_file_bytes(mb << 20);
-        }
-        let parsed = match cli.into_job() {
+        let limits = cli.read_limits();
+        let (output, job) = match cli.into_job() {
             Ok(parsed) => parsed,
-            Err(usage) => usage.exit(),
+            Err(usage) => usage.format(&mut Cli::command()).exit(),
         };
-        if let Err(clash) = guard::check(&command, &matches) {
+        if let Err(clash) = guard::check(&command, &matches, limits) {
             eprintln!("error: {clash}");
             return ExitCode::from(2);
         }
-        parsed
+        (output, job, limits)
     };
     let result = match &job {
         Job::Check(files, load) => cmd_check::run(files, load, output),
         Job::Calibrate(config) => cmd_calibrate::run(config, output),
-        Job::Gains(args) => cmd_gains::run(args, output),
-        Job::PsdMap(args) => cmd_psd_map::run(args, output),
+        Job::Gains(args) => cmd_gains::run(args, output, limits),
+        Job::PsdMap(args) => cmd_psd_map::run(args, output, limits),
         Job::SimulateScan(args) => cmd_simulate_scan::run(args, output),
-        Job::Simulate(args) => cmd_simulate::run(args, output),
+        Job::Simulate(args) => cmd_simulate::run(args, output, limits),
         Job::Study(config) => cmd_study::run(config, output),
         Job::Demo(args) => cmd_demo::run(args, output),
-        Job::Demodulate(args) => cmd_demodulate::run(args, output),
-        Job::Track(args) => cmd_track::run(args, output),
-        Job::Plan(args) => cmd_plan::run(args, output),
-        Job::FocalCheck(args) => cmd_focal_check::run(args, output),
-        Job::CalibrateInSitu(args) => cmd_calibrate_in_situ::run(args, output),
-        Job::Correct(config) => cmd_correct::run(config, output),
-        Job::Aoa(config) => cmd_aoa::run(config, output),
-        Job::Locate(config) => cmd_locate::run(config, output),
+        Job::Demodulate(args) => cmd_demodulate::run(args, output, limits),
+        Job::Track(args) => cmd_track::run(args, output, limits),
+        Job::Plan(args) => cmd_plan::run(args, output, limits),
+        Job::FocalCheck(args) => cmd_focal_check::run(args, output, limits),
+        Job::CalibrateInSitu(args) => cmd_calibrate_in_situ::run(args, output, limits),
+        Job::Correct(config) => cmd_correct::run(config, output, limits),
+        Job::Aoa(config) => cmd_aoa::run(config, output, limits),
+        Job::Locate(config) => cmd_locate::run(config, output, limits),
         Job::Map(request, out) => cmd_map::run(request, out.as_deref(), output),
-        Job::Report(config) => cmd_report::run(config, output),
-        Job::Evaluate(args) => cmd_evaluate::run(args, output),
+        Job::Report(config) => cmd_report::run(config, output, limits),
+        Job::Evaluate(args) => cmd_evaluate::run(args, output, limits),
         Job::SimulatePositioning(args) => cmd_simulate_positioning::run(args, output),
-        Job::Export(args) => cmd_export::run(args, output),
-        Job::Diff(args) => cmd_diff::run(args, output),
+        Job::Export(args) => cmd_export::run(args, output, limits),
+        Job::Diff(args) => cmd_diff::run(args, output, limits),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

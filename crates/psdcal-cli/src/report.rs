@@ -3,10 +3,19 @@
 
 use psdcal_io::IoError;
 
-use crate::cli::Output;
+/// How results are shown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Output {
+    /// Human-readable summary on standard output.
+    Text,
+    /// No summary.
+    Quiet,
+    /// JSON on standard output.
+    Json,
+}
 
 /// At most this many warnings are printed one by one.
-const MAX_WARNINGS: usize = 50;
+pub const MAX_WARNINGS: usize = 50;
 
 /// The error the library wrapped, so that its message and hint are the
 /// lower crate's own.

@@ -3,7 +3,9 @@
 
 use clap::{CommandFactory, Parser};
 use psdcal::{DataSetFiles, LoadOptions};
-use psdcal_cli::cli::{Cli, CorrectArgs, Job, Output, PointSource};
+use psdcal_cli::args::CorrectArgs;
+use psdcal_cli::cli::{Cli, Job, PointSource};
+use psdcal_cli::report::Output;
 use psdcal_model::PsdGeometry;
 
 fn parse(args: &[&str]) -> Result<(Output, Job), clap::Error> {
@@ -30,6 +32,7 @@ fn check_with_observations_and_defaults() {
             LoadOptions {
                 geometry: PsdGeometry { lx: 9.0, ly: 9.0 },
                 strict: false,
+                limits: Default::default(),
             }
         )
     );

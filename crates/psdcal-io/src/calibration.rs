@@ -46,7 +46,9 @@ use psdcal_model::{
 use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomic_bytes;
-use crate::error::{json_error, IoError, Location};
+use crate::error::{json_error, IoError};
+use crate::limits::ReadLimits;
+use crate::location::Location;
 
 mod provenance;
 mod psd_map_stage;
@@ -314,9 +316,17 @@ impl Calibration {
 
 /// Reads and validates calibration.json.
 pub fn read_calibration(path: impl AsRef<Path>) -> Result<Calibration, IoError> {
+    read_calibration_with(path, ReadLimits::default())
+}
+
+/// [`read_calibration`] within `limits` (docs/formats.md, "Limits").
+pub fn read_calibration_with(
+    path: impl AsRef<Path>,
+    limits: ReadLimits,
+) -> Result<Calibration, IoError> {
     let path = path.as_ref();
     let source = path.display().to_string();
-    let bytes = crate::limits::read_bounded(path)?;
+    let bytes = crate::limits::read_bounded(path, limits)?;
     Calibration::from_json_bytes(&source, &bytes)
 }
 

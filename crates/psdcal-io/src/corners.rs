@@ -10,7 +10,9 @@ use std::path::Path;
 use nalgebra::Vector2;
 
 use crate::csv_table::CsvTable;
-use crate::error::{IoError, Location};
+use crate::error::IoError;
+use crate::limits::ReadLimits;
+use crate::location::Location;
 
 const COLUMNS: &str = "corner, x_mm, y_mm (optional sigma_mm)";
 
@@ -39,7 +41,12 @@ pub struct Corners {
 impl Corners {
     /// Reads the corners file.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        let table = CsvTable::read_path(path.as_ref(), COLUMNS)?;
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
+        let table = CsvTable::read_path(path.as_ref(), COLUMNS, limits)?;
         table.require_rows()?;
         let (id, x, y) = (
             table.column("corner")?,

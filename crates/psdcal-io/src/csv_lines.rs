@@ -10,8 +10,9 @@
 
 use std::io::{BufRead, Read};
 
-use crate::error::{IoError, Location};
+use crate::error::IoError;
 use crate::limits::{bytes_text, too_large, MAX_LINE_BYTES};
+use crate::location::Location;
 
 /// Physical lines of a text input.
 pub(crate) struct LineReader<R> {

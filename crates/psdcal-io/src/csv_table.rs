@@ -24,8 +24,9 @@ use std::path::Path;
 
 use crate::csv_fields::split_fields;
 use crate::csv_lines::LineReader;
-use crate::error::{quoted, ColumnRef, IoError, Location};
-use crate::limits::{excerpt, max_file_bytes};
+use crate::error::{quoted, ColumnRef, IoError};
+use crate::limits::{excerpt, ReadLimits};
+use crate::location::Location;
 
 /// A parsed CSV file: its header and its data records, with line numbers.
 #[derive(Debug, Clone)]
@@ -71,25 +72,30 @@ impl Col {
 }
 
 impl CsvTable {
-    /// Reads and parses a file (at most [`max_file_bytes`]); `expected`
-    /// lists the format's columns for messages.
-    pub fn read_path(path: &Path, expected: &'static str) -> Result<Self, IoError> {
-        let stream = CsvStream::open(path, expected, Some(max_file_bytes()))?;
+    /// Reads and parses a file (within `limits`); `expected` lists the
+    /// format's columns for messages.
+    pub fn read_path(
+        path: &Path,
+        expected: &'static str,
+        limits: ReadLimits,
+    ) -> Result<Self, IoError> {
+        let stream = CsvStream::open(path, expected, Some(limits.max_file_bytes))?;
         stream.collect_rows()
     }
 
-    /// Reads everything from `reader` (at most [`max_file_bytes`]) and parses
-    /// it; `source` names it in messages.
+    /// Reads everything from `reader` (within `limits`) and parses it;
+    /// `source` names it in messages.
     pub fn from_reader(
         source: &str,
         reader: impl Read,
         expected: &'static str,
+        limits: ReadLimits,
     ) -> Result<Self, IoError> {
         let stream = CsvStream::new(
             source,
             BufReader::new(reader),
             expected,
-            Some(max_file_bytes()),
+            Some(limits.max_file_bytes),
         )?;
         stream.collect_rows()
     }

@@ -17,44 +17,8 @@ use std::fmt;
 use psdcal_model::ModelError;
 use thiserror::Error;
 
+use crate::location::Location;
 use crate::warning::Warning;
-
-/// A place in a file: its name as given by the user and, when the problem
-/// sits on a line, the 1-based physical line number.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Location {
-    /// File name or path, as shown to the user.
-    pub file: String,
-    /// 1-based physical line, if the problem is on one line.
-    pub line: Option<usize>,
-}
-
-impl Location {
-    /// A location on a line of a file.
-    pub fn line(file: &str, line: usize) -> Self {
-        Self {
-            file: file.to_string(),
-            line: Some(line),
-        }
-    }
-
-    /// A location for a whole file.
-    pub fn file(file: &str) -> Self {
-        Self {
-            file: file.to_string(),
-            line: None,
-        }
-    }
-}
-
-impl fmt::Display for Location {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.line {
-            Some(line) => write!(f, "{}:{}", self.file, line),
-            None => f.write_str(&self.file),
-        }
-    }
-}
 
 /// A CSV column: its header name and 1-based position.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -282,29 +246,6 @@ pub(crate) fn json_error(source: &str, e: &serde_json::Error) -> IoError {
         column: e.column(),
         message: shown,
     }
-}
-
-/// A file read whole (within the size limit) as UTF-8 text.
-pub(crate) fn read_text(path: &std::path::Path) -> Result<String, IoError> {
-    let source = path.display().to_string();
-    utf8_text(&source, crate::limits::read_bounded(path)?)
-}
-
-/// [`read_text`] from a reader; `source` names it in messages.
-pub(crate) fn read_text_from(source: &str, reader: impl std::io::Read) -> Result<String, IoError> {
-    utf8_text(source, crate::limits::read_all_bounded(source, reader)?)
-}
-
-fn utf8_text(source: &str, bytes: Vec<u8>) -> Result<String, IoError> {
-    String::from_utf8(bytes).map_err(|e| {
-        let offset = e.utf8_error().valid_up_to();
-        IoError::Encoding {
-            at: Location::file(source),
-            message: format!(
-                "the byte at offset {offset} is not UTF-8; expected a UTF-8 JSON file"
-            ),
-        }
-    })
 }
 
 /// A raw field as shown in messages: quoted, control characters escaped,

@@ -10,6 +10,7 @@ use psdcal_model::ChannelGains;
 use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomic_bytes;
+use crate::limits::ReadLimits;
 use crate::{IoError, Location};
 
 /// The format name of gains.json.
@@ -87,16 +88,33 @@ pub fn write_gains(path: impl AsRef<Path>, file: &GainsFile) -> Result<(), IoErr
 
 /// Reads and checks gains.json.
 pub fn read_gains(path: impl AsRef<Path>) -> Result<GainsFile, IoError> {
+    read_gains_with(path, ReadLimits::default())
+}
+
+/// [`read_gains`] within `limits` (docs/formats.md, "Limits").
+pub fn read_gains_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<GainsFile, IoError> {
     let path = path.as_ref();
     let source = path.display().to_string();
-    GainsFile::from_json_str(&source, &crate::error::read_text(path)?)
+    GainsFile::from_json_str(&source, &crate::limits::read_text(path, limits)?)
 }
 
 impl GainsFile {
     /// Reads and checks gains.json from a reader; `source` names it in
     /// messages.
     pub fn from_reader(source: &str, reader: impl std::io::Read) -> Result<Self, IoError> {
-        Self::from_json_str(source, &crate::error::read_text_from(source, reader)?)
+        Self::from_reader_with(source, reader, ReadLimits::default())
+    }
+
+    /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
+    pub fn from_reader_with(
+        source: &str,
+        reader: impl std::io::Read,
+        limits: ReadLimits,
+    ) -> Result<Self, IoError> {
+        Self::from_json_str(
+            source,
+            &crate::limits::read_text_from(source, reader, limits)?,
+        )
     }
 
     /// Checks gains.json text; `source` names it in messages.

@@ -50,6 +50,7 @@ mod error;
 mod export;
 mod gains_file;
 mod limits;
+mod location;
 mod number_text;
 mod observations;
 mod points;
@@ -58,6 +59,7 @@ mod positioning;
 mod psd_map_file;
 mod raw;
 mod raw_csv;
+mod raw_frame;
 mod rig;
 mod rig_observations;
 mod same_file;
@@ -76,39 +78,43 @@ mod warning;
 
 pub use atomic::{write_atomic, write_atomic_bytes};
 pub use calibration::{
-    read_calibration, write_calibration, BootstrapRecord, Calibration, CostKind, Covariance,
-    Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile, IntrinsicsRecord, Provenance,
-    PsdMapScanRecord, PsdMapStageCovariance, PsdMapStageRecord, ScanResidualCells, SensorSize,
-    Software, StdDevs, ValidRegionRecord, CALIBRATION_FORMAT, CALIBRATION_VERSION, GAIN_NAMES,
+    read_calibration, read_calibration_with, write_calibration, BootstrapRecord, Calibration,
+    CostKind, Covariance, Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile,
+    IntrinsicsRecord, Provenance, PsdMapScanRecord, PsdMapStageCovariance, PsdMapStageRecord,
+    ScanResidualCells, SensorSize, Software, StdDevs, ValidRegionRecord, CALIBRATION_FORMAT,
+    CALIBRATION_VERSION, GAIN_NAMES,
 };
 pub use camera_model_file::{float_text, write_camera_model, CameraFormat, CameraModelFile};
 pub use corners::{Corner, Corners};
 pub use coverage::{Bounds, Coverage};
 pub use csv_field::csv_field;
-pub use error::{ColumnRef, IoError, Location};
+pub use error::{ColumnRef, IoError};
 pub use export::{
     write_observations, write_signals, write_template, ObservationRow, SignalRowOut, TemplateLed,
 };
-pub use gains_file::{read_gains, write_gains, GainStd, GainsFile, GAINS_FORMAT};
+pub use gains_file::{read_gains, read_gains_with, write_gains, GainStd, GainsFile, GAINS_FORMAT};
 pub use limits::{
-    max_file_bytes, read_all_bounded, read_bounded, set_max_file_bytes, DEFAULT_MAX_FILE_BYTES,
-    MAX_EXCERPT_CHARS, MAX_LINE_BYTES,
+    read_all_bounded, read_bounded, ReadLimits, DEFAULT_MAX_FILE_BYTES, MAX_EXCERPT_CHARS,
+    MAX_LINE_BYTES,
 };
+pub use location::Location;
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
 pub use poses::{write_poses, PoseRow, Poses};
 pub use positioning::{EstimateRow, MatchedEstimate, PositionEstimates, PositionTruth, TruthRow};
 pub use psd_map_file::{
-    psd_map_from_reader, read_psd_map, write_psd_map, LoadedPsdMap, MapCandidateRecord,
-    MapCoefficients, MapCovarianceRecord, MapFitRecord, MapResidualsRecord, PsdMapFile,
-    PSD_MAP_FORMAT, PSD_MAP_VERSION,
+    psd_map_from_reader, psd_map_from_reader_with, read_psd_map, read_psd_map_with, write_psd_map,
+    LoadedPsdMap, MapCandidateRecord, MapCoefficients, MapCovarianceRecord, MapFitRecord,
+    MapResidualsRecord, PsdMapFile, PSD_MAP_FORMAT, PSD_MAP_VERSION,
 };
 pub use raw::{
-    npy_header, write_csv_frames, write_npy_frames, Frame, RawFormat, RawReader, RATE_TOLERANCE,
-    RAW_CSV_HEADER,
+    npy_header, write_csv_frames, write_npy_frames, RawFormat, RawReader, RAW_CSV_HEADER,
 };
-pub use rig::{read_rig, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION};
+pub use raw_frame::{Frame, RATE_TOLERANCE};
+pub use rig::{
+    read_rig, read_rig_with, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION,
+};
 pub use rig_observations::{RigObservation, RigObservations};
 pub use same_file::refuse_overwrite;
 pub use scan::{write_scan, Scan, ScanPoints, ScanReading, ScanRow, SCAN_DUPLICATE_MM};
@@ -119,8 +125,8 @@ pub use tdms::{TdmsReader, TDMS_DEFAULT_CHANNELS};
 pub use tdms_write::TdmsFrameWriter;
 pub use template::{Led, LineGroup, Template};
 pub use truth::{
-    read_truth, write_truth, SimulationSettings, TrueGains, TruePose, Truth, TRUTH_FORMAT,
-    TRUTH_VERSION,
+    read_truth, read_truth_with, write_truth, SimulationSettings, TrueGains, TruePose, Truth,
+    TRUTH_FORMAT, TRUTH_VERSION,
 };
 pub use validate::{
     validate_data_set, Image, ValidatedDataSet, ValidationOptions, MIN_IMAGES, MIN_POINTS_PER_IMAGE,

@@ -4,8 +4,8 @@
 //! - A **line** of a CSV file holds at most [`MAX_LINE_BYTES`] bytes.
 //! - A **file** read whole (the CSV files of a data set, calibration.json,
 //!   gains.json, rig.json, truth.json, rig_points.csv) holds at most
-//!   [`max_file_bytes`] bytes: 512 MiB unless the program raises it with
-//!   [`set_max_file_bytes`] (`psdcal --max-input-mb`). Streamed tables
+//!   [`ReadLimits::max_file_bytes`] bytes: 512 MiB unless the caller passes
+//!   other [`ReadLimits`] to the reader (`psdcal --max-input-mb`). Streamed tables
 //!   (points.csv for `correct`, `aoa` and `locate` on a plane) are read row
 //!   by row in constant memory and have no size limit.
 //! - A message quotes at most [`MAX_EXCERPT_CHARS`] characters of a file.
@@ -16,9 +16,9 @@
 use std::fs::File;
 use std::io::Read;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::error::{IoError, Location};
+use crate::error::IoError;
+use crate::location::Location;
 
 /// The longest CSV line accepted, bytes (1 MiB).
 pub const MAX_LINE_BYTES: usize = 1 << 20;
@@ -27,17 +27,31 @@ pub const DEFAULT_MAX_FILE_BYTES: u64 = 512 << 20;
 /// The most characters of a file's content quoted in a message.
 pub const MAX_EXCERPT_CHARS: usize = 60;
 
-static MAX_FILE_BYTES: AtomicU64 = AtomicU64::new(DEFAULT_MAX_FILE_BYTES);
-
-/// The largest file read whole, bytes.
-pub fn max_file_bytes() -> u64 {
-    MAX_FILE_BYTES.load(Ordering::Relaxed)
+/// The bounds a reader of a whole file is given (default: 512 MiB), passed
+/// to each reader that takes them (`read_with`, `from_reader_with`, …); the
+/// readers without them use the default.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ReadLimits {
+    /// The largest file read whole, bytes.
+    pub max_file_bytes: u64,
 }
 
-/// Sets the largest file read whole, bytes, for this process (at least 1
-/// KiB).
-pub fn set_max_file_bytes(bytes: u64) {
-    MAX_FILE_BYTES.store(bytes.max(1024), Ordering::Relaxed);
+impl Default for ReadLimits {
+    fn default() -> Self {
+        Self {
+            max_file_bytes: DEFAULT_MAX_FILE_BYTES,
+        }
+    }
+}
+
+impl ReadLimits {
+    /// At most `mib` MiB per file read whole (`psdcal --max-input-mb`; at
+    /// least 1 KiB).
+    pub fn from_mib(mib: u64) -> Self {
+        Self {
+            max_file_bytes: (mib << 20).max(1024),
+        }
+    }
 }
 
 /// The error of a file past the size limit.
@@ -64,20 +78,52 @@ pub(crate) fn bytes_text(bytes: u64) -> String {
     }
 }
 
-/// Reads a whole file, refusing one past [`max_file_bytes`] (counted while
-/// reading, so devices and pipes are bounded too).
-pub fn read_bounded(path: &Path) -> Result<Vec<u8>, IoError> {
+/// Reads a whole file, refusing one past `limits`' [`ReadLimits::max_file_bytes`]
+/// (counted while reading, so devices and pipes are bounded too).
+pub fn read_bounded(path: &Path, limits: ReadLimits) -> Result<Vec<u8>, IoError> {
     let source = path.display().to_string();
     let file = File::open(path).map_err(|e| IoError::Read {
         file: source.clone(),
         source: e,
     })?;
-    read_all_bounded(&source, file)
+    read_all_bounded(&source, file, limits)
 }
 
-/// Reads everything from `reader`, refusing more than [`max_file_bytes`].
-pub fn read_all_bounded(source: &str, reader: impl Read) -> Result<Vec<u8>, IoError> {
-    read_all_limited(source, reader, max_file_bytes())
+/// Reads everything from `reader`, refusing more than `limits`'
+/// [`ReadLimits::max_file_bytes`].
+pub fn read_all_bounded(
+    source: &str,
+    reader: impl Read,
+    limits: ReadLimits,
+) -> Result<Vec<u8>, IoError> {
+    read_all_limited(source, reader, limits.max_file_bytes)
+}
+
+/// A file read whole (within `limits`) as UTF-8 text.
+pub(crate) fn read_text(path: &Path, limits: ReadLimits) -> Result<String, IoError> {
+    let source = path.display().to_string();
+    utf8_text(&source, read_bounded(path, limits)?)
+}
+
+/// [`read_text`] from a reader; `source` names it in messages.
+pub(crate) fn read_text_from(
+    source: &str,
+    reader: impl Read,
+    limits: ReadLimits,
+) -> Result<String, IoError> {
+    utf8_text(source, read_all_bounded(source, reader, limits)?)
+}
+
+fn utf8_text(source: &str, bytes: Vec<u8>) -> Result<String, IoError> {
+    String::from_utf8(bytes).map_err(|e| {
+        let offset = e.utf8_error().valid_up_to();
+        IoError::Encoding {
+            at: Location::file(source),
+            message: format!(
+                "the byte at offset {offset} is not UTF-8; expected a UTF-8 JSON file"
+            ),
+        }
+    })
 }
 
 /// Reads everything from `reader`, refusing more than `limit` bytes.
@@ -121,7 +167,38 @@ mod tests {
         );
         assert_eq!(read_all_limited("s", &b"abc"[..], 3).unwrap(), b"abc");
         assert!(read_all_limited("s", &b"abcd"[..], 3).is_err());
-        assert_eq!(max_file_bytes(), DEFAULT_MAX_FILE_BYTES);
+        assert_eq!(ReadLimits::default().max_file_bytes, DEFAULT_MAX_FILE_BYTES);
+        assert_eq!(ReadLimits::from_mib(3).max_file_bytes, 3 << 20);
+    }
+
+    #[test]
+    fn two_limits_in_one_process_are_each_honoured() {
+        let dir = std::env::temp_dir().join(format!("psdcal-limits-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("two_kib.bin");
+        std::fs::write(&path, vec![b'x'; 2048]).unwrap();
+        let small = ReadLimits {
+            max_file_bytes: 1024,
+        };
+        let large = ReadLimits::from_mib(1);
+        let (a, b) = std::thread::scope(|s| {
+            let a = s.spawn(|| read_bounded(&path, small));
+            let b = s.spawn(|| read_bounded(&path, large));
+            (a.join().unwrap(), b.join().unwrap())
+        });
+        assert_eq!(
+            a.unwrap_err().to_string(),
+            format!(
+                "{}: the file is larger than 1.0 KiB; expected a smaller file (raise the \
+                 limit with --max-input-mb)",
+                path.display()
+            )
+        );
+        assert_eq!(b.unwrap().len(), 2048);
+        // One after the other, on one thread, too.
+        assert!(read_bounded(&path, small).is_err());
+        assert!(read_bounded(&path, ReadLimits::default()).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -16,6 +16,7 @@ use std::path::Path;
 
 use crate::csv_table::CsvTable;
 use crate::error::IoError;
+use crate::limits::ReadLimits;
 
 const EXPECTED_COLUMNS: &str = "image, led, x_mm, y_mm";
 
@@ -47,12 +48,35 @@ pub struct Observations {
 impl Observations {
     /// Reads observations.csv from a file.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(path.as_ref(), EXPECTED_COLUMNS)?)
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::read_path(
+            path.as_ref(),
+            EXPECTED_COLUMNS,
+            limits,
+        )?)
     }
 
     /// Reads observations.csv from a reader; `source` names it in messages.
     pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::from_reader(source, reader, EXPECTED_COLUMNS)?)
+        Self::from_reader_with(source, reader, ReadLimits::default())
+    }
+
+    /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
+    pub fn from_reader_with(
+        source: &str,
+        reader: impl Read,
+        limits: ReadLimits,
+    ) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::from_reader(
+            source,
+            reader,
+            EXPECTED_COLUMNS,
+            limits,
+        )?)
     }
 
     /// Parses observations.csv text; `source` names it in messages.

@@ -18,7 +18,9 @@ use nalgebra::Vector2;
 use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
 
 use crate::csv_table::{parse_number, Col, CsvRow, CsvStream, CsvTable};
-use crate::error::{ColumnRef, IoError, Location};
+use crate::error::{ColumnRef, IoError};
+use crate::limits::ReadLimits;
+use crate::location::Location;
 use crate::number_text::number_text;
 use crate::signals::impact_point_at;
 
@@ -82,18 +84,34 @@ pub struct AddedColumn<'a> {
 impl Points {
     /// Reads points.csv from a file (whole, within the size limit).
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
         Self::collect(PointStream::from_table(CsvTable::read_path(
             path.as_ref(),
             EXPECTED_COLUMNS,
+            limits,
         )?)?)
     }
 
     /// Reads points.csv from a reader; `source` names it in messages.
     pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
+        Self::from_reader_with(source, reader, ReadLimits::default())
+    }
+
+    /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
+    pub fn from_reader_with(
+        source: &str,
+        reader: impl Read,
+        limits: ReadLimits,
+    ) -> Result<Self, IoError> {
         Self::collect(PointStream::from_table(CsvTable::from_reader(
             source,
             reader,
             EXPECTED_COLUMNS,
+            limits,
         )?)?)
     }
 

@@ -10,7 +10,9 @@ use std::path::Path;
 
 use crate::atomic::write_atomic;
 use crate::csv_table::CsvTable;
-use crate::error::{IoError, Location};
+use crate::error::IoError;
+use crate::limits::ReadLimits;
+use crate::location::Location;
 
 const COLUMNS: &str = "image, rx, ry, rz, tx_mm, ty_mm, tz_mm";
 
@@ -39,7 +41,12 @@ pub struct Poses {
 impl Poses {
     /// Reads poses.csv.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        let table = CsvTable::read_path(path.as_ref(), COLUMNS)?;
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
+        let table = CsvTable::read_path(path.as_ref(), COLUMNS, limits)?;
         table.require_rows()?;
         let image = table.column("image")?;
         let cols = ["rx", "ry", "rz", "tx_mm", "ty_mm", "tz_mm"]

@@ -27,7 +27,9 @@ use std::path::Path;
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 
 use crate::csv_table::{Col, CsvRow, CsvTable};
-use crate::error::{IoError, Location};
+use crate::error::IoError;
+use crate::limits::ReadLimits;
+use crate::location::Location;
 
 const TRUTH_COLUMNS: &str = "emitter, x_mm, y_mm, z_mm (and/or alpha_x_deg, alpha_y_deg)";
 const ESTIMATE_COLUMNS: &str = "emitter, x_world_mm, y_world_mm, z_world_mm (as psdcal locate \
@@ -154,7 +156,12 @@ fn unique<'a>(
 impl PositionTruth {
     /// Reads truth.csv.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(path.as_ref(), TRUTH_COLUMNS)?)
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::read_path(path.as_ref(), TRUTH_COLUMNS, limits)?)
     }
 
     /// Parses text; `source` names it in messages.
@@ -262,7 +269,16 @@ where
 impl PositionEstimates {
     /// Reads the estimates.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(path.as_ref(), ESTIMATE_COLUMNS)?)
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::read_path(
+            path.as_ref(),
+            ESTIMATE_COLUMNS,
+            limits,
+        )?)
     }
 
     /// Parses text; `source` names it in messages.

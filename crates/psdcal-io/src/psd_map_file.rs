@@ -26,6 +26,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomic_bytes;
 use crate::calibration::{Provenance, SensorSize};
+use crate::limits::ReadLimits;
 use crate::{IoError, Location};
 
 /// The format name of psd_map.json.
@@ -257,8 +258,17 @@ pub fn write_psd_map(path: impl AsRef<Path>, file: &PsdMapFile) -> Result<(), Io
 
 /// Reads psd_map.json (bounded) and checks it.
 pub fn read_psd_map(path: impl AsRef<Path>) -> Result<(PsdMapFile, LoadedPsdMap), IoError> {
+    read_psd_map_with(path, ReadLimits::default())
+}
+
+/// [`read_psd_map`] within `limits` (docs/formats.md, "Limits").
+pub fn read_psd_map_with(
+    path: impl AsRef<Path>,
+    limits: ReadLimits,
+) -> Result<(PsdMapFile, LoadedPsdMap), IoError> {
     let path = path.as_ref();
-    psd_map_from_text(&path.display().to_string(), &crate::error::read_text(path)?)
+    let text = crate::limits::read_text(path, limits)?;
+    psd_map_from_text(&path.display().to_string(), &text)
 }
 
 /// [`read_psd_map`] from a reader (bounded); `source` names it in messages.
@@ -266,7 +276,19 @@ pub fn psd_map_from_reader(
     source: &str,
     reader: impl std::io::Read,
 ) -> Result<(PsdMapFile, LoadedPsdMap), IoError> {
-    psd_map_from_text(source, &crate::error::read_text_from(source, reader)?)
+    psd_map_from_reader_with(source, reader, ReadLimits::default())
+}
+
+/// [`psd_map_from_reader`] within `limits` (docs/formats.md, "Limits").
+pub fn psd_map_from_reader_with(
+    source: &str,
+    reader: impl std::io::Read,
+    limits: ReadLimits,
+) -> Result<(PsdMapFile, LoadedPsdMap), IoError> {
+    psd_map_from_text(
+        source,
+        &crate::limits::read_text_from(source, reader, limits)?,
+    )
 }
 
 /// Parses and checks psd_map.json's text; `source` names it in messages.

@@ -27,9 +27,11 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
-use crate::error::{IoError, Location};
+use crate::error::IoError;
 use crate::limits::excerpt;
+use crate::location::Location;
 use crate::raw_csv::CsvFrames;
+use crate::raw_frame::{Frame, CHANNELS, RATE_TOLERANCE};
 use crate::tdms::TdmsReader;
 
 /// A header excerpt for a one-line message (control characters shown as `?`).
@@ -40,19 +42,9 @@ fn shown(text: &str) -> String {
         .collect()
 }
 
-/// One sample of the four channels, volts: `[vx1, vx2, vy1, vy2]`.
-pub type Frame = [f64; 4];
-
-/// Relative tolerance on the time steps of a `t_s` column (and on the
-/// agreement of `t_s` with `--rate`).
-pub const RATE_TOLERANCE: f64 = 1e-3;
-
 /// The read buffer of a recording opened by path, bytes: large blocks, so
 /// that raw.csv's fast path rarely meets a line cut by the buffer's end.
 const READ_BUFFER_BYTES: usize = 1 << 18;
-
-pub(crate) const CHANNELS: [&str; 4] = ["vx1", "vx2", "vy1", "vy2"];
-pub(crate) const EXPECTED_COLUMNS: &str = "vx1, vx2, vy1, vy2 (and optionally t_s)";
 
 /// The layout of a raw recording, from its file name's extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

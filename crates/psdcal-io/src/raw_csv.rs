@@ -17,8 +17,12 @@ use std::io::BufRead;
 
 use crate::csv_numeric::NumericLine;
 use crate::csv_table::{Col, CsvRow, CsvStream};
-use crate::error::{IoError, Location};
-use crate::raw::{Frame, CHANNELS, EXPECTED_COLUMNS, RATE_TOLERANCE};
+use crate::error::IoError;
+use crate::location::Location;
+use crate::raw_frame::{Frame, CHANNELS, RATE_TOLERANCE};
+
+/// raw.csv's columns, for messages.
+pub(crate) const EXPECTED_COLUMNS: &str = "vx1, vx2, vy1, vy2 (and optionally t_s)";
 
 /// raw.csv, row by row.
 pub(crate) struct CsvFrames<R> {

@@ -33,6 +33,7 @@ use psdcal_model::Pose;
 use serde_json::{Map, Value};
 
 use crate::error::IoError;
+use crate::limits::ReadLimits;
 
 /// The `format` name of rig.json.
 pub const RIG_FORMAT: &str = "psdcal-rig";
@@ -90,13 +91,23 @@ pub fn read_rig(path: impl AsRef<Path>) -> Result<RigFile, IoError> {
     RigFile::read(path)
 }
 
+/// [`read_rig`] within `limits` (docs/formats.md, "Limits").
+pub fn read_rig_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<RigFile, IoError> {
+    RigFile::read_with(path, limits)
+}
+
 impl RigFile {
     /// Reads and validates rig.json; calibration paths are resolved against
     /// its folder.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
         let path = path.as_ref();
         let source = path.display().to_string();
-        let bytes = crate::limits::read_bounded(path)?;
+        let bytes = crate::limits::read_bounded(path, limits)?;
         let text = std::str::from_utf8(&bytes).map_err(|e| IoError::Encoding {
             at: crate::Location::file(&source),
             message: format!(

@@ -21,7 +21,9 @@ use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
 
 use crate::atomic::write_atomic;
 use crate::csv_table::CsvTable;
-use crate::error::{IoError, Location};
+use crate::error::IoError;
+use crate::limits::ReadLimits;
+use crate::location::Location;
 use crate::signals::impact_point_at;
 
 const EXPECTED_COLUMNS: &str = "x_stage_mm, y_stage_mm, and x_mm, y_mm or vx1, vx2, vy1, vy2";
@@ -77,12 +79,35 @@ pub struct ScanPoints {
 impl Scan {
     /// Reads scan.csv from a file (bounded, docs/formats.md "Limits").
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(path.as_ref(), EXPECTED_COLUMNS)?)
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::read_path(
+            path.as_ref(),
+            EXPECTED_COLUMNS,
+            limits,
+        )?)
     }
 
     /// Reads scan.csv from a reader; `source` names it in messages.
     pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::from_reader(source, reader, EXPECTED_COLUMNS)?)
+        Self::from_reader_with(source, reader, ReadLimits::default())
+    }
+
+    /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
+    pub fn from_reader_with(
+        source: &str,
+        reader: impl Read,
+        limits: ReadLimits,
+    ) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::from_reader(
+            source,
+            reader,
+            EXPECTED_COLUMNS,
+            limits,
+        )?)
     }
 
     /// Parses scan.csv text; `source` names it in messages.

@@ -15,6 +15,7 @@ use std::path::Path;
 
 use crate::csv_table::CsvTable;
 use crate::error::IoError;
+use crate::limits::ReadLimits;
 
 /// One interval of the schedule.
 #[derive(Debug, Clone, PartialEq)]
@@ -45,7 +46,16 @@ pub struct Schedule {
 impl Schedule {
     /// Reads schedule.csv.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(path.as_ref(), SCHEDULE_COLUMNS)?)
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::read_path(
+            path.as_ref(),
+            SCHEDULE_COLUMNS,
+            limits,
+        )?)
     }
 
     /// Parses schedule.csv text; `source` names it in messages.
@@ -141,7 +151,12 @@ pub struct Tones {
 impl Tones {
     /// Reads tones.csv.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(path.as_ref(), TONES_COLUMNS)?)
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::read_path(path.as_ref(), TONES_COLUMNS, limits)?)
     }
 
     /// Parses tones.csv text; `source` names it in messages.

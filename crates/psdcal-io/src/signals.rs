@@ -20,7 +20,9 @@ use psdcal_model::sensor::impact_point_with_gains;
 use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
 
 use crate::csv_table::CsvTable;
-use crate::error::{IoError, Location};
+use crate::error::IoError;
+use crate::limits::ReadLimits;
+use crate::location::Location;
 use crate::observations::{Observation, Observations};
 
 const EXPECTED_COLUMNS: &str = "image, led, vx1, vx2, vy1, vy2";
@@ -71,12 +73,35 @@ pub struct Signals {
 impl Signals {
     /// Reads signals.csv from a file.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(path.as_ref(), EXPECTED_COLUMNS)?)
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::read_path(
+            path.as_ref(),
+            EXPECTED_COLUMNS,
+            limits,
+        )?)
     }
 
     /// Reads signals.csv from a reader; `source` names it in messages.
     pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::from_reader(source, reader, EXPECTED_COLUMNS)?)
+        Self::from_reader_with(source, reader, ReadLimits::default())
+    }
+
+    /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
+    pub fn from_reader_with(
+        source: &str,
+        reader: impl Read,
+        limits: ReadLimits,
+    ) -> Result<Self, IoError> {
+        Self::from_table(CsvTable::from_reader(
+            source,
+            reader,
+            EXPECTED_COLUMNS,
+            limits,
+        )?)
     }
 
     /// Parses signals.csv text; `source` names it in messages.

@@ -32,8 +32,9 @@ use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 
-use crate::error::{IoError, Location};
+use crate::error::IoError;
 use crate::limits::excerpt;
+use crate::location::Location;
 use crate::tdms_meta::{
     channel_names, group_path, parse_metadata, Index, LeadIn, MetaObject, Value, LEAD_IN,
     UNFINISHED,

@@ -6,7 +6,7 @@
 //! only when it holds as many frames as the previous one, else a segment
 //! whose incremental metadata gives the channels their new value count.
 
-use crate::raw::Frame;
+use crate::raw_frame::Frame;
 
 const TOC_META: u32 = 1 << 1;
 const TOC_NEW_LIST: u32 = 1 << 2;

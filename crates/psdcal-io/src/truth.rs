@@ -12,6 +12,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomic_bytes;
+use crate::limits::ReadLimits;
 use crate::IoError;
 
 /// The format name of truth.json.
@@ -113,9 +114,14 @@ pub fn write_truth(path: impl AsRef<Path>, truth: &Truth) -> Result<(), IoError>
 
 /// Reads truth.json.
 pub fn read_truth(path: impl AsRef<Path>) -> Result<Truth, IoError> {
+    read_truth_with(path, ReadLimits::default())
+}
+
+/// [`read_truth`] within `limits` (docs/formats.md, "Limits").
+pub fn read_truth_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Truth, IoError> {
     let path = path.as_ref();
     let source = path.display().to_string();
-    let text = crate::error::read_text(path)?;
+    let text = crate::limits::read_text(path, limits)?;
     let truth: Truth =
         serde_json::from_str(&text).map_err(|e| crate::error::json_error(&source, &e))?;
     if truth.format != TRUTH_FORMAT {

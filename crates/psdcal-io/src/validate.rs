@@ -20,7 +20,8 @@ use nalgebra::Vector2;
 use psdcal_model::sensor::is_on_active_area;
 use psdcal_model::PsdGeometry;
 
-use crate::error::{IoError, Location};
+use crate::error::IoError;
+use crate::location::Location;
 use crate::observations::Observations;
 use crate::template::Template;
 use crate::warning::Warning;

@@ -9,7 +9,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-use crate::error::Location;
+use crate::location::Location;
 
 /// Something suspicious in the data that psdcal worked around.
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -146,7 +146,7 @@ pub use study::study_psd_map::{pooled, psd_map_seed, SeedErrors};
 pub use study::testing::{refine_seed, RefineErrors, ScanSpec};
 
 pub use psdcal_calib::CalibError;
-pub use psdcal_io::{Calibration, IoError, Warning};
+pub use psdcal_io::{Calibration, IoError, ReadLimits, Warning};
 pub use psdcal_locate::LocateError;
 pub use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, Plane, MAX_GRID};
 pub use psdcal_model::{Diagnostic, DiagnosticCode, Severity};

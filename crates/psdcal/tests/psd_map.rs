@@ -50,6 +50,7 @@ fn a_map_of_another_sensor_or_a_scan_that_misses_the_data_is_refused() {
         &LoadOptions {
             geometry: PsdGeometry { lx: 10.0, ly: 10.0 },
             strict: false,
+            limits: Default::default(),
         },
     )
     .unwrap();
@@ -81,6 +82,7 @@ fn a_map_of_another_sensor_or_a_scan_that_misses_the_data_is_refused() {
         seed: 0,
         command: String::new(),
         report: None,
+        limits: Default::default(),
     })
     .unwrap();
     let half_map = dir.path().join("half.json");

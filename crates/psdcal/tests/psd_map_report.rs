@@ -58,6 +58,7 @@ fn request(scan: &Path, report: &Path) -> PsdMapRequest {
         seed: 0,
         command: "psdcal psd-map --report".into(),
         report: Some(report.to_path_buf()),
+        limits: Default::default(),
     }
 }
 

@@ -48,6 +48,7 @@ fn demodulated(dir: &Path, format: RawFormat, fdma: bool, out: &str) -> psdcal::
         out: dir.join(out),
         config: DemodConfig::default(),
         channels: Vec::new(),
+        limits: Default::default(),
     })
     .unwrap()
 }
@@ -242,6 +243,7 @@ fn track_gives_the_angles_of_demodulate() {
             config: DemodConfig::default(),
             raw: None,
             channels: Vec::new(),
+            limits: Default::default(),
         },
         stream.as_bytes(),
         &mut out,
@@ -267,6 +269,7 @@ fn track_gives_the_angles_of_demodulate() {
             config: DemodConfig::default(),
             raw: Some(d.join("raw.tdms")),
             channels: Vec::new(),
+            limits: Default::default(),
         },
         &b""[..],
         &mut from_file,

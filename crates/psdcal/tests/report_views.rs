@@ -34,6 +34,7 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
         seed: 0,
         command: String::new(),
         report: None,
+        limits: Default::default(),
     })
     .unwrap();
     let map_path = dir.path().join("psd_map.json");
@@ -72,6 +73,7 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
         calibration: cal.clone(),
         data: Some((data.join("template.csv"), data.join("observations.csv"))),
         out: dir.path().join("report"),
+        limits: Default::default(),
     };
     let loaded = LoadedSensor::read(&cal).unwrap();
     let content = report_content(&request, &loaded, Some(&set)).unwrap();
@@ -260,6 +262,7 @@ fn the_distortion_field_draws_the_valid_region_boundary() {
             calibration: path.clone(),
             data: None,
             out: dir.path().join("report"),
+            limits: Default::default(),
         };
         let loaded = LoadedSensor::read(&path).unwrap();
         let content = report_content(&request, &loaded, None).unwrap();

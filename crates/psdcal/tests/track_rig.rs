@@ -143,6 +143,7 @@ fn run(dir: &Path, text: &str) -> Vec<Vec<String>> {
             config: DemodConfig::default(),
             raw: None,
             channels: Vec::new(),
+            limits: Default::default(),
         },
         text.as_bytes(),
         &mut out,

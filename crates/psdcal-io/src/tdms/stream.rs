@@ -6,8 +6,9 @@
 use std::io::SeekFrom;
 
 use super::{read_error, ReadSeek, TdmsReader, BLOCK};
-use crate::error::{IoError, Location};
+use crate::error::IoError;
 use crate::limits::excerpt;
+use crate::location::Location;
 use crate::tdms_meta::{DataType, LeadIn, RawIndex, LEAD_IN, UNFINISHED};
 
 /// A selected channel's place in the current segment.

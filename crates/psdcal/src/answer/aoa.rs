@@ -59,14 +59,16 @@ pub fn measurement(input: &PointInput) -> Option<Measurement> {
 
 /// Angles of arrival of every row of `points` with the calibration at
 /// `calibration`, streamed to `out` (standard output when `None`);
-/// `point_sigma_mm` adds the point noise's part.
+/// `point_sigma_mm` adds the point noise's part; the calibration is read
+/// within `limits`.
 pub fn aoa_table(
     calibration: &Path,
     points: &Path,
     point_sigma_mm: Option<f64>,
     out: Option<&Path>,
+    limits: psdcal_io::ReadLimits,
 ) -> Result<AoaTable> {
-    let loaded = LoadedSensor::read(calibration)?;
+    let loaded = LoadedSensor::read_with(calibration, limits)?;
     let with_point = point_sigma_mm.is_some();
     let options = LocateOptions {
         point_sigma_mm: point_sigma_mm.unwrap_or(0.0),

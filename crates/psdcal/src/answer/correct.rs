@@ -77,9 +77,15 @@ pub(crate) fn correct_point(
 }
 
 /// Corrects the points of `points` with the calibration at `calibration`,
-/// streaming the answer to `out` (standard output when `None`).
-pub fn correct(calibration: &Path, points: &Path, out: Option<&Path>) -> Result<Corrected> {
-    let loaded = LoadedSensor::read(calibration)?;
+/// streaming the answer to `out` (standard output when `None`); the
+/// calibration is read within `limits`.
+pub fn correct(
+    calibration: &Path,
+    points: &Path,
+    out: Option<&Path>,
+    limits: psdcal_io::ReadLimits,
+) -> Result<Corrected> {
+    let loaded = LoadedSensor::read_with(calibration, limits)?;
     let sensor = &loaded.sensor;
     let answer = answer_points(points, out, added_columns, |m| {
         let c = correct_point(sensor, m)?;

@@ -30,6 +30,8 @@ pub struct DiffRequest {
     pub out: Option<PathBuf>,
     /// Folder for diff.html and its heat maps.
     pub report: Option<PathBuf>,
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// The comparison.
@@ -67,8 +69,8 @@ pub const DIFF_COLUMNS: [&str; 14] = [
 
 /// Compares the calibrations and writes what was asked.
 pub fn diff(request: &DiffRequest) -> Result<Diffed> {
-    let a = LoadedSensor::read(&request.a)?;
-    let b = LoadedSensor::read(&request.b)?;
+    let a = LoadedSensor::read_with(&request.a, request.limits)?;
+    let b = LoadedSensor::read_with(&request.b, request.limits)?;
     let diff = diff_calibrations(&a.sensor, &b.sensor, request.grid)?;
     let warnings = [&a, &b]
         .into_iter()

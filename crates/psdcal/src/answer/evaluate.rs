@@ -35,6 +35,8 @@ pub struct EvaluateRequest {
     /// A rig file: the page plots the error against the distance to the
     /// nearest sensor.
     pub rig: Option<PathBuf>,
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// The evaluation.
@@ -71,12 +73,12 @@ pub struct Evaluation {
 
 /// Reads both files, matches them and computes the metrics.
 pub fn evaluate(request: &EvaluateRequest) -> Result<Evaluation> {
-    let truth = PositionTruth::read(&request.truth)?;
-    let estimates = PositionEstimates::read(&request.estimates)?;
+    let truth = PositionTruth::read_with(&request.truth, request.limits)?;
+    let estimates = PositionEstimates::read_with(&request.estimates, request.limits)?;
     let matched = estimates.matched(&truth)?;
     let sensors: Option<Vec<Vector3<f64>>> = match &request.rig {
         Some(path) => Some(
-            RigFile::read(path)?
+            RigFile::read_with(path, request.limits)?
                 .sensors
                 .iter()
                 .map(|s| s.world_from_sensor.t)

@@ -63,6 +63,8 @@ pub struct ExportRequest {
     pub max_error_deg: f64,
     /// The file to write.
     pub out: PathBuf,
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// The written model and its error.
@@ -130,7 +132,7 @@ pub fn export(request: &ExportRequest) -> Result<Exported> {
             )));
         }
     }
-    let loaded = LoadedSensor::read(&request.calibration)?;
+    let loaded = LoadedSensor::read_with(&request.calibration, request.limits)?;
     let g = loaded.sensor.geometry;
     let (width, height) = (
         pixels(g.lx, request.pixel_um)?,

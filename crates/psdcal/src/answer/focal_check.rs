@@ -34,6 +34,8 @@ pub struct FocalCheckRequest {
     pub distance_sigma_mm: f64,
     /// Sides `(W, H)` in the scene, mm (a square: equal).
     pub size_mm: (f64, f64),
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// The check's result.
@@ -69,8 +71,8 @@ pub fn focal_check(request: &FocalCheckRequest) -> Result<FocalCheck> {
     if !(request.distance_sigma_mm.is_finite() && request.distance_sigma_mm >= 0.0) {
         return Err(Error::Options("--distance-sigma must be ≥ 0 mm".into()));
     }
-    let loaded = LoadedSensor::read(&request.calibration)?;
-    let corners = Corners::read(&request.points)?;
+    let loaded = LoadedSensor::read_with(&request.calibration, request.limits)?;
+    let corners = Corners::read_with(&request.points, request.limits)?;
     let chain = loaded.sensor.chain();
     let mut ideal = Vec::with_capacity(4);
     for c in &corners.corners {

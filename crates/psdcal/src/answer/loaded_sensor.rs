@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use psdcal_io::{read_calibration, Calibration};
+use psdcal_io::{read_calibration_with, Calibration, ReadLimits};
 use psdcal_locate::CalibratedSensor;
 
 use crate::base::error::Result;
@@ -23,7 +23,12 @@ pub struct LoadedSensor {
 impl LoadedSensor {
     /// Reads calibration.json (version 1 or 2).
     pub fn read(path: &Path) -> Result<Self> {
-        let record = read_calibration(path)?;
+        Self::read_with(path, ReadLimits::default())
+    }
+
+    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+    pub fn read_with(path: &Path, limits: ReadLimits) -> Result<Self> {
+        let record = read_calibration_with(path, limits)?;
         let sensor = convert::sensor(&record, path)?;
         Ok(Self {
             path: path.to_path_buf(),

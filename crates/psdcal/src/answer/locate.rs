@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix3, Vector2};
-use psdcal_io::{RigFile, RigObservations};
+use psdcal_io::{ReadLimits, RigFile, RigObservations};
 use psdcal_locate::{LocateOptions, Measurement, Plane, Rig, RigSensor};
 
 use crate::answer::aoa::measurement;
@@ -121,18 +121,20 @@ fn covariance_fields(c: &Matrix3<f64>) -> [String; 7] {
 
 /// Locates the emitters of `points` on `target` and writes the table to
 /// `out` (standard output when `None`); on a plane the points are streamed.
+/// The files read whole are bounded by `limits`.
 pub fn locate_table(
     target: &LocateTarget,
     points: &Path,
     options: &LocateOptions,
     out: Option<&Path>,
+    limits: ReadLimits,
 ) -> Result<LocateTable> {
     match target {
         LocateTarget::Plane { calibration, plane } => {
-            on_plane(calibration, plane, points, options, out)
+            on_plane(calibration, plane, points, options, out, limits)
         }
         LocateTarget::Rig(rig) => {
-            let (located, table) = with_rig(rig, points, options)?;
+            let (located, table) = with_rig(rig, points, options, limits)?;
             table.write_to(out)?;
             Ok(located)
         }
@@ -145,8 +147,9 @@ fn on_plane(
     points: &Path,
     options: &LocateOptions,
     out: Option<&Path>,
+    limits: ReadLimits,
 ) -> Result<LocateTable> {
-    let loaded = LoadedSensor::read(calibration)?;
+    let loaded = LoadedSensor::read_with(calibration, limits)?;
     let added = |amplitudes: bool| {
         let mut added: Vec<String> = Vec::new();
         if amplitudes {
@@ -195,9 +198,14 @@ fn on_plane(
     })
 }
 
-/// The rig of a rig file: every calibration read (each file once).
-pub(crate) fn load_rig(path: &Path, warnings: &mut Vec<String>) -> Result<(RigFile, Rig)> {
-    let file = RigFile::read(path)?;
+/// The rig of a rig file: every calibration read (each file once, within
+/// `limits`).
+pub(crate) fn load_rig(
+    path: &Path,
+    limits: ReadLimits,
+    warnings: &mut Vec<String>,
+) -> Result<(RigFile, Rig)> {
+    let file = RigFile::read_with(path, limits)?;
     let mut loaded: HashMap<&Path, LoadedSensor> = HashMap::new();
     let mut sensors = Vec::with_capacity(file.sensors.len());
     for record in &file.sensors {
@@ -205,7 +213,7 @@ pub(crate) fn load_rig(path: &Path, warnings: &mut Vec<String>) -> Result<(RigFi
         let sensor = match loaded.get(path) {
             Some(known) => known.sensor.clone(),
             None => {
-                let new = LoadedSensor::read(path)?;
+                let new = LoadedSensor::read_with(path, limits)?;
                 warnings.extend(covariance_warning(&new));
                 let sensor = new.sensor.clone();
                 loaded.insert(path, new);
@@ -246,10 +254,11 @@ fn with_rig(
     rig_path: &Path,
     points: &Path,
     options: &LocateOptions,
+    limits: ReadLimits,
 ) -> Result<(LocateTable, Table)> {
     let mut warnings = Vec::new();
-    let (file, rig) = load_rig(rig_path, &mut warnings)?;
-    let observations = RigObservations::read(points)?;
+    let (file, rig) = load_rig(rig_path, limits, &mut warnings)?;
+    let observations = RigObservations::read_with(points, limits)?;
     observations.check_against(&file)?;
     let mut header: Vec<String> = vec!["emitter".into(), "sensors".into()];
     header.extend(position_columns("world"));

@@ -75,6 +75,8 @@ pub struct MapRequest {
     pub grid: usize,
     /// Add the paper's small-angle form (P42).
     pub paper: bool,
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// A computed map.
@@ -138,7 +140,7 @@ impl MapTable {
 pub fn map_table(request: &MapRequest) -> Result<MapTable> {
     let (model, geometry, covariance, model_name) = match &request.model {
         MapModel::Calibration(path) => {
-            let loaded = LoadedSensor::read(path)?;
+            let loaded = LoadedSensor::read_with(path, request.limits)?;
             (
                 loaded.sensor.model,
                 loaded.sensor.geometry,

@@ -54,6 +54,7 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
         Some(path) => Some(calibrate_map::load(
             path,
             &set.options.geometry,
+            set.options.limits,
             &mut inputs,
         )?),
         None => None,

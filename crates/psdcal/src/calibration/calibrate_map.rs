@@ -12,7 +12,7 @@ use std::path::Path;
 use nalgebra::DMatrix;
 use psdcal_calib::BlockCovariance;
 use psdcal_io::{
-    psd_map_from_reader, Calibration, LoadedPsdMap, PsdMapFile, PsdMapStageCovariance,
+    psd_map_from_reader_with, Calibration, LoadedPsdMap, PsdMapFile, PsdMapStageCovariance,
     PsdMapStageRecord,
 };
 use psdcal_locate::{CalibratedSensor, SensorPsdMap};
@@ -28,14 +28,16 @@ pub(crate) struct MapInput {
     pub loaded: LoadedPsdMap,
 }
 
-/// Reads psd_map.json once, adding it with the hash of the bytes read to
-/// `inputs`, and checks it belongs to a sensor of `geometry`.
+/// Reads psd_map.json once (within `limits`), adding it with the hash of
+/// the bytes read to `inputs`, and checks it belongs to a sensor of
+/// `geometry`.
 pub(crate) fn load(
     path: &Path,
     geometry: &PsdGeometry,
+    limits: psdcal_io::ReadLimits,
     inputs: &mut InputHashes,
 ) -> Result<MapInput> {
-    let (file, loaded) = inputs.read(path, |s, r| psd_map_from_reader(s, r))?;
+    let (file, loaded) = inputs.read(path, |s, r| psd_map_from_reader_with(s, r, limits))?;
     file.check_sensor(&path.display().to_string(), geometry)?;
     Ok(MapInput { file, loaded })
 }

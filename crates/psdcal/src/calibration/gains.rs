@@ -58,8 +58,13 @@ pub fn gains_summary(file: &GainsFile, signals: &Path, out: Option<&Path>) -> Re
 /// Every record must have four positive amplitudes within a factor
 /// `MAX_GAIN_RATIO` (10) of `vx1`; a record that does not is an error naming
 /// its line, so the file written is always one `calibrate --gains` reads.
-pub fn estimate_gains(signals: &Path, method: GainsMethod) -> Result<GainsFile> {
-    let points = Points::read(signals)?;
+/// `signals` is read whole, within `limits`.
+pub fn estimate_gains(
+    signals: &Path,
+    method: GainsMethod,
+    limits: psdcal_io::ReadLimits,
+) -> Result<GainsFile> {
+    let points = Points::read_with(signals, limits)?;
     if !points.amplitudes {
         return Err(Error::Input(format!(
             "{}: no amplitude columns (vx1, vx2, vy1, vy2); the equal-current method needs \

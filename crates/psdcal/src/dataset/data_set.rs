@@ -34,13 +34,16 @@ pub struct DataSetFiles {
     pub gains: Option<PathBuf>,
 }
 
-/// How a data set is validated (default: 9 × 9 mm, not strict).
+/// How a data set is read and validated (default: 9 × 9 mm, not strict,
+/// the default read limits).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LoadOptions {
     /// The PSD's active area.
     pub geometry: PsdGeometry,
     /// Every warning is an error instead of dropping the data.
     pub strict: bool,
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// The points of a data set given in memory.
@@ -77,17 +80,22 @@ impl DataSet {
     pub fn from_files(files: &DataSetFiles, options: &LoadOptions) -> Result<Self> {
         // Each file is read once; its hash is of the bytes parsed.
         let mut inputs = InputHashes::default();
-        let template = inputs.read(&files.template, |s, r| Template::from_reader(s, r))?;
+        let limits = options.limits;
+        let template = inputs.read(&files.template, |s, r| {
+            Template::from_reader_with(s, r, limits)
+        })?;
         let known: Option<GainsFile> = match &files.gains {
-            Some(path) => Some(inputs.read(path, |s, r| GainsFile::from_reader(s, r))?),
+            Some(path) => {
+                Some(inputs.read(path, |s, r| GainsFile::from_reader_with(s, r, limits))?)
+            }
             None => None,
         };
         let points = match &files.points {
             PointSource::Observations(path) => MemoryPoints::Observations(
-                inputs.read(path, |s, r| Observations::from_reader(s, r))?,
+                inputs.read(path, |s, r| Observations::from_reader_with(s, r, limits))?,
             ),
             PointSource::Signals(path) => MemoryPoints::Signals(
-                inputs.read(path, |s, r| Signals::from_reader(s, r))?,
+                inputs.read(path, |s, r| Signals::from_reader_with(s, r, limits))?,
                 known.map(|g| g.gains()),
             ),
         };

@@ -234,28 +234,32 @@ pub fn data_set(
     }
     // Each file is hashed as it is read (the provenance lists what was read).
     let mut inputs = InputHashes::default();
+    let limits = options.limits;
     let template = match template {
-        TableInput::File(p) => inputs.read(p, |s, r| Template::from_reader(s, r))?,
+        TableInput::File(p) => inputs.read(p, |s, r| Template::from_reader_with(s, r, limits))?,
         TableInput::Rows(r) => template_from_rows(r)?,
     };
     let known = match gains {
         Some(p) => Some(
             inputs
-                .read(p, |s, r| psdcal_io::GainsFile::from_reader(s, r))?
+                .read(p, |s, r| {
+                    psdcal_io::GainsFile::from_reader_with(s, r, limits)
+                })?
                 .gains(),
         ),
         None => None,
     };
     let memory = match points {
-        PointsInput::Observations(TableInput::File(p)) => {
-            MemoryPoints::Observations(inputs.read(p, |s, r| Observations::from_reader(s, r))?)
-        }
+        PointsInput::Observations(TableInput::File(p)) => MemoryPoints::Observations(
+            inputs.read(p, |s, r| Observations::from_reader_with(s, r, limits))?,
+        ),
         PointsInput::Observations(TableInput::Rows(r)) => {
             MemoryPoints::Observations(observations_from_rows(r)?)
         }
-        PointsInput::Signals(TableInput::File(p)) => {
-            MemoryPoints::Signals(inputs.read(p, |s, r| Signals::from_reader(s, r))?, known)
-        }
+        PointsInput::Signals(TableInput::File(p)) => MemoryPoints::Signals(
+            inputs.read(p, |s, r| Signals::from_reader_with(s, r, limits))?,
+            known,
+        ),
         PointsInput::Signals(TableInput::Rows(r)) => {
             MemoryPoints::Signals(signals_from_rows(r)?, known)
         }

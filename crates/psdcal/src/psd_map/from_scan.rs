@@ -54,6 +54,8 @@ pub struct PsdMapRequest {
     pub command: String,
     /// Folder for the report (psd_map.html with its figures), if asked.
     pub report: Option<PathBuf>,
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// A fitted map as a file and its summary.
@@ -123,7 +125,9 @@ pub(crate) fn scan_summary(file: &PsdMapFile, stage: &PsdMap) -> PsdMapScanRecor
 /// Reads a scan and fits its map.
 pub fn psd_map_from_scan(request: &PsdMapRequest) -> Result<PsdMapOutcome> {
     let mut inputs = InputHashes::default();
-    let scan = inputs.read(&request.scan, |s, r| Scan::from_reader(s, r))?;
+    let scan = inputs.read(&request.scan, |s, r| {
+        Scan::from_reader_with(s, r, request.limits)
+    })?;
     let points = scan.points(&request.geometry, &ChannelGains::UNIT)?;
     let options = FitOptions {
         model: request.model,

@@ -30,6 +30,8 @@ pub struct ReportRequest {
     pub data: Option<(PathBuf, PathBuf)>,
     /// Output folder.
     pub out: PathBuf,
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// What a report wrote.
@@ -66,7 +68,7 @@ impl ReportFiles {
 
 /// Builds and writes the report.
 pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
-    let loaded = LoadedSensor::read(&request.calibration)?;
+    let loaded = LoadedSensor::read_with(&request.calibration, request.limits)?;
     let geometry = loaded.record.geometry();
     let data = match &request.data {
         Some((t, o)) => Some(DataSet::from_files(
@@ -78,6 +80,7 @@ pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
             &LoadOptions {
                 geometry,
                 strict: false,
+                limits: request.limits,
             },
         )?),
         None => None,

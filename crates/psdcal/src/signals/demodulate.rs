@@ -59,6 +59,8 @@ pub struct DemodulateRequest {
     /// `group/channel`, a unique channel name or a TDMS path); empty: the
     /// default (docs/formats.md).
     pub channels: Vec<String>,
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// The fate of one (image, LED) of the schedule.
@@ -149,8 +151,10 @@ fn tones_of(
 /// `snr_db`). See the module documentation.
 pub fn demodulate(request: &DemodulateRequest) -> Result<Demodulated> {
     check_request(request)?;
-    let schedule = Schedule::read(&request.schedule)?;
-    let tones = request.tones.as_ref().map(Tones::read).transpose()?;
+    let limits = request.limits;
+    let schedule = Schedule::read_with(&request.schedule, limits)?;
+    let tones = request.tones.as_ref().map(|t| Tones::read_with(t, limits));
+    let tones = tones.transpose()?;
     let mut reader = RawReader::open_channels(&request.raw, request.rate_hz, &request.channels)?;
     let fs = reader.sample_rate_hz();
     let mut buffer = RecordBuffer::new();

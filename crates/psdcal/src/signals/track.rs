@@ -61,6 +61,8 @@ pub struct TrackRequest {
     pub raw: Option<PathBuf>,
     /// A .tdms recording's channels (four per sensor); empty: the default.
     pub channels: Vec<String>,
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// What `track` saw.
@@ -93,15 +95,18 @@ pub fn track(
     input: impl BufRead,
     mut output: impl Write,
 ) -> Result<TrackSummary> {
+    let limits = request.limits;
     let answerer = match &request.target {
-        TrackTarget::Sensor(path) => Answerer::Sensor(Box::new(LoadedSensor::read(path)?)),
-        TrackTarget::Rig(path) => Answerer::Rig(Box::new(TrackRig::load(path)?)),
+        TrackTarget::Sensor(path) => {
+            Answerer::Sensor(Box::new(LoadedSensor::read_with(path, limits)?))
+        }
+        TrackTarget::Rig(path) => Answerer::Rig(Box::new(TrackRig::load(path, limits)?)),
     };
     let sensors: Vec<String> = match &answerer {
         Answerer::Sensor(_) => vec![String::new()],
         Answerer::Rig(rig) => rig.ids(),
     };
-    let tones = Tones::read(&request.tones)?;
+    let tones = Tones::read_with(&request.tones, limits)?;
     let (mut source, fs) = match &request.raw {
         Some(path) => SampleSource::file(path, &sensors, &request.channels, request.rate_hz)?,
         None => {

@@ -41,10 +41,10 @@ pub(crate) struct TrackRig {
 }
 
 impl TrackRig {
-    /// Reads rig.json and its calibrations.
-    pub fn load(path: &Path) -> Result<Self> {
+    /// Reads rig.json and its calibrations (within `limits`).
+    pub fn load(path: &Path, limits: psdcal_io::ReadLimits) -> Result<Self> {
         let mut warnings = Vec::new();
-        let (_, rig) = load_rig(path, &mut warnings)?;
+        let (_, rig) = load_rig(path, limits, &mut warnings)?;
         Ok(Self { rig })
     }
 

@@ -57,6 +57,8 @@ pub struct PlanRequest {
     pub out: PathBuf,
     /// Folder for the heat map (plan_sigma.svg, plan_sigma.png).
     pub report: Option<PathBuf>,
+    /// Bounds on the files read whole (docs/formats.md, "Limits").
+    pub limits: psdcal_io::ReadLimits,
 }
 
 /// A plan with its printable forms.
@@ -71,7 +73,7 @@ pub struct Planned {
 }
 
 fn setup(request: &PlanRequest) -> Result<(PlanSetup, Option<LoadedSensor>)> {
-    let template = Template::read(&request.template)?;
+    let template = Template::read_with(&request.template, request.limits)?;
     let leds = template
         .leds
         .iter()
@@ -83,7 +85,7 @@ fn setup(request: &PlanRequest) -> Result<(PlanSetup, Option<LoadedSensor>)> {
         .map_err(|e| Error::Options(format!("--snr {snr}: {e}")))?;
     let (mut sensor, geometry, loaded) = match &request.next {
         Some(path) => {
-            let loaded = LoadedSensor::read(path)?;
+            let loaded = LoadedSensor::read_with(path, request.limits)?;
             (loaded.sensor.model, loaded.sensor.geometry, Some(loaded))
         }
         None => {

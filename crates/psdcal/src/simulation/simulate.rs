@@ -223,9 +223,14 @@ pub(crate) fn simulate_and_write(
 
 /// Simulates the data set at the poses of a poses.csv (`psdcal simulate
 /// --poses`, docs/formats.md) instead of drawn ones, and writes it;
-/// `request.images` is replaced by the number of poses.
-pub fn simulate_files_at_poses(request: &SimulateRequest, poses: &Path) -> Result<SimulatedFiles> {
-    let file = psdcal_io::Poses::read(poses)?;
+/// `request.images` is replaced by the number of poses; poses.csv is read
+/// within `limits`.
+pub fn simulate_files_at_poses(
+    request: &SimulateRequest,
+    poses: &Path,
+    limits: psdcal_io::ReadLimits,
+) -> Result<SimulatedFiles> {
+    let file = psdcal_io::Poses::read_with(poses, limits)?;
     let poses: Vec<Pose> = file
         .rows
         .iter()

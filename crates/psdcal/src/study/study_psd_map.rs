@@ -65,6 +65,8 @@ pub(crate) fn fit_and_write_map(
         seed,
         command: String::new(),
         report: None,
+        // The study reads only the scans it wrote.
+        limits: Default::default(),
     })?;
     let map_path = dir.join(format!("psd_map{seed}.json"));
     fitted.write(&map_path)?;
