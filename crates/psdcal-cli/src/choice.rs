@@ -25,28 +25,6 @@ pub fn name<T: ValueEnum>(value: &T) -> String {
         .map_or_else(String::new, |p| p.get_name().to_string())
 }
 
-/// `--lens` of `simulate` and `map`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum LensArg {
-    #[value(name = "1")]
-    One,
-    #[value(name = "2")]
-    Two,
-}
-
-/// `--template` of `simulate`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum TemplateArg {
-    Scatter14,
-    Grid,
-}
-
-/// `--method` of `gains`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum GainsMethodArg {
-    EqualCurrent,
-}
-
 /// The tables of `study`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum TableArg {
@@ -64,28 +42,6 @@ pub enum TableArg {
     /// The PSD map's condition (run only when named).
     Psdmap,
     All,
-}
-
-/// `From<$arg> for $lib` mapping the variants of the same names.
-macro_rules! same_variants {
-    ($arg:ident => $lib:path { $($v:ident),* }) => {
-        impl From<$arg> for $lib {
-            fn from(a: $arg) -> Self {
-                use $lib as Lib;
-                match a {
-                    $($arg::$v => Lib::$v,)*
-                }
-            }
-        }
-    };
-}
-
-/// `simulate --raw`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum RawArg {
-    Csv,
-    Npy,
-    Tdms,
 }
 
 /// `simulate --impairments` (`none`: a clean card).
@@ -117,22 +73,3 @@ pub fn impairments(list: &[ImpairmentArg]) -> psdcal::Impairments {
         .collect();
     psdcal::Impairments::only(&kinds)
 }
-
-same_variants!(LensArg => psdcal::Lens { One, Two });
-same_variants!(TemplateArg => psdcal::TemplateKind { Scatter14, Grid });
-same_variants!(GainsMethodArg => psdcal::GainsMethod { EqualCurrent });
-same_variants!(RawArg => psdcal::RawFormat { Csv, Npy, Tdms });
-
-/// `export --to`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ExportTo {
-    /// OpenCV FileStorage YAML (the rational model)
-    #[value(name = "opencv")]
-    OpenCv,
-    /// mrcal .cameramodel (LENSMODEL_OPENCV8)
-    Mrcal,
-    /// ROS camera_info YAML (plumb_bob or rational_polynomial)
-    Ros,
-}
-
-same_variants!(ExportTo => psdcal::ExportTarget { OpenCv, Mrcal, Ros });

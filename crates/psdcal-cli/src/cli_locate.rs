@@ -11,7 +11,6 @@ use psdcal::option_text::{
 use psdcal::{LocateOptions, MapRequest, Param, Plane, ReadLimits};
 pub use psdcal::{LocateTarget, MapModel, MapSource};
 
-use crate::choice::LensArg;
 use crate::report::Output;
 
 /// Angles of arrival of measured points (or amplitudes) with their uncertainty
@@ -83,7 +82,7 @@ pub struct MapArgs {
     pub calibration: Option<PathBuf>,
     /// The paper's simulated lens instead of a calibration: 1 (f = 25 mm) or 2 (f = 8 mm), 9 x 9 mm PSD
     #[arg(long, value_name = "N", value_enum)]
-    pub lens: Option<LensArg>,
+    pub lens: Option<psdcal::Lens>,
     /// Parameter error NAME=VALUE (repeatable or comma-separated), e.g. f=0.05,cx=0.02,k1=1e-4
     #[arg(long = "error", value_name = "NAME=VALUE", value_parser = parse_error_list, allow_hyphen_values = true)]
     pub errors: Vec<Vec<(Param, f64)>>,
@@ -192,7 +191,9 @@ impl MapArgs {
         }
         let model = match (self.calibration, self.lens) {
             (Some(path), None) => MapModel::Calibration(path),
-            (None, Some(lens)) => MapModel::PaperLens(if lens == LensArg::One { 1 } else { 2 }),
+            (None, Some(lens)) => {
+                MapModel::PaperLens(if lens == psdcal::Lens::One { 1 } else { 2 })
+            }
             _ => {
                 return Err(usage(
                     clap::error::ErrorKind::ArgumentConflict,

@@ -7,14 +7,14 @@ use clap::Args;
 use psdcal::option_text::{parse_images, parse_snr, parse_threads, parse_trials};
 use psdcal::{parse_record_cycles, StudyRequest};
 
-use crate::choice::{choice, name, LensArg, TableArg, TemplateArg};
+use crate::choice::{choice, name, TableArg};
 
 /// Simulate a calibration data set through the whole signal chain
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct SimulateArgs {
     /// The paper's lens: 1 (f = 25 mm) or 2 (f = 8 mm)
-    #[arg(long, value_name = "1|2", default_value = "2", value_parser = choice::<LensArg>)]
-    pub lens: LensArg,
+    #[arg(long, value_name = "1|2", default_value = "2", value_parser = choice::<psdcal::Lens>)]
+    pub lens: psdcal::Lens,
     /// Per-channel SNR in dB (no noise when absent)
     #[arg(long, value_name = "DB", value_parser = parse_snr, allow_negative_numbers = true)]
     pub snr: Option<f64>,
@@ -32,8 +32,8 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "N", default_value = "9", value_parser = parse_images)]
     pub images: usize,
     /// Template: scatter14 (14 unaligned LEDs) or grid (5 x 5 with lines)
-    #[arg(long, value_name = "NAME", default_value = "scatter14", value_parser = choice::<TemplateArg>)]
-    pub template: TemplateArg,
+    #[arg(long, value_name = "NAME", default_value = "scatter14", value_parser = choice::<psdcal::TemplateKind>)]
+    pub template: psdcal::TemplateKind,
     /// Length of each LED's record in modulation cycles (the first 25 are
     /// the filter's transient; the rest are demodulated). Longer records
     /// average more samples: residuals fall in proportion (the paper's
@@ -50,8 +50,8 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "FILE", conflicts_with_all = ["raw", "images"])]
     pub poses: Option<PathBuf>,
     /// Also write the raw recording a card would make (raw.csv, raw.npy or raw.tdms, 20 kHz) and schedule.csv
-    #[arg(long, value_name = "csv|npy|tdms", value_parser = choice::<crate::choice::RawArg>)]
-    pub raw: Option<crate::choice::RawArg>,
+    #[arg(long, value_name = "csv|npy|tdms", value_parser = choice::<psdcal::RawFormat>)]
+    pub raw: Option<psdcal::RawFormat>,
     /// With --raw: every LED of an image on at once, each at its own tone (writes tones.csv)
     #[arg(long, requires = "raw")]
     pub fdma: bool,

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::choice::ExportTo;
 use crate::report::Output;
 
 /// A calibration as an OpenCV, mrcal or ROS camera model (fitted, with its error)
@@ -16,7 +15,7 @@ pub struct ExportArgs {
     pub calibration: PathBuf,
     /// Format: opencv, mrcal or ros
     #[arg(long, value_name = "FORMAT", value_enum)]
-    pub to: ExportTo,
+    pub to: psdcal::ExportTarget,
     /// Pixel pitch, µm (it must divide the active area's sides)
     #[arg(long, value_name = "UM", default_value_t = psdcal::DEFAULT_PIXEL_UM)]
     pub pixel_um: f64,
@@ -32,7 +31,7 @@ pub struct ExportArgs {
 pub fn run(args: &ExportArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let done = psdcal::export(&psdcal::ExportRequest {
         calibration: args.calibration.clone(),
-        target: args.to.into(),
+        target: args.to,
         pixel_um: args.pixel_um,
         max_error_deg: args.max_error_deg,
         out: args.out.clone(),

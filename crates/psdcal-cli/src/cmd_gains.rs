@@ -1,6 +1,5 @@
 //! `psdcal gains`: relative channel gains from equal-current records.
 
-use crate::choice::GainsMethodArg;
 use crate::report::Output;
 use clap::Args;
 use std::path::PathBuf;
@@ -12,8 +11,8 @@ pub struct GainsArgs {
     #[arg(long, short = 's', value_name = "FILE")]
     pub signals: PathBuf,
     /// Estimation method (equal-current: all four channels carry the same current)
-    #[arg(long, value_name = "METHOD", value_enum, default_value_t = GainsMethodArg::EqualCurrent)]
-    pub method: GainsMethodArg,
+    #[arg(long, value_name = "METHOD", value_enum, default_value_t = psdcal::GainsMethod::EqualCurrent)]
+    pub method: psdcal::GainsMethod,
     /// Where to write gains.json (atomically); standard output when absent
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
@@ -21,7 +20,7 @@ pub struct GainsArgs {
 
 /// Runs `gains` (without `--out`, gains.json goes to standard output).
 pub fn run(args: &GainsArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
-    let file = psdcal::estimate_gains(&args.signals, args.method.into(), limits)?;
+    let file = psdcal::estimate_gains(&args.signals, args.method, limits)?;
     match &args.out {
         Some(path) => psdcal_io::write_gains(path, &file)?,
         None if output != Output::Json => {

@@ -9,13 +9,13 @@ use crate::report::Output;
 /// Runs `simulate`.
 pub fn run(args: &SimulateArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
     let request = SimulateRequest {
-        lens: args.lens.into(),
+        lens: args.lens,
         snr_db: args.snr,
         imbalance: args.imbalance,
         psd_distortion: args.psd_distortion,
         psd_nonlinearity: args.psd_nonlinearity,
         images: args.images,
-        template: args.template.into(),
+        template: args.template,
         record_cycles: args.record_cycles,
         seed: args.seed,
         out: args.out.clone(),
@@ -29,7 +29,7 @@ pub fn run(args: &SimulateArgs, output: Output, limits: psdcal::ReadLimits) -> a
         (Some(format), _) => psdcal::simulate_raw_files(
             &request,
             &psdcal::RawRequest {
-                format: format.into(),
+                format,
                 fdma: args.fdma,
                 impairments: crate::choice::impairments(&args.impairments),
             },

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use psdcal::{PositioningRequest, RoomOptions};
 
-use crate::choice::{choice, LensArg};
+use crate::choice::choice;
 use crate::report::Output;
 use psdcal::option_text::positive_mm;
 use psdcal::option_text::{parse_images, parse_snr};
@@ -15,8 +15,8 @@ use psdcal::option_text::{parse_images, parse_snr};
 #[derive(Debug, Clone, PartialEq, Args)]
 pub struct PositioningArgs {
     /// The paper's lens of every sensor: 1 (f = 25 mm) or 2 (f = 8 mm)
-    #[arg(long, value_name = "1|2", default_value = "2", value_parser = choice::<LensArg>)]
-    pub lens: LensArg,
+    #[arg(long, value_name = "1|2", default_value = "2", value_parser = choice::<psdcal::Lens>)]
+    pub lens: psdcal::Lens,
     /// Per-channel SNR in dB, calibration data and emitters (no noise when absent)
     #[arg(long, value_name = "DB", value_parser = parse_snr, allow_negative_numbers = true)]
     pub snr: Option<f64>,
@@ -46,7 +46,7 @@ pub struct PositioningArgs {
 /// Runs `simulate-positioning`.
 pub fn run(a: &PositioningArgs, output: Output) -> anyhow::Result<()> {
     let rig = psdcal::simulate_positioning(&PositioningRequest {
-        lens: a.lens.into(),
+        lens: a.lens,
         snr_db: a.snr,
         images: a.images,
         record_cycles: psdcal::DEFAULT_RECORD_CYCLES,

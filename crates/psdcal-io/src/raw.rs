@@ -48,6 +48,7 @@ const READ_BUFFER_BYTES: usize = 1 << 18;
 
 /// The layout of a raw recording, from its file name's extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[non_exhaustive]
 pub enum RawFormat {
     /// raw.csv.

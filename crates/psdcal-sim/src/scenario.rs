@@ -54,6 +54,21 @@ pub enum Lens {
     Two,
 }
 
+/// The command line's `--lens 1|2` (no help per value).
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for Lens {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[Lens::One, Lens::Two]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(match self {
+            Lens::One => "1",
+            Lens::Two => "2",
+        }))
+    }
+}
+
 impl Lens {
     /// The lens's true model (no PSD distortion).
     pub fn model(self) -> SensorModel {
@@ -75,6 +90,7 @@ impl Lens {
 /// The calibration template.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum TemplateKind {
     /// 14 unaligned LEDs.
     Scatter14,

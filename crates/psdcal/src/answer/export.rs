@@ -23,14 +23,16 @@ use serde_json::json;
 use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 
-/// Where the model goes.
+/// Where the model goes (the variants' docs are `--to`'s help).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum ExportTarget {
-    /// OpenCV FileStorage YAML, the rational model.
+    /// OpenCV FileStorage YAML (the rational model)
+    #[cfg_attr(feature = "clap", value(name = "opencv"))]
     OpenCv,
-    /// mrcal `.cameramodel`, `LENSMODEL_OPENCV8`.
+    /// mrcal .cameramodel (LENSMODEL_OPENCV8)
     Mrcal,
-    /// ROS `camera_info` YAML.
+    /// ROS camera_info YAML (plumb_bob or rational_polynomial)
     Ros,
 }
 

@@ -20,6 +20,17 @@ pub enum GainsMethod {
     EqualCurrent,
 }
 
+#[cfg(feature = "clap")]
+impl clap::ValueEnum for GainsMethod {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[GainsMethod::EqualCurrent]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
+}
+
 impl GainsMethod {
     /// The name written in gains.json.
     pub fn name(self) -> &'static str {
