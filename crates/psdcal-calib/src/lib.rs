@@ -35,6 +35,7 @@ pub mod refine;
 pub mod start;
 pub mod surveyed;
 pub mod uncertainty;
+mod warning;
 
 // The former flat module paths.
 pub use diagnose::{diagnostics, report, residual_structure};
@@ -75,3 +76,4 @@ pub use uncertainty::covariance::{covariance, Covariance, CovarianceMethod};
 pub use uncertainty::linearity::{
     check_linearity, LinearityCheck, ParameterLinearity, UncertaintyVerdict,
 };
+pub use warning::{warning_texts, FitWarning};

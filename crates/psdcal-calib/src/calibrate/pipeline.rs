@@ -27,6 +27,7 @@ use crate::uncertainty::bootstrap::{bootstrap_covariance, BootstrapReport};
 use crate::uncertainty::covariance::{analytic_method, covariance_at, Covariance};
 use crate::uncertainty::linearity::{check_linearity_at, LinearityCheck, UncertaintyVerdict};
 use crate::uncertainty::profile::profile_at_three_sigma;
+use crate::warning::FitWarning;
 use crate::CalibError;
 
 /// Largest relative standard deviation of a freed `f` accepted as a
@@ -283,25 +284,23 @@ fn result_warnings(
     init: &Initialization,
     statistics: &FitStatistics,
     global: Option<&GlobalReport>,
-) -> Vec<String> {
+) -> Vec<FitWarning> {
     let mut warnings = covariance.warnings.clone();
     if let Some(note) = &init.report.preliminary_note {
         warnings.push(note.clone());
     }
     if !statistics.outliers.is_empty() {
-        warnings.push(format!(
-            "{} point(s) down-weighted as outliers by the robust loss",
-            statistics.outliers.len()
-        ));
+        warnings.push(FitWarning::Outliers {
+            count: statistics.outliers.len(),
+        });
     }
     if let Some(g) = global {
         if g.minima.len() > 1 {
-            warnings.push(format!(
-                "the cost has {} local minima over l1; the lowest ({:.4e}) was kept, the next is {:.4e}",
-                g.minima.len(),
-                g.minima[0].cost,
-                g.minima[1].cost
-            ));
+            warnings.push(FitWarning::LocalMinima {
+                count: g.minima.len(),
+                lowest: g.minima[0].cost,
+                next: g.minima[1].cost,
+            });
         }
     }
     warnings

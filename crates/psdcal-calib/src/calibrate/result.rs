@@ -16,6 +16,7 @@ use crate::start::initialize::InitReport;
 use crate::uncertainty::bootstrap::BootstrapReport;
 use crate::uncertainty::covariance::Covariance;
 use crate::uncertainty::linearity::LinearityCheck;
+use crate::warning::FitWarning;
 
 /// A finished calibration.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,7 +57,7 @@ pub struct CalibrationResult {
     /// Fit statistics.
     pub statistics: FitStatistics,
     /// Everything the user should know (identifiability, start, outliers).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<FitWarning>,
     /// A block of the model with a known covariance (a PSD map's
     /// coefficients), held fixed with its covariance carried or refined
     /// with it as the prior ([`CalibrateOptions::fixed_covariance`],

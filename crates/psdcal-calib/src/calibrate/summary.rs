@@ -116,7 +116,7 @@ impl CalibrationResult {
             sigma2: self.covariance.sigma2,
             dof: self.covariance.dof,
             global: self.global.clone(),
-            warnings: self.warnings.clone(),
+            warnings: crate::warning::warning_texts(&self.warnings),
             diagnostics: self.diagnostics.clone(),
         }
     }

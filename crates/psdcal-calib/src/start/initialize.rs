@@ -87,6 +87,7 @@ use crate::start::preliminary::{
     check_data, estimate_preliminary, Preliminary, PreliminaryOptions, PreliminaryReport,
 };
 use crate::start::zhang::{closed_form, ClosedFormSolution};
+use crate::warning::FitWarning;
 use crate::{CalibError, CalibrationData, ImageObservations};
 use psdcal_model::CostKind;
 
@@ -179,7 +180,7 @@ pub struct InitReport {
     /// The preliminary correction.
     pub preliminary: PreliminaryReport,
     /// Why an `Auto` preliminary correction was skipped, if it was.
-    pub preliminary_note: Option<String>,
+    pub preliminary_note: Option<FitWarning>,
     /// Per image: RMS transfer error of its homography (corrected points), mm.
     pub homography_rms: Vec<f64>,
     /// `J` at the start, mm² (template-plane sum of squares).
@@ -309,7 +310,7 @@ fn check_input(data: &CalibrationData, options: &InitOptions) -> Result<(), Cali
 fn preliminary_correction(
     data: &CalibrationData,
     options: &InitOptions,
-) -> Result<(PreliminaryReport, Option<String>), CalibError> {
+) -> Result<(PreliminaryReport, Option<FitWarning>), CalibError> {
     let prelim_options = PreliminaryOptions {
         method: options.preliminary,
         centre: options.preliminary_centre,
@@ -329,7 +330,9 @@ fn preliminary_correction(
         Ok(r) => Ok((r, None)),
         Err(e) if options.preliminary == Preliminary::Auto => Ok((
             PreliminaryReport::off(options.preliminary_centre),
-            Some(format!("automatic preliminary correction skipped: {e}")),
+            Some(FitWarning::PreliminarySkipped {
+                reason: e.to_string(),
+            }),
         )),
         Err(e) => Err(e),
     }

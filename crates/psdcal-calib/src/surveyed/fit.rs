@@ -16,6 +16,7 @@ use crate::surveyed::projection_dlt::{
     decompose_projection, dlt_projection, flatness, MIN_SURVEYED_POINTS,
 };
 use crate::uncertainty::linearity::LinearityCheck;
+use crate::warning::FitWarning;
 use crate::CalibError;
 
 /// Smallest ratio of the point cloud's third to first principal spread
@@ -53,7 +54,7 @@ pub struct SurveyedCalibration {
     pub report: SolverReport,
     /// What the user should know (residuals smaller than the survey σ
     /// predicts, a poorly determined parameter).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<FitWarning>,
     /// The diagnostics (calibration.json's `diagnostics`) and their
     /// statistics ([`crate::surveyed_checks`]).
     pub diagnostics: DiagnosticReport,
@@ -453,12 +454,11 @@ fn finish(
         .collect();
     let mut warnings = Vec::new();
     if options.survey_sigma_mm > 0.0 && refined.cost < share {
-        warnings.push(format!(
-            "the residuals ({:.3e} mm²) are smaller than a survey σ of {} mm predicts ({:.3e} \
-             mm²): the survey is better than stated, and the reported uncertainty errs on the \
-             large side",
-            refined.cost, options.survey_sigma_mm, share
-        ));
+        warnings.push(FitWarning::SurveyBetterThanStated {
+            residual_mm2: refined.cost,
+            survey_sigma_mm: options.survey_sigma_mm,
+            predicted_mm2: share,
+        });
     }
     if let Some(sd) = covariance.std("f") {
         let f = state.model.get("f").unwrap_or(f64::NAN);

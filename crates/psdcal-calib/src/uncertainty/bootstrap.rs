@@ -30,6 +30,7 @@ use crate::refine::options::RefineOptions;
 use crate::refine::refined::Refined;
 use crate::refine::solve::refine;
 use crate::uncertainty::covariance::{correlation_warnings, Covariance, CovarianceMethod};
+use crate::warning::FitWarning;
 use crate::CalibError;
 
 /// The fewest distinct images a resample holds.
@@ -162,10 +163,10 @@ pub fn bootstrap_covariance(
             stage: "bootstrap covariance",
             reason: e.to_string(),
         })?;
-    let mut warnings: Vec<String> = analytic
+    let mut warnings: Vec<FitWarning> = analytic
         .warnings
         .iter()
-        .filter(|w| !w.contains("strongly correlated"))
+        .filter(|w| !matches!(w, FitWarning::StronglyCorrelated { .. }))
         .cloned()
         .collect();
     warnings.extend(correlation_warnings(&parameters));

@@ -33,6 +33,7 @@ use crate::problem::calibration_problem::{CalibrationProblem, FitState};
 use crate::refine::linearization::AtSolution;
 use crate::refine::options::RefineOptions;
 use crate::refine::refined::Refined;
+use crate::warning::FitWarning;
 use crate::CalibError;
 use psdcal_model::CostKind;
 use psdcal_solver::normal_equations::NormalEquations;
@@ -95,7 +96,7 @@ pub struct Covariance {
     /// Degrees of freedom `2·points − parameters`.
     pub dof: usize,
     /// Identifiability warnings (empty when the data pin everything down).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<FitWarning>,
     /// How it was estimated.
     pub method: CovarianceMethod,
 }
@@ -201,10 +202,10 @@ pub(crate) fn covariance_at(
         for (k, p) in names.iter().enumerate() {
             let inflation = s_inv[(k, k)] * s[(k, k)];
             if inflation > INFLATION_WARNING {
-                warnings.push(format!(
-                    "{p} is poorly determined by these images (variance inflated {inflation:.1e}× by correlation \
-                     with the other parameters); consider fixing it"
-                ));
+                warnings.push(FitWarning::PoorlyDetermined {
+                    parameter: p.to_string(),
+                    inflation,
+                });
             }
         }
     }
@@ -255,19 +256,18 @@ pub(crate) fn covariance_at(
 }
 
 /// Warnings for pairs correlated beyond [`CORRELATION_WARNING`].
-pub(crate) fn correlation_warnings(estimated: &ParameterCovariance) -> Vec<String> {
+pub(crate) fn correlation_warnings(estimated: &ParameterCovariance) -> Vec<FitWarning> {
     let names = estimated.names();
     let corr = estimated.correlation();
     let mut warnings = Vec::new();
     for i in 0..names.len() {
         for j in (i + 1)..names.len() {
             if corr[(i, j)].abs() > CORRELATION_WARNING {
-                warnings.push(format!(
-                    "{} and {} are strongly correlated ({:+.3}): the data barely separate them",
-                    names[i],
-                    names[j],
-                    corr[(i, j)]
-                ));
+                warnings.push(FitWarning::StronglyCorrelated {
+                    first: names[i].clone(),
+                    second: names[j].clone(),
+                    correlation: corr[(i, j)],
+                });
             }
         }
     }

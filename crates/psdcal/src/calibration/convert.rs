@@ -269,7 +269,7 @@ pub fn fit_report(r: &CalibrationResult) -> FitReport {
                 rms_image_mm: i.rms_image_mm,
             })
             .collect(),
-        warnings: r.warnings.clone(),
+        warnings: psdcal_calib::warning_texts(&r.warnings),
         diagnostics: r.diagnostics.clone(),
     }
 }

@@ -305,7 +305,7 @@ impl InSitu {
             "points": r.points,
             "iterations": r.report.iterations,
             "poses": self.poses_json("calibration.json")["sensors"].clone(),
-            "warnings": r.warnings,
+            "warnings": psdcal_calib::warning_texts(&r.warnings),
             "diagnostics": r.diagnostics.diagnostics,
             "linearity": r.linearity,
         })
