@@ -29,6 +29,15 @@ pub struct ColumnRef {
     pub number: usize,
 }
 
+/// What makes a sample stream unreadable ([`IoError::Stream`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StreamFault {
+    /// The options do not fit the recording (its format, its rate).
+    Options,
+    /// The stream's header lacks a needed column.
+    Header,
+}
+
 impl fmt::Display for ColumnRef {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "column '{}' ({})", self.name, self.number)
@@ -129,6 +138,14 @@ pub enum IoError {
         /// What is wrong and what was expected.
         message: String,
     },
+    /// A sample stream that cannot be read as asked (the text says why).
+    #[error("{message}")]
+    Stream {
+        /// Whose fault: the options or the stream's header.
+        fault: StreamFault,
+        /// What is wrong and what to do.
+        message: String,
+    },
     /// An amplitude row cannot give an impact point (docs/model.md §1).
     #[error("{at}: {source}")]
     Amplitudes {
@@ -206,6 +223,7 @@ impl IoError {
             | IoError::Invalid { at, .. }
             | IoError::Amplitudes { at, .. } => Some(&at.file),
             IoError::Strict { warning } => Some(warning.file()),
+            IoError::Stream { .. } => None,
         }
     }
 
@@ -215,7 +233,8 @@ impl IoError {
             IoError::Read { .. }
             | IoError::Write { .. }
             | IoError::Field { .. }
-            | IoError::OutputIsInput { .. } => None,
+            | IoError::OutputIsInput { .. }
+            | IoError::Stream { .. } => None,
             IoError::Json { line, .. } | IoError::NewerVersion { line, .. } => Some(*line),
             IoError::Encoding { at, .. }
             | IoError::Structure { at, .. }

@@ -63,6 +63,7 @@ mod raw_frame;
 mod rig;
 mod rig_observations;
 mod same_file;
+mod sample_stream;
 mod scan;
 mod schedule;
 mod signals;
@@ -88,7 +89,7 @@ pub use camera_model_file::{float_text, write_camera_model, CameraFormat, Camera
 pub use corners::{Corner, Corners};
 pub use coverage::{Bounds, Coverage};
 pub use csv_field::csv_field;
-pub use error::{ColumnRef, IoError};
+pub use error::{ColumnRef, IoError, StreamFault};
 pub use export::{
     write_observations, write_signals, write_template, ObservationRow, SignalRowOut, TemplateLed,
 };
@@ -117,6 +118,7 @@ pub use rig::{
 };
 pub use rig_observations::{RigObservation, RigObservations};
 pub use same_file::refuse_overwrite;
+pub use sample_stream::{Sample, SampleSource};
 pub use scan::{write_scan, Scan, ScanPoints, ScanReading, ScanRow, SCAN_DUPLICATE_MM};
 pub use schedule::{write_schedule, write_tones, Schedule, ScheduleRow, Tone, Tones};
 pub use signals::{SignalRow, Signals};

@@ -2,5 +2,4 @@
 
 pub(crate) mod demodulate;
 pub(crate) mod track;
-pub(crate) mod track_input;
 pub(crate) mod track_rig;

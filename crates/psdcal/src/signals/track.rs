@@ -1,7 +1,7 @@
 //! `track`: angles of arrival (one sensor) or positions (a rig) from a
 //! live stream of raw samples (docs/model.md §8.5): rows of
 //! `vx1,vx2,vy1,vy2` (volts) per sensor in, as they arrive (standard input,
-//! or a recording file: `track_input.rs`); per window of `round(window fs)`
+//! or a recording file: psdcal-io's `SampleSource`); per window of `round(window fs)`
 //! samples and per LED of tones.csv, one row out, flushed at the end of each
 //! window (`daq-reader | psdcal track … | controller`):
 //!
@@ -23,7 +23,7 @@
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
 
-use psdcal_io::Tones;
+use psdcal_io::{IoError, Sample, SampleSource, StreamFault, Tones};
 use psdcal_locate::{LocateOptions, Measurement};
 use psdcal_model::Amplitudes;
 use psdcal_signal::tones::check_separable;
@@ -32,7 +32,6 @@ use psdcal_signal::{DemodConfig, RecordEstimate, SignalError, Window, Windows};
 use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 use crate::base::table::{deg, num};
-use crate::signals::track_input::{Sample, SampleSource};
 use crate::signals::track_rig::TrackRig;
 
 /// Whose angles or positions `track` computes.
@@ -108,7 +107,8 @@ pub fn track(
     };
     let tones = Tones::read_with(&request.tones, limits)?;
     let (mut source, fs) = match &request.raw {
-        Some(path) => SampleSource::file(path, &sensors, &request.channels, request.rate_hz)?,
+        Some(path) => SampleSource::file(path, &sensors, &request.channels, request.rate_hz)
+            .map_err(stream_error)?,
         None => {
             let fs = request.rate_hz.ok_or_else(|| {
                 Error::Options(
@@ -164,7 +164,7 @@ pub fn track(
     let empty_fields = header.matches(',').count() - 1;
     let mut windows = Windows::new(sensors.len(), window, fs, freqs, request.config);
     let options = LocateOptions::default();
-    while let Some(sample) = source.next()? {
+    while let Some(sample) = source.next_sample().map_err(stream_error)? {
         let Sample::Values(values) = sample else {
             summary.malformed += 1;
             let t = (summary.samples as f64) / fs;
@@ -229,4 +229,20 @@ fn sensor_rows(
         rows.push(row);
     }
     rows
+}
+
+/// A stream's refusal as the facade's error: the options' fault or the
+/// header's in the words the stream gave.
+fn stream_error(e: IoError) -> Error {
+    match e {
+        IoError::Stream {
+            fault: StreamFault::Options,
+            message,
+        } => Error::Options(message),
+        IoError::Stream {
+            fault: StreamFault::Header,
+            message,
+        } => Error::Input(message),
+        e => Error::Io(e),
+    }
 }

@@ -1,4 +1,4 @@
-//! The samples `track` reads: rows of `4 S` values (S sensors, each
+//! A stream of samples (what `psdcal track` reads): rows of `4 S` values (S sensors, each
 //! `vx1, vx2, vy1, vy2`, volts) from a text stream as they arrive, or from a
 //! recording file (docs/formats.md, "Raw recordings").
 //!
@@ -9,21 +9,29 @@
 //! in rig.json's order, four each. A line that is not the needed finite
 //! numbers (or longer than 1 MiB, or not UTF-8) is [`Sample::Malformed`].
 //!
-//! Recording file: one sensor, raw.csv, raw.npy or raw.tdms (psdcal-io's
-//! `RawReader`); a rig, raw.tdms with the channels `SENSOR/vx1` … (a group
+//! Recording file: one sensor, raw.csv, raw.npy or raw.tdms
+//! ([`RawReader`]); a rig, raw.tdms with the channels `SENSOR/vx1` … (a group
 //! per sensor, named by its id) or the channels named, four per sensor in
 //! rig.json's order.
 
 use std::io::{BufRead, Read};
 use std::path::Path;
 
-use psdcal_io::{RawReader, TdmsReader, MAX_LINE_BYTES, TDMS_DEFAULT_CHANNELS};
+use crate::error::{IoError, StreamFault};
+use crate::limits::MAX_LINE_BYTES;
+use crate::raw::RawReader;
+use crate::tdms::{TdmsReader, TDMS_DEFAULT_CHANNELS};
 
-use crate::base::error::{Error, Result};
+type Result<T> = std::result::Result<T, IoError>;
+
+/// A stream that cannot be read as asked.
+fn fault(fault: StreamFault, message: String) -> IoError {
+    IoError::Stream { fault, message }
+}
 
 /// One input row.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) enum Sample {
+pub enum Sample {
     /// The `4 S` values.
     Values(Vec<f64>),
     /// A line that is not a sample.
@@ -34,7 +42,7 @@ pub(crate) enum Sample {
 const BLOCK: usize = 4096;
 
 /// Where the samples come from.
-pub(crate) enum SampleSource<R> {
+enum Source<R> {
     /// A text stream.
     Lines {
         input: R,
@@ -57,10 +65,10 @@ pub(crate) enum SampleSource<R> {
     },
 }
 
-impl<R: BufRead> SampleSource<R> {
+impl<R: BufRead> Source<R> {
     /// A text stream of the `sensors` (an empty id: the one sensor).
-    pub fn lines(input: R, sensors: Vec<String>) -> Self {
-        SampleSource::Lines {
+    fn lines(input: R, sensors: Vec<String>) -> Self {
+        Source::Lines {
             input,
             sensors,
             columns: None,
@@ -71,7 +79,7 @@ impl<R: BufRead> SampleSource<R> {
 
     /// A recording file of the `sensors`, its sample rate (`rate_hz` or the
     /// file's own).
-    pub fn file(
+    fn file(
         path: &Path,
         sensors: &[String],
         channels: &[String],
@@ -82,7 +90,7 @@ impl<R: BufRead> SampleSource<R> {
             let rate = reader.sample_rate_hz();
             let buffer = Default::default();
             let reader = Box::new(reader);
-            return Ok((SampleSource::Raw { reader, buffer }, rate));
+            return Ok((Source::Raw { reader, buffer }, rate));
         }
         let specs: Vec<String> = if channels.is_empty() {
             sensors
@@ -101,30 +109,36 @@ impl<R: BufRead> SampleSource<R> {
             .and_then(|e| e.to_str())
             .is_some_and(|e| e.eq_ignore_ascii_case("tdms"));
         if !is_tdms || specs.len() != 4 * sensors.len() {
-            return Err(Error::Options(format!(
+            return Err(fault(
+                StreamFault::Options,
+                format!(
                 "{}: a rig's recording is a .tdms file with four channels per sensor ({} named, \
                  {} sensors); expected raw.tdms with groups named by the sensors, or the rows \
                  on standard input",
                 path.display(),
                 specs.len(),
                 sensors.len()
-            )));
+            ),
+            ));
         }
         let reader = TdmsReader::open(path, &specs, specs.len())?;
-        let increment = reader.increment_s(psdcal_io::RATE_TOLERANCE)?;
+        let increment = reader.increment_s(crate::raw_frame::RATE_TOLERANCE)?;
         let rate = match (rate_hz, increment) {
             (Some(r), _) => r,
             (None, Some(dt)) => 1.0 / dt,
             (None, None) => {
-                return Err(Error::Options(format!(
-                    "{}: the channels carry no wf_increment; give the sample rate as --rate HZ",
-                    path.display()
-                )))
+                return Err(fault(
+                    StreamFault::Options,
+                    format!(
+                        "{}: the channels carry no wf_increment; give the sample rate as --rate HZ",
+                        path.display()
+                    ),
+                ))
             }
         };
         let width = specs.len();
         let reader = Box::new(reader);
-        let source = SampleSource::Tdms {
+        let source = Source::Tdms {
             reader,
             width,
             buffer: Vec::new(),
@@ -134,9 +148,9 @@ impl<R: BufRead> SampleSource<R> {
     }
 
     /// The next row; `None` at the end of the input.
-    pub fn next(&mut self) -> Result<Option<Sample>> {
+    fn next(&mut self) -> Result<Option<Sample>> {
         match self {
-            SampleSource::Raw { reader, buffer } => {
+            Source::Raw { reader, buffer } => {
                 if buffer.is_empty() {
                     let mut block = Vec::with_capacity(BLOCK);
                     reader.read_frames(&mut block, BLOCK)?;
@@ -144,7 +158,7 @@ impl<R: BufRead> SampleSource<R> {
                 }
                 Ok(buffer.pop_front().map(|f| Sample::Values(f.to_vec())))
             }
-            SampleSource::Tdms {
+            Source::Tdms {
                 reader,
                 width,
                 buffer,
@@ -161,7 +175,7 @@ impl<R: BufRead> SampleSource<R> {
                 *next += *width;
                 Ok(Some(Sample::Values(row)))
             }
-            SampleSource::Lines {
+            Source::Lines {
                 input,
                 sensors,
                 columns,
@@ -172,11 +186,9 @@ impl<R: BufRead> SampleSource<R> {
                 let read = (&mut *input)
                     .take(MAX_LINE_BYTES as u64 + 1)
                     .read_until(b'\n', line)
-                    .map_err(|source| {
-                        Error::Io(psdcal_io::IoError::Read {
-                            file: "standard input".to_string(),
-                            source,
-                        })
+                    .map_err(|source| IoError::Read {
+                        file: "standard input".to_string(),
+                        source,
                     })?;
                 if read == 0 {
                     return Ok(None);
@@ -202,11 +214,14 @@ impl<R: BufRead> SampleSource<R> {
                 if *first_line && is_header {
                     *first_line = false;
                     *columns = Some(header_columns(&fields, sensors).ok_or_else(|| {
-                        Error::Input(format!(
-                            "standard input: the header '{}' lacks one of {}",
-                            text.chars().take(60).collect::<String>(),
-                            needed(sensors)
-                        ))
+                        fault(
+                            StreamFault::Header,
+                            format!(
+                                "standard input: the header '{}' lacks one of {}",
+                                text.chars().take(60).collect::<String>(),
+                                needed(sensors)
+                            ),
+                        )
                     })?);
                     continue;
                 }
@@ -219,6 +234,34 @@ impl<R: BufRead> SampleSource<R> {
                 }));
             },
         }
+    }
+}
+
+/// A stream of samples: a text stream or a recording file (module
+/// documentation).
+pub struct SampleSource<R>(Source<R>);
+
+impl<R: BufRead> SampleSource<R> {
+    /// A text stream of the `sensors` (an empty id: the one sensor).
+    pub fn lines(input: R, sensors: Vec<String>) -> Self {
+        Self(Source::lines(input, sensors))
+    }
+
+    /// A recording file of the `sensors` (four `channels` per sensor of a
+    /// .tdms file, or empty for the default), and its sample rate
+    /// (`rate_hz` or the file's own).
+    pub fn file(
+        path: &Path,
+        sensors: &[String],
+        channels: &[String],
+        rate_hz: Option<f64>,
+    ) -> Result<(Self, f64)> {
+        Source::file(path, sensors, channels, rate_hz).map(|(s, rate)| (Self(s), rate))
+    }
+
+    /// The next row; `None` at the end of the input.
+    pub fn next_sample(&mut self) -> Result<Option<Sample>> {
+        self.0.next()
     }
 }
 
