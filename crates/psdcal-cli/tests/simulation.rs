@@ -313,7 +313,7 @@ fn study_runs_the_psd_map_condition() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("study.json")).unwrap()).unwrap();
     let seed = &json["psd_map"]["seeds"][0];
-    let again = ::psdcal::psd_map_seed(&dir.path().join("again"), 5, false).unwrap();
+    let again = ::psdcal::psd_map_seed(5, false).unwrap();
     assert_eq!(seed["map"].as_f64().unwrap(), again.map);
     assert_eq!(seed["l1"].as_f64().unwrap(), again.l1);
     assert_eq!(seed["clean"].as_f64().unwrap(), again.clean);

@@ -10,11 +10,10 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let seeds: u64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(10);
     let amplitudes = args.iter().any(|a| a == "--amplitudes");
-    let dir = tempfile::tempdir().expect("temporary folder");
     println!("seed,map_mdeg,l1_mdeg,clean_mdeg,map_error_um,scan_noise_um");
     let mut all = Vec::new();
     for seed in 1..=seeds {
-        let e = support::run_seed(dir.path(), seed, amplitudes);
+        let e = support::run_seed(seed, amplitudes);
         println!(
             "{seed},{:.3},{:.3},{:.3},{:.3},{:.3}",
             e.map.to_degrees() * 1e3,

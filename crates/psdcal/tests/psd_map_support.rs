@@ -16,7 +16,53 @@ use std::path::Path;
 
 pub use psdcal::{pooled, SeedErrors};
 
-/// The experiment for one seed (the facade's `psd_map_seed`).
-pub fn run_seed(dir: &Path, seed: u64, amplitudes: bool) -> SeedErrors {
-    psdcal::psd_map_seed(dir, seed, amplitudes).unwrap()
+/// The experiment for one seed (the facade's `psd_map_seed`, in memory).
+pub fn run_seed(seed: u64, amplitudes: bool) -> SeedErrors {
+    psdcal::psd_map_seed(seed, amplitudes).unwrap()
+}
+
+/// The files of seed `seed`'s experiment, as the command line makes them:
+/// the data set with the non-linearity in `dir/nl{seed}`, the scan
+/// `dir/scan{seed}.csv` and its map `dir/psd_map{seed}.json`.
+pub fn write_seed_files(dir: &Path, seed: u64) {
+    use psdcal::{
+        psd_map_from_scan, simulate_files, simulate_scan_file, Lens, PsdGeometry, PsdMapModel,
+        PsdMapRequest, ScanRequest, SimulateRequest, TemplateKind, DEFAULT_RECORD_CYCLES,
+    };
+    simulate_files(&SimulateRequest {
+        lens: Lens::Two,
+        snr_db: Some(40.0),
+        imbalance: false,
+        psd_distortion: false,
+        psd_nonlinearity: true,
+        images: 12,
+        template: TemplateKind::Scatter14,
+        record_cycles: DEFAULT_RECORD_CYCLES,
+        seed,
+        out: dir.join(format!("nl{seed}")),
+    })
+    .unwrap();
+    let scan = dir.join(format!("scan{seed}.csv"));
+    simulate_scan_file(&ScanRequest {
+        step_mm: 0.25,
+        stage_sigma_um: 0.3,
+        snr_db: Some(50.0),
+        nonlinearity: true,
+        geometry: PsdGeometry::default(),
+        seed: 1000 + seed,
+        out: scan.clone(),
+    })
+    .unwrap();
+    psd_map_from_scan(&PsdMapRequest {
+        scan,
+        model: PsdMapModel::Auto,
+        geometry: PsdGeometry::default(),
+        seed,
+        command: String::new(),
+        report: None,
+        limits: Default::default(),
+    })
+    .unwrap()
+    .write(&dir.join(format!("psd_map{seed}.json")))
+    .unwrap();
 }

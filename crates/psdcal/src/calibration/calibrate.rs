@@ -11,8 +11,9 @@ use psdcal_io::{write_calibration, Calibration, ValidRegionRecord};
 use crate::base::error::{Error, Result};
 use crate::base::options::CalibrationOptions;
 use crate::base::provenance::provenance;
+use crate::base::provenance::InputHashes;
 use crate::base::summary::Summary;
-use crate::calibration::calibrate_map;
+use crate::calibration::calibrate_map::{self, MapInput};
 use crate::calibration::convert;
 use crate::calibration::fit_report::FitReport;
 use crate::calibration::residuals::ResidualTable;
@@ -37,17 +38,7 @@ pub struct Calibrated {
 /// Calibrates `set` with `options`. The record's provenance lists the data
 /// set's input files; its command is empty until [`Calibrated::set_command`].
 pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrated> {
-    if set.template.is_three_d() {
-        return Err(Error::Input(format!(
-            "{} has LEDs off the plane Z = 0 (its Z_mm column): calibrate fits a planar \
-             template; for surveyed 3-D points use psdcal calibrate-in-situ",
-            set.template.source
-        )));
-    }
-    options
-        .check(set.signals.is_some(), set.known_gains.is_some())
-        .map_err(Error::Options)?;
-    let data = convert::calibration_data(set, options.fit_gains);
+    check_options(set, options)?;
     // The data set's files, and the map's when there is one (hashed as read).
     let mut inputs = set.inputs.clone();
     let map = match &options.psd_map {
@@ -59,6 +50,19 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
         )?),
         None => None,
     };
+    calibrate_with_map(set, options, map, &inputs)
+}
+
+/// [`calibrate`] with the PSD map already read (or made in memory): the
+/// record's provenance lists `inputs`.
+pub(crate) fn calibrate_with_map(
+    set: &DataSet,
+    options: &CalibrationOptions,
+    map: Option<MapInput>,
+    inputs: &InputHashes,
+) -> Result<Calibrated> {
+    check_options(set, options)?;
+    let data = convert::calibration_data(set, options.fit_gains);
     let mut calibrate_options = convert::calibrate_options(options);
     if let Some(map) = &map {
         calibrate_options.base = calibrate_map::with_map(&calibrate_options.base, map)?;
@@ -69,7 +73,7 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
         }
     }
     let result = psdcal_calib::calibrate(&data, &calibrate_options)
-        .map_err(|e| calibration_error(e, set, &data, options))?;
+        .map_err(|e| calibration_error(e, set, &data, map.as_ref().map(|m| m.source.as_str())))?;
     let map_stage = match (&map, &result.block) {
         (Some(map), Some(block)) => Some(calibrate_map::stage_record(map, block)),
         _ => None,
@@ -77,7 +81,7 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
     let mut record = convert::record(&result, &data, set, options);
     record.valid_region = Some(ValidRegionRecord::from_region(&result.valid_region));
     record.psd_map = map_stage;
-    record.provenance = Some(provenance("", options.to_json(), &inputs));
+    record.provenance = Some(provenance("", options.to_json(), inputs));
     let report = convert::fit_report(&result);
     Ok(Calibrated {
         result,
@@ -88,13 +92,28 @@ pub fn calibrate(set: &DataSet, options: &CalibrationOptions) -> Result<Calibrat
     })
 }
 
+/// A planar data set, and the options against it (before any file is
+/// read).
+fn check_options(set: &DataSet, options: &CalibrationOptions) -> Result<()> {
+    if set.template.is_three_d() {
+        return Err(Error::Input(format!(
+            "{} has LEDs off the plane Z = 0 (its Z_mm column): calibrate fits a planar \
+             template; for surveyed 3-D points use psdcal calibrate-in-situ",
+            set.template.source
+        )));
+    }
+    options
+        .check(set.signals.is_some(), set.known_gains.is_some())
+        .map_err(Error::Options)
+}
+
 /// psdcal-calib's refusal in the data set's own names: the misplaced LED
 /// by identifier and line, a point by its image and LED.
 fn calibration_error(
     e: CalibError,
     set: &DataSet,
     data: &CalibrationData,
-    options: &CalibrationOptions,
+    map_source: Option<&str>,
 ) -> Error {
     let point_text = |p: &DataPoint| {
         let image = &data.images[p.image];
@@ -129,9 +148,9 @@ fn calibration_error(
             outside,
             points,
             first,
-        } => match &options.psd_map {
+        } => match map_source {
             Some(map) => Error::DataOutsidePsdMap {
-                map: map.display().to_string(),
+                map: map.to_string(),
                 outside,
                 points,
                 first: point_text(&first),

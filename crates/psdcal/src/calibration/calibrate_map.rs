@@ -24,8 +24,28 @@ use crate::base::provenance::InputHashes;
 /// A map file read for a calibration.
 #[derive(Debug, Clone)]
 pub(crate) struct MapInput {
+    /// The file's name, for messages.
+    pub source: String,
     pub file: PsdMapFile,
     pub loaded: LoadedPsdMap,
+}
+
+impl MapInput {
+    /// A map in memory, named `source` in messages, checked against the
+    /// sensor as a file would be.
+    pub(crate) fn in_memory(
+        file: PsdMapFile,
+        source: &str,
+        geometry: &PsdGeometry,
+    ) -> Result<Self> {
+        let loaded = file.to_stage(source)?;
+        file.check_sensor(source, geometry)?;
+        Ok(MapInput {
+            source: source.to_string(),
+            file,
+            loaded,
+        })
+    }
 }
 
 /// Reads psd_map.json once (within `limits`), adding it with the hash of
@@ -38,8 +58,13 @@ pub(crate) fn load(
     inputs: &mut InputHashes,
 ) -> Result<MapInput> {
     let (file, loaded) = inputs.read(path, |s, r| psd_map_from_reader_with(s, r, limits))?;
-    file.check_sensor(&path.display().to_string(), geometry)?;
-    Ok(MapInput { file, loaded })
+    let source = path.display().to_string();
+    file.check_sensor(&source, geometry)?;
+    Ok(MapInput {
+        source,
+        file,
+        loaded,
+    })
 }
 
 /// `base` with the map first among its distortion stages, at its values.

@@ -128,6 +128,16 @@ pub fn psd_map_from_scan(request: &PsdMapRequest) -> Result<PsdMapOutcome> {
     let scan = inputs.read(&request.scan, |s, r| {
         Scan::from_reader_with(s, r, request.limits)
     })?;
+    psd_map_of(&scan, &inputs, request)
+}
+
+/// Fits the map of a scan in memory (`request.scan` names it; `inputs`,
+/// the files it was read from, for the provenance).
+pub(crate) fn psd_map_of(
+    scan: &Scan,
+    inputs: &InputHashes,
+    request: &PsdMapRequest,
+) -> Result<PsdMapOutcome> {
     let points = scan.points(&request.geometry, &ChannelGains::UNIT)?;
     let options = FitOptions {
         model: request.model,
@@ -188,7 +198,7 @@ pub fn psd_map_from_scan(request: &PsdMapRequest) -> Result<PsdMapOutcome> {
         provenance: provenance(
             &request.command,
             serde_json::json!({"model": model_text(&request.model), "seed": request.seed}),
-            &inputs,
+            inputs,
         ),
     };
     let mut text = summary_text(&file, &fit, &points.measured, &points.source);

@@ -310,13 +310,11 @@ impl StudyPlan {
         self.write(&tables, &maps, psd_map.as_ref(), elapsed)
     }
 
-    /// The PSD-map condition: one seed per trial (`seed + k`), its files in
-    /// a work folder under the output folder, removed afterwards. A seed
-    /// whose calibration is refused is counted, not pooled.
+    /// The PSD-map condition: one seed per trial (`seed + k`), in memory. A
+    /// seed whose calibration is refused is counted, not pooled.
     fn run_psd_map(&self, tick: &(dyn Fn() + Sync), cancel: &AtomicBool) -> Result<PsdMapRun> {
         use rayon::prelude::*;
         use std::sync::atomic::Ordering;
-        let work = self.request.out.join(".psdmap-work");
         let result: Result<Vec<std::result::Result<SeedErrors, (u64, String)>>> =
             (0..self.request.trials)
                 .into_par_iter()
@@ -324,23 +322,16 @@ impl StudyPlan {
                     if cancel.load(Ordering::Relaxed) {
                         return Err(Error::Interrupted);
                     }
-                    let dir = work.join(format!("trial{k}"));
-                    std::fs::create_dir_all(&dir).map_err(|e| Error::OutputFolder {
-                        path: dir.clone(),
-                        message: format!("cannot create {}: {e}", dir.display()),
-                    })?;
                     let seed = self.request.seed + k as u64;
-                    let e = psd_map_seed(&dir, seed, false);
-                    let _ = std::fs::remove_dir_all(&dir);
+                    let e = psd_map_seed(seed, false);
                     tick();
                     match e {
                         Ok(e) => Ok(Ok(e)),
-                        Err(e @ (Error::Interrupted | Error::OutputFolder { .. })) => Err(e),
+                        Err(e @ Error::Interrupted) => Err(e),
                         Err(e) => Ok(Err((seed, e.to_string()))),
                     }
                 })
                 .collect();
-        let _ = std::fs::remove_dir_all(&work);
         let mut run = PsdMapRun::default();
         for r in result? {
             match r {

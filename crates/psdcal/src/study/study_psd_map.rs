@@ -12,23 +12,26 @@
 //! map's own error is the RMS of `d(m) − (spot(m) − m)` over a 41 × 41 grid
 //! inside the scan, next to the scan's noise `√((σx² + σy²)/2)`.
 
-use std::path::Path;
+use std::path::PathBuf;
 
 use nalgebra::Vector2;
-use psdcal_model::SensorModel;
+use psdcal_io::{
+    Calibration, Led, Observation, Observations, Scan, ScanReading, ScanRow, Template,
+};
+use psdcal_locate::{LocateOptions, Measurement};
+use psdcal_model::{Param, PsdGeometry, SensorModel};
 use psdcal_sim::{Lens, PsdNonlinearity, TemplateKind};
 
 use crate::answer::loaded_sensor::sensor_of;
 use crate::base::error::{Error, Result};
 use crate::base::options::CalibrationOptions;
-use crate::calibration::calibrate::calibrate;
-use crate::dataset::data_set::{DataSet, DataSetFiles, LoadOptions, PointSource};
-use crate::psd_map::from_scan::{psd_map_from_scan, PsdMapOutcome, PsdMapRequest};
-use crate::simulation::simulate::{simulate_files, SimulateRequest, DEFAULT_RECORD_CYCLES};
-use crate::simulation::simulate_scan::{simulate_scan_file, ScanRequest};
-use psdcal_io::Calibration;
-use psdcal_locate::{LocateOptions, Measurement};
-use psdcal_model::{Param, PsdGeometry};
+use crate::base::provenance::InputHashes;
+use crate::calibration::calibrate::{calibrate, calibrate_with_map};
+use crate::calibration::calibrate_map::MapInput;
+use crate::dataset::data_set::{DataSet, LoadOptions, MemoryPoints};
+use crate::psd_map::from_scan::{psd_map_of, PsdMapOutcome, PsdMapRequest};
+use crate::simulation::simulate::{simulate_data, SimulateRequest, DEFAULT_RECORD_CYCLES};
+use crate::simulation::simulate_scan::{scan_samples, ScanRequest};
 use psdcal_psdmap::ModelChoice as PsdMapModel;
 
 /// One seed's angle errors (rad) and the map's error against the truth.
@@ -51,30 +54,73 @@ pub struct SeedErrors {
     pub scan_noise_mm: f64,
 }
 
-/// The map of `scan` with the model chosen by cross-validation (folds from
-/// `seed`), written to `dir/psd_map{seed}.json`.
-pub(crate) fn fit_and_write_map(
-    dir: &Path,
-    scan: &Path,
-    seed: u64,
-) -> Result<(PsdMapOutcome, std::path::PathBuf)> {
-    let fitted = psd_map_from_scan(&PsdMapRequest {
-        scan: scan.to_path_buf(),
-        model: PsdMapModel::Auto,
-        geometry: PsdGeometry::default(),
-        seed,
-        command: String::new(),
-        report: None,
-        // The study reads only the scans it wrote.
-        limits: Default::default(),
-    })?;
-    let map_path = dir.join(format!("psd_map{seed}.json"));
-    fitted.write(&map_path)?;
-    Ok((fitted, map_path))
+/// The simulated scan of `request` as its file would hold it, in memory:
+/// the measured points, or with `amplitudes` the electrode amplitudes only.
+pub(crate) fn scan_in_memory(request: &ScanRequest, amplitudes: bool) -> Result<Scan> {
+    let scanned = scan_samples(request)?;
+    let rows = scanned
+        .samples
+        .iter()
+        .enumerate()
+        .map(|(i, s)| ScanRow {
+            stage: s.stage,
+            reading: if amplitudes {
+                ScanReading::Amplitudes(s.amplitudes)
+            } else {
+                ScanReading::Point(s.measured)
+            },
+            // Rows after the header line.
+            line_no: i + 2,
+        })
+        .collect();
+    Ok(Scan {
+        source: request.out.display().to_string(),
+        rows,
+    })
 }
 
-pub(crate) fn data_set(dir: &Path, seed: u64, nonlinearity: bool) -> Result<DataSet> {
-    simulate_files(&SimulateRequest {
+/// The map of `scan` with the model chosen by cross-validation (folds from
+/// `seed`), and the same as a calibration's input named
+/// `psd_map{seed}.json`.
+pub(crate) fn fit_map(scan: &Scan, seed: u64) -> Result<(PsdMapOutcome, MapInput)> {
+    let geometry = PsdGeometry::default();
+    let fitted = psd_map_of(
+        scan,
+        &InputHashes::default(),
+        &PsdMapRequest {
+            scan: PathBuf::from(&scan.source),
+            model: PsdMapModel::Auto,
+            geometry,
+            seed,
+            command: String::new(),
+            report: None,
+            limits: Default::default(),
+        },
+    )?;
+    let map = MapInput::in_memory(fitted.file.clone(), &map_name(seed), &geometry)?;
+    Ok((fitted, map))
+}
+
+/// The name of seed `seed`'s map in messages.
+fn map_name(seed: u64) -> String {
+    format!("psd_map{seed}.json")
+}
+
+/// `set` calibrated with `map` held fixed or, with `refine`, refined.
+pub(crate) fn calibrate_with(set: &DataSet, map: &MapInput, refine: bool) -> Result<Calibration> {
+    let options = CalibrationOptions {
+        psd_map: Some(PathBuf::from(&map.source)),
+        refine_psd_map: refine,
+        ..CalibrationOptions::default()
+    };
+    let calibrated = calibrate_with_map(set, &options, Some(map.clone()), &InputHashes::default())?;
+    Ok(calibrated.record)
+}
+
+/// The data set of seed `seed` (lens 2, 40 dB, 12 images, with or without
+/// the PSD's non-linearity), simulated in memory.
+pub(crate) fn data_set(seed: u64, nonlinearity: bool) -> Result<DataSet> {
+    let data = simulate_data(&SimulateRequest {
         lens: Lens::Two,
         snr_db: Some(40.0),
         imbalance: false,
@@ -84,14 +130,42 @@ pub(crate) fn data_set(dir: &Path, seed: u64, nonlinearity: bool) -> Result<Data
         template: TemplateKind::Scatter14,
         record_cycles: DEFAULT_RECORD_CYCLES,
         seed,
-        out: dir.to_path_buf(),
+        out: PathBuf::new(),
     })?;
-    DataSet::from_files(
-        &DataSetFiles {
-            template: dir.join("template.csv"),
-            points: PointSource::Observations(dir.join("observations.csv")),
-            gains: None,
-        },
+    let template = Template {
+        source: "template.csv".into(),
+        leds: data
+            .template
+            .iter()
+            .enumerate()
+            .map(|(i, led)| Led {
+                id: led.id.clone(),
+                x_mm: led.x_mm,
+                y_mm: led.y_mm,
+                z_mm: None,
+                lines: led.lines.clone(),
+                line_no: i + 2,
+            })
+            .collect(),
+    };
+    let observations = Observations {
+        source: "observations.csv".into(),
+        rows: data
+            .observations
+            .iter()
+            .enumerate()
+            .map(|(i, o)| Observation {
+                image: o.image.clone(),
+                led: o.led.clone(),
+                x_mm: o.x_mm,
+                y_mm: o.y_mm,
+                line_no: i + 2,
+            })
+            .collect(),
+    };
+    DataSet::from_memory(
+        template,
+        MemoryPoints::Observations(observations),
         &LoadOptions::default(),
     )
 }
@@ -126,47 +200,30 @@ pub(crate) fn aoa_error(record: &Calibration, nonlinearity: bool) -> Result<f64>
     Ok((sum / n as f64).sqrt())
 }
 
-/// The experiment for one seed; `amplitudes`: fit the map from the scan's
-/// amplitude form.
-pub fn psd_map_seed(dir: &Path, seed: u64, amplitudes: bool) -> Result<SeedErrors> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
-        path: dir.to_path_buf(),
-        message: format!("cannot create {}: {e}", dir.display()),
-    })?;
-    let scan = dir.join(format!("scan{seed}.csv"));
-    let scanned = simulate_scan_file(&ScanRequest {
-        step_mm: 0.25,
-        stage_sigma_um: 0.3,
-        snr_db: Some(50.0),
-        nonlinearity: true,
-        geometry: PsdGeometry::default(),
-        seed: 1000 + seed,
-        out: scan.clone(),
-    })?;
-    if amplitudes {
-        let stage: Vec<_> = scanned.samples.iter().map(|s| s.stage).collect();
-        let amps: Vec<_> = scanned.samples.iter().map(|s| s.amplitudes).collect();
-        psdcal_io::write_scan(&scan, &stage, None, Some(&amps))?;
-    }
-    let (fitted, map_path) = fit_and_write_map(dir, &scan, seed)?;
+/// The experiment for one seed (module documentation), in memory;
+/// `amplitudes`: fit the map from the scan's amplitude form.
+pub fn psd_map_seed(seed: u64, amplitudes: bool) -> Result<SeedErrors> {
+    let scan = scan_in_memory(
+        &ScanRequest {
+            step_mm: 0.25,
+            stage_sigma_um: 0.3,
+            snr_db: Some(50.0),
+            nonlinearity: true,
+            geometry: PsdGeometry::default(),
+            seed: 1000 + seed,
+            out: PathBuf::from(format!("scan{seed}.csv")),
+        },
+        amplitudes,
+    )?;
+    let (fitted, map) = fit_map(&scan, seed)?;
     assert_eq!(fitted.file.fit.from_amplitudes, amplitudes);
     // The map against the true field (measured → spot) inside the scan.
     let map_error_mm = map_error(&fitted.fit.map, &fitted.fit.block)?;
 
-    let noisy = data_set(&dir.join(format!("nl{seed}")), seed, true)?;
-    let with_map = CalibrationOptions {
-        psd_map: Some(map_path),
-        ..CalibrationOptions::default()
-    };
-    let map = aoa_error(&calibrate(&noisy, &with_map)?.record, true)?;
-    let refined_record = calibrate(
-        &noisy,
-        &CalibrationOptions {
-            refine_psd_map: true,
-            ..with_map
-        },
-    )?
-    .record;
+    let noisy = data_set(seed, true)?;
+    let map_record = calibrate_with(&noisy, &map, false)?;
+    let map_rms = aoa_error(&map_record, true)?;
+    let refined_record = calibrate_with(&noisy, &map, true)?;
     let refined = aoa_error(&refined_record, true)?;
     let refined_block: Vec<f64> = refined_record
         .psd_map
@@ -189,13 +246,13 @@ pub fn psd_map_seed(dir: &Path, seed: u64, amplitudes: bool) -> Result<SeedError
         ..CalibrationOptions::default()
     };
     let l1 = aoa_error(&calibrate(&noisy, &free_l1)?.record, true)?;
-    let clean_set = data_set(&dir.join(format!("clean{seed}")), seed, false)?;
+    let clean_set = data_set(seed, false)?;
     let clean = aoa_error(
         &calibrate(&clean_set, &CalibrationOptions::default())?.record,
         false,
     )?;
     Ok(SeedErrors {
-        map,
+        map: map_rms,
         refined,
         refined_map_error_mm,
         l1,

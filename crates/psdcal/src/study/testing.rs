@@ -3,13 +3,13 @@
 //! fixed, for a scan of a given quality (tests/psd_map_refine in
 //! psdcal-cli).
 
-use std::path::Path;
+use std::path::PathBuf;
 
 use crate::base::error::{Error, Result};
-use crate::base::options::CalibrationOptions;
-use crate::calibration::calibrate::calibrate;
-use crate::simulation::simulate_scan::{simulate_scan_file, ScanRequest};
-use crate::study::study_psd_map::{aoa_error, data_set, fit_and_write_map, map_error};
+use crate::simulation::simulate_scan::ScanRequest;
+use crate::study::study_psd_map::{
+    aoa_error, calibrate_with, data_set, fit_map, map_error, scan_in_memory,
+};
 use psdcal_model::PsdGeometry;
 
 /// A scan of [`refine_seed`]: raster step (mm), stage σ (µm), SNR (dB).
@@ -45,36 +45,23 @@ pub struct RefineErrors {
 /// refined (`--refine-psd-map`): angle errors as in [`psd_map_seed`], the
 /// map's error against the true field before and after, and the largest
 /// coefficient σ before and after.
-pub fn refine_seed(dir: &Path, seed: u64, scan: &ScanSpec) -> Result<RefineErrors> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
-        path: dir.to_path_buf(),
-        message: format!("cannot create {}: {e}", dir.display()),
-    })?;
-    let scan_path = dir.join(format!("scan{seed}.csv"));
-    simulate_scan_file(&ScanRequest {
-        step_mm: scan.step_mm,
-        stage_sigma_um: scan.stage_sigma_um,
-        snr_db: Some(scan.snr_db),
-        nonlinearity: true,
-        geometry: PsdGeometry::default(),
-        seed: 1000 + seed,
-        out: scan_path.clone(),
-    })?;
-    let (fitted, map_path) = fit_and_write_map(dir, &scan_path, seed)?;
-    let noisy = data_set(&dir.join(format!("nl{seed}")), seed, true)?;
-    let held_options = CalibrationOptions {
-        psd_map: Some(map_path),
-        ..CalibrationOptions::default()
-    };
-    let held = calibrate(&noisy, &held_options)?.record;
-    let refined = calibrate(
-        &noisy,
-        &CalibrationOptions {
-            refine_psd_map: true,
-            ..held_options
+pub fn refine_seed(seed: u64, scan: &ScanSpec) -> Result<RefineErrors> {
+    let scan = scan_in_memory(
+        &ScanRequest {
+            step_mm: scan.step_mm,
+            stage_sigma_um: scan.stage_sigma_um,
+            snr_db: Some(scan.snr_db),
+            nonlinearity: true,
+            geometry: PsdGeometry::default(),
+            seed: 1000 + seed,
+            out: PathBuf::from(format!("scan{seed}.csv")),
         },
-    )?
-    .record;
+        false,
+    )?;
+    let (fitted, map) = fit_map(&scan, seed)?;
+    let noisy = data_set(seed, true)?;
+    let held = calibrate_with(&noisy, &map, false)?;
+    let refined = calibrate_with(&noisy, &map, true)?;
     let stage = refined
         .psd_map
         .as_ref()
