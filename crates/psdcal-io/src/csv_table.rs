@@ -28,6 +28,59 @@ use crate::error::{quoted, ColumnRef, IoError};
 use crate::limits::{excerpt, ReadLimits};
 use crate::location::Location;
 
+/// The readers of a CSV table type that has `fn from_table(CsvTable) ->
+/// Result<Self, IoError>` and a `EXPECTED_COLUMNS` in scope: from a path, a
+/// reader or text, with the default [`ReadLimits`] or given ones. `$file`
+/// names the file in the docs.
+macro_rules! csv_table_readers {
+    ($file:literal) => {
+        #[doc = concat!("Reads ", $file, " from a file.")]
+        pub fn read(path: impl AsRef<std::path::Path>) -> Result<Self, IoError> {
+            Self::read_with(path, ReadLimits::default())
+        }
+
+        /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+        pub fn read_with(
+            path: impl AsRef<std::path::Path>,
+            limits: ReadLimits,
+        ) -> Result<Self, IoError> {
+            Self::from_table($crate::csv_table::CsvTable::read_path(
+                path.as_ref(),
+                EXPECTED_COLUMNS,
+                limits,
+            )?)
+        }
+
+        #[doc = concat!("Reads ", $file, " from a reader; `source` names it in messages.")]
+        pub fn from_reader(source: &str, reader: impl std::io::Read) -> Result<Self, IoError> {
+            Self::from_reader_with(source, reader, ReadLimits::default())
+        }
+
+        /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
+        pub fn from_reader_with(
+            source: &str,
+            reader: impl std::io::Read,
+            limits: ReadLimits,
+        ) -> Result<Self, IoError> {
+            Self::from_table($crate::csv_table::CsvTable::from_reader(
+                source,
+                reader,
+                EXPECTED_COLUMNS,
+                limits,
+            )?)
+        }
+
+        #[doc = concat!("Parses ", $file, " text; `source` names it in messages.")]
+        pub fn from_str(source: &str, text: &str) -> Result<Self, IoError> {
+            Self::from_table($crate::csv_table::CsvTable::parse(
+                source,
+                text.as_bytes(),
+                EXPECTED_COLUMNS,
+            )?)
+        }
+    };
+}
+
 /// A parsed CSV file: its header and its data records, with line numbers.
 #[derive(Debug, Clone)]
 pub(crate) struct CsvTable {

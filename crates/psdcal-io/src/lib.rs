@@ -45,6 +45,7 @@ mod csv_field;
 mod csv_fields;
 mod csv_lines;
 mod csv_numeric;
+#[macro_use]
 mod csv_table;
 mod error;
 mod export;

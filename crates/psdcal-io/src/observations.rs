@@ -11,9 +11,6 @@
 //! numbers); checks against the template (unknown LEDs, duplicates, points
 //! off the sensor) are [`crate::validate_data_set`]'s.
 
-use std::io::Read;
-use std::path::Path;
-
 use crate::csv_table::CsvTable;
 use crate::error::IoError;
 use crate::limits::ReadLimits;
@@ -46,43 +43,7 @@ pub struct Observations {
 }
 
 impl Observations {
-    /// Reads observations.csv from a file.
-    pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::read_with(path, ReadLimits::default())
-    }
-
-    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
-    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(
-            path.as_ref(),
-            EXPECTED_COLUMNS,
-            limits,
-        )?)
-    }
-
-    /// Reads observations.csv from a reader; `source` names it in messages.
-    pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
-        Self::from_reader_with(source, reader, ReadLimits::default())
-    }
-
-    /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
-    pub fn from_reader_with(
-        source: &str,
-        reader: impl Read,
-        limits: ReadLimits,
-    ) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::from_reader(
-            source,
-            reader,
-            EXPECTED_COLUMNS,
-            limits,
-        )?)
-    }
-
-    /// Parses observations.csv text; `source` names it in messages.
-    pub fn from_str(source: &str, text: &str) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::parse(source, text.as_bytes(), EXPECTED_COLUMNS)?)
-    }
+    csv_table_readers!("observations.csv");
 
     fn from_table(table: CsvTable) -> Result<Self, IoError> {
         let image_col = table.column("image")?;

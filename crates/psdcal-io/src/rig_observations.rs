@@ -14,8 +14,6 @@
 //! emitter, naming the line.
 
 use std::collections::HashMap;
-use std::io::Read;
-use std::path::Path;
 
 use nalgebra::Vector2;
 use psdcal_model::Amplitudes;
@@ -53,43 +51,7 @@ pub struct RigObservations {
 }
 
 impl RigObservations {
-    /// Reads the file.
-    pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::read_with(path, ReadLimits::default())
-    }
-
-    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
-    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(
-            path.as_ref(),
-            EXPECTED_COLUMNS,
-            limits,
-        )?)
-    }
-
-    /// Reads from a reader; `source` names it in messages.
-    pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
-        Self::from_reader_with(source, reader, ReadLimits::default())
-    }
-
-    /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
-    pub fn from_reader_with(
-        source: &str,
-        reader: impl Read,
-        limits: ReadLimits,
-    ) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::from_reader(
-            source,
-            reader,
-            EXPECTED_COLUMNS,
-            limits,
-        )?)
-    }
-
-    /// Parses text; `source` names it in messages.
-    pub fn from_str(source: &str, text: &str) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::parse(source, text.as_bytes(), EXPECTED_COLUMNS)?)
-    }
+    csv_table_readers!("rig_points.csv");
 
     fn from_table(table: CsvTable) -> Result<Self, IoError> {
         let emitter = table.column("emitter")?;
@@ -192,6 +154,8 @@ impl RigObservations {
 
 #[cfg(test)]
 mod tests {
+    use std::path::Path;
+
     use super::*;
 
     fn rig() -> RigFile {

@@ -13,7 +13,6 @@
 //! each position once.
 
 use std::collections::HashMap;
-use std::io::Read;
 use std::path::Path;
 
 use nalgebra::Vector2;
@@ -77,43 +76,7 @@ pub struct ScanPoints {
 }
 
 impl Scan {
-    /// Reads scan.csv from a file (bounded, docs/formats.md "Limits").
-    pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::read_with(path, ReadLimits::default())
-    }
-
-    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
-    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(
-            path.as_ref(),
-            EXPECTED_COLUMNS,
-            limits,
-        )?)
-    }
-
-    /// Reads scan.csv from a reader; `source` names it in messages.
-    pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
-        Self::from_reader_with(source, reader, ReadLimits::default())
-    }
-
-    /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
-    pub fn from_reader_with(
-        source: &str,
-        reader: impl Read,
-        limits: ReadLimits,
-    ) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::from_reader(
-            source,
-            reader,
-            EXPECTED_COLUMNS,
-            limits,
-        )?)
-    }
-
-    /// Parses scan.csv text; `source` names it in messages.
-    pub fn from_str(source: &str, text: &str) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::parse(source, text.as_bytes(), EXPECTED_COLUMNS)?)
-    }
+    csv_table_readers!("scan.csv");
 
     fn from_table(table: CsvTable) -> Result<Self, IoError> {
         let sx = table.column("x_stage_mm")?;

@@ -12,9 +12,6 @@
 //! dividing out the relative channel gains. A row whose amplitudes sum to zero
 //! or less gives no point and is an error naming its line.
 
-use std::io::Read;
-use std::path::Path;
-
 use nalgebra::Vector2;
 use psdcal_model::sensor::impact_point_with_gains;
 use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
@@ -71,43 +68,7 @@ pub struct Signals {
 }
 
 impl Signals {
-    /// Reads signals.csv from a file.
-    pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::read_with(path, ReadLimits::default())
-    }
-
-    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
-    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(
-            path.as_ref(),
-            EXPECTED_COLUMNS,
-            limits,
-        )?)
-    }
-
-    /// Reads signals.csv from a reader; `source` names it in messages.
-    pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
-        Self::from_reader_with(source, reader, ReadLimits::default())
-    }
-
-    /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
-    pub fn from_reader_with(
-        source: &str,
-        reader: impl Read,
-        limits: ReadLimits,
-    ) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::from_reader(
-            source,
-            reader,
-            EXPECTED_COLUMNS,
-            limits,
-        )?)
-    }
-
-    /// Parses signals.csv text; `source` names it in messages.
-    pub fn from_str(source: &str, text: &str) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::parse(source, text.as_bytes(), EXPECTED_COLUMNS)?)
-    }
+    csv_table_readers!("signals.csv");
 
     fn from_table(table: CsvTable) -> Result<Self, IoError> {
         let image_col = table.column("image")?;

@@ -16,8 +16,6 @@
 //! reported by [`Template::warnings`].
 
 use std::collections::HashMap;
-use std::io::Read;
-use std::path::Path;
 
 use crate::csv_table::CsvTable;
 use crate::error::IoError;
@@ -69,44 +67,7 @@ impl Template {
     pub const MIN_LEDS: usize = 4;
     /// Fewest LEDs a line group needs to constrain straightness.
     pub const MIN_LINE_LEDS: usize = 3;
-
-    /// Reads template.csv from a file.
-    pub fn read(path: impl AsRef<Path>) -> Result<Self, IoError> {
-        Self::read_with(path, ReadLimits::default())
-    }
-
-    /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
-    pub fn read_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::read_path(
-            path.as_ref(),
-            EXPECTED_COLUMNS,
-            limits,
-        )?)
-    }
-
-    /// Reads template.csv from a reader; `source` names it in messages.
-    pub fn from_reader(source: &str, reader: impl Read) -> Result<Self, IoError> {
-        Self::from_reader_with(source, reader, ReadLimits::default())
-    }
-
-    /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
-    pub fn from_reader_with(
-        source: &str,
-        reader: impl Read,
-        limits: ReadLimits,
-    ) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::from_reader(
-            source,
-            reader,
-            EXPECTED_COLUMNS,
-            limits,
-        )?)
-    }
-
-    /// Parses template.csv text; `source` names it in messages.
-    pub fn from_str(source: &str, text: &str) -> Result<Self, IoError> {
-        Self::from_table(CsvTable::parse(source, text.as_bytes(), EXPECTED_COLUMNS)?)
-    }
+    csv_table_readers!("template.csv");
 
     fn from_table(table: CsvTable) -> Result<Self, IoError> {
         let led_col = table.column("led")?;
