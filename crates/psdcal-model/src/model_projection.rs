@@ -78,6 +78,35 @@ impl Model {
         ))
     }
 
+    /// The ideal (undistorted) point of template point `(X, Y)` in pose
+    /// `sensor_from_template`: the pinhole alone.
+    pub fn project_ideal(
+        &self,
+        sensor_from_template: &Pose,
+        template_xy: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
+        let p_t = Vector3::new(template_xy.x, template_xy.y, 0.0);
+        self.ideal_of_point(&sensor_from_template.transform(&p_t))
+    }
+
+    /// The ideal point of a sensor-frame point `P_c` in front of the sensor:
+    /// `x = f Xc/Zc + γ Yc/Zc + cx`, `y = f Yc/Zc + cy` (P4).
+    pub fn ideal_of_point(&self, p_c: &Vector3<f64>) -> Result<Vector2<f64>, ModelError> {
+        Ok(self.ideal_of_ray(&normalised(p_c)?))
+    }
+
+    /// [`Self::project`] with the inverse of the distortion stopped at its
+    /// tolerance ([`Self::measured_from_ideal_to_tolerance`]): the
+    /// projection psdcal's simulators draw their data with.
+    pub fn project_to_tolerance(
+        &self,
+        sensor_from_template: &Pose,
+        template_xy: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
+        let ideal = self.project_ideal(sensor_from_template, template_xy)?;
+        self.measured_from_ideal_to_tolerance(&ideal)
+    }
+
     /// The measured point of template point `(X, Y)` in pose
     /// `sensor_from_template`.
     pub fn project(
