@@ -2,7 +2,7 @@
 //! sensor in given poses, and Gaussian (or any) point noise.
 
 use nalgebra::Vector2;
-use psdcal_model::{Pose, SensorModel};
+use psdcal_model::{Model, Pose, SensorModel};
 use rand::distr::Distribution;
 use rand::Rng;
 
@@ -25,13 +25,16 @@ pub fn image_points(
     poses: &[Pose],
     kind: PointKind,
 ) -> Vec<Vec<Vector2<f64>>> {
+    let model = Model::standard(model);
     poses
         .iter()
         .map(|pose| {
             template
                 .iter()
                 .map(|p| match kind {
-                    PointKind::Measured => model.project(pose, p).expect("projectable"),
+                    PointKind::Measured => {
+                        model.project_to_tolerance(pose, p).expect("projectable")
+                    }
                     PointKind::Ideal => model.project_ideal(pose, p).expect("in front"),
                 })
                 .collect()

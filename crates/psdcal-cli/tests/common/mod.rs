@@ -151,13 +151,13 @@ pub fn poses() -> Vec<(String, Pose)> {
 
 /// Measured points of every (image, LED), in file order.
 pub fn measured_points() -> Vec<(String, String, Vector2<f64>)> {
-    let model = model();
+    let model = psdcal_model::Model::standard(&model());
     let geometry = PsdGeometry::default();
     let mut rows = Vec::new();
     for (image, pose) in poses() {
         for (led, x, y, _) in template_leds() {
             let m = model
-                .project(&pose, &Vector2::new(x, y))
+                .project_to_tolerance(&pose, &Vector2::new(x, y))
                 .expect("fixture points project");
             assert!(
                 is_on_active_area(&geometry, &m),

@@ -28,7 +28,7 @@ use crate::simulation::simulate::{simulate_files, SimulateRequest, DEFAULT_RECOR
 use crate::simulation::simulate_scan::{simulate_scan_file, ScanRequest};
 use psdcal_io::Calibration;
 use psdcal_locate::{LocateOptions, Measurement};
-use psdcal_model::{Param, PsdGeometry};
+use psdcal_model::{Model, Param, PsdGeometry};
 use psdcal_psdmap::ModelChoice as PsdMapModel;
 
 /// One seed's angle errors (rad) and the map's error against the truth.
@@ -96,7 +96,7 @@ pub(crate) fn data_set(dir: &Path, seed: u64, nonlinearity: bool) -> Result<Data
 
 /// The RMS angle error of a calibration (module documentation), rad.
 pub(crate) fn aoa_error(record: &Calibration, nonlinearity: bool) -> Result<f64> {
-    let truth = SensorModel::paper_lens2();
+    let truth = Model::standard(&SensorModel::paper_lens2());
     let geometry = PsdGeometry::default();
     let nl = PsdNonlinearity::new(geometry);
     let sensor = sensor_of(record)?;
@@ -107,7 +107,7 @@ pub(crate) fn aoa_error(record: &Calibration, nonlinearity: bool) -> Result<f64>
                 0.4 * geometry.lx * (i as f64 / 4.0 - 1.0),
                 0.4 * geometry.ly * (j as f64 / 4.0 - 1.0),
             );
-            let spot = truth.distort(&ideal)?;
+            let spot = truth.measured_from_ideal_to_tolerance(&ideal)?;
             let m = if nonlinearity {
                 nl.reported(&spot)
             } else {
@@ -115,7 +115,7 @@ pub(crate) fn aoa_error(record: &Calibration, nonlinearity: bool) -> Result<f64>
             };
             let est = sensor.aoa(&Measurement::Point(m), &LocateOptions::default())?;
             let e = est.aoa.direction.into_inner();
-            let t = truth.ray_direction(&ideal).into_inner();
+            let t = truth.direction_of_ideal(&ideal).into_inner();
             let angle = e.cross(&t).norm().atan2(e.dot(&t));
             sum += angle * angle;
             n += 1;
