@@ -3,7 +3,7 @@
 //!
 //! For every template pose and LED: the LED's ideal image point
 //! (pinhole, docs/model.md §3) is distorted by the lens and — when switched on —
-//! the PSD (`SensorModel::distort`, §2) into the true impact point; the
+//! the PSD (`Model::measured_from_ideal_to_tolerance`, §2) into the true impact point; the
 //! pin-cushion forward model gives the four electrode currents for a total
 //! photocurrent `I0` (§1); the amplifiers multiply them by their gains (the
 //! chain's amplifier gain (`ChainConfig::amplifier_gain_v_per_a`), times the relative gains when the

@@ -10,9 +10,9 @@ use rand::Rng;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PointKind {
     /// The measured point: through the model's lens and PSD distortion
-    /// (`SensorModel::project`).
+    /// (`Model::project_to_tolerance`).
     Measured,
-    /// The ideal pinhole point (`SensorModel::project_ideal`).
+    /// The ideal pinhole point (`Model::project_ideal`).
     Ideal,
 }
 

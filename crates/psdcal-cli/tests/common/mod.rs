@@ -3,7 +3,7 @@
 //!
 //! The fixtures are real model output: the template seen by the paper's lens
 //! 2 (`SensorModel::paper_lens2()`) in four poses, projected with
-//! `SensorModel::project`. `tests/cli.rs` checks that the committed files
+//! `Model::project_to_tolerance`. `tests/cli.rs` checks that the committed files
 //! equal what [`valid_fixtures`] generates; run the tests with
 //! `PSDCAL_BLESS=1` to rewrite them after changing the generator.
 #![allow(dead_code)]
