@@ -120,7 +120,9 @@ fn start_solve_calibrate(c: &mut Criterion) {
     let init = initialize(&s.data, &options.init).unwrap();
     let mut start: Model = options.base.clone();
     for p in &options.refine.free {
-        start.set(p.name(), init.model.get(*p)).unwrap();
+        start
+            .set(p.name(), init.model.get(p.name()).unwrap())
+            .unwrap();
     }
     let mut group = c.benchmark_group("solve");
     group.bench_function("12x14", |b| {

@@ -96,8 +96,9 @@ fn apply_matches_projection_and_normalisation_is_hartleys() {
     let model = SensorModel::pinhole(8.0, 0.5, -0.7);
     let pose = poses(&model, &template, 1, 30f64.to_radians(), 3)[0];
     let h = true_homography(&model, &pose);
+    let chain = psdcal_model::Model::standard(&model);
     for p in &template {
-        let q = model.project_ideal(&pose, p).unwrap();
+        let q = chain.project_ideal(&pose, p).unwrap();
         assert!((h.apply(p).unwrap() - q).norm() < 1e-12);
     }
     let t = normalizing_transform(&template).unwrap();

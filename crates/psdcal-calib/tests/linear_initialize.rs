@@ -23,7 +23,7 @@ fn check_finite(init: &Initialization, data: &CalibrationData) {
 
 fn describe(label: &str, init: &Initialization) {
     let r = &init.report;
-    let k = &init.model.intrinsics;
+    let k = &init.model.sensor_model().intrinsics;
     println!(
         "{label}: route {:?}, f = {:.4}, c = ({:.3}, {:.3}), k1 = {:.3e}; closed form {:?} (rejected: {}); \
          search f {:?}; template RMS {:.3} mm; Δχ²(f×2) = {:.1}",
@@ -31,7 +31,7 @@ fn describe(label: &str, init: &Initialization) {
         k.f,
         k.cx,
         k.cy,
-        init.model.distortion.k1,
+        init.model.sensor_model().distortion.k1,
         r.closed_form.map(|c| c.f_squared.signum() * c.f_squared.abs().sqrt()),
         r.closed_form_rejection.as_deref().unwrap_or("no"),
         r.search.map(|s| s.f),
@@ -51,12 +51,15 @@ fn exact_start_on_pinhole_data() {
         check_finite(&init, &data);
         assert_eq!(init.report.route, InitRoute::ClosedForm);
         assert!(init.report.closed_form_rejection.is_none());
-        let k = &init.model.intrinsics;
+        let k = &init.model.sensor_model().intrinsics;
         assert!(
             rel(k.f, f) < 1e-8 && (k.cx - 0.5).abs() < 1e-8 && (k.cy + 0.7).abs() < 1e-8,
             "{k:?}"
         );
-        assert!(init.model.distortion.k1.abs() < 1e-12 && init.model.distortion.k2.abs() < 1e-12);
+        assert!(
+            init.model.sensor_model().distortion.k1.abs() < 1e-12
+                && init.model.sensor_model().distortion.k2.abs() < 1e-12
+        );
         for (est, pose) in init.poses.iter().zip(&true_poses) {
             assert!((est.rotation() - pose.rotation()).norm() < 1e-8);
             assert!((est.t - pose.t).norm() < 1e-8 * pose.t.norm());
@@ -115,9 +118,9 @@ fn fallback_on_raw_distorted_data_without_preliminary_correction() {
                 // put the closed form up to ~25 % off), and the calibration
                 // from it recovers the truth exactly.
                 assert!(
-                    rel(init.model.intrinsics.f, f0) < 0.3,
+                    rel(init.model.sensor_model().intrinsics.f, f0) < 0.3,
                     "{name} seed {seed} {label}: f = {}",
-                    init.model.intrinsics.f
+                    init.model.sensor_model().intrinsics.f
                 );
                 let full = psdcal_calib::calibrate(
                     &sc.data,
@@ -135,9 +138,9 @@ fn fallback_on_raw_distorted_data_without_preliminary_correction() {
                 // The start's k1 has the right sign (with f off it compensates
                 // part of the distortion; the refinement settles it).
                 assert!(
-                    init.model.distortion.k1 > 0.0,
+                    init.model.sensor_model().distortion.k1 > 0.0,
                     "k1 = {:e}",
-                    init.model.distortion.k1
+                    init.model.sensor_model().distortion.k1
                 );
                 if opts.focal_guess.is_some() && init.report.route != InitRoute::ClosedForm {
                     assert_eq!(init.report.route, InitRoute::FocalGuess);
@@ -163,7 +166,7 @@ fn default_start_on_noisy_lens_data() {
         let init = initialize(&data, &InitOptions::default()).unwrap();
         describe(&format!("{name}, σ = {sigma} mm"), &init);
         check_finite(&init, &data);
-        assert!(rel(init.model.intrinsics.f, truth.intrinsics.f) < 0.15);
+        assert!(rel(init.model.sensor_model().intrinsics.f, truth.intrinsics.f) < 0.15);
         if init.report.route != InitRoute::ClosedForm {
             assert!(init.report.focal_sensitivity > 9.0);
         }

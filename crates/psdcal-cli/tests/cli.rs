@@ -287,14 +287,14 @@ fn correct_writes_ideal_points_to_stdout() {
     );
     let inputs = common::points_to_correct();
     assert_eq!(rows.len(), inputs.len());
-    let model = common::model();
+    let model = psdcal_model::Model::standard(&common::model());
     for (k, (row, p)) in rows.iter().zip(&inputs).enumerate() {
         assert_eq!(row[0], format!("p{k}"));
         assert_eq!(row[1], format!("note, {k}"));
         assert_eq!(row[2], p.x.to_string());
         assert_eq!(row[3], p.y.to_string());
         assert_eq!(row[4], " x ");
-        let ideal = model.undistort(p);
+        let ideal = model.ideal(p);
         let x: f64 = row[5].parse().unwrap();
         let y: f64 = row[6].parse().unwrap();
         assert!((x - ideal.x).abs() <= 1e-12, "{x} vs {}", ideal.x);
@@ -390,7 +390,7 @@ fn correct_amplitudes_divides_the_calibration_gains() {
             "status"
         ]
     );
-    let model = common::model();
+    let model = psdcal_model::Model::standard(&common::model());
     let inputs = common::points_to_correct();
     assert_eq!(rows.len(), inputs.len());
     for (k, (row, p)) in rows.iter().zip(&inputs).enumerate() {
@@ -409,7 +409,7 @@ fn correct_amplitudes_divides_the_calibration_gains() {
         assert!((got(6) - measured.y).abs() <= 1e-12);
         // The gains were divided out: the measured point is the true one.
         assert!((Vector2::new(got(5), got(6)) - p).norm() <= 1e-12);
-        let ideal = model.undistort(&measured);
+        let ideal = model.ideal(&measured);
         assert!((got(7) - ideal.x).abs() <= 1e-12);
         assert!((got(8) - ideal.y).abs() <= 1e-12);
     }

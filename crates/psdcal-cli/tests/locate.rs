@@ -76,7 +76,7 @@ fn aoa_keeps_the_input_and_matches_the_library() {
             "input columns are kept as written"
         );
         let m = Vector2::new(value(&header, row, "x_mm"), value(&header, row, "y_mm"));
-        let aoa = angle_of_arrival(&model, &m).unwrap();
+        let aoa = angle_of_arrival(&psdcal_model::Model::standard(&model), &m).unwrap();
         assert_eq!(value(&header, row, "alpha_x_deg"), aoa.alpha.x.to_degrees());
         assert_eq!(value(&header, row, "alpha_y_deg"), aoa.alpha.y.to_degrees());
         let ray = Vector3::new(
@@ -204,7 +204,11 @@ fn locate_on_planes_round_trips_and_flags_misses() {
         .collect();
     let mut csv_text = String::from("emitter,x_mm,y_mm\n");
     for (k, e) in emitters.iter().enumerate() {
-        let m = measured_from_ray(&model, &Vector2::new(e.x / e.z, e.y / e.z)).unwrap();
+        let m = measured_from_ray(
+            &psdcal_model::Model::standard(&model),
+            &Vector2::new(e.x / e.z, e.y / e.z),
+        )
+        .unwrap();
         csv_text.push_str(&format!("e{k},{},{}\n", m.x, m.y));
     }
     let points = dir.path().join("p.csv");
@@ -327,7 +331,11 @@ fn locate_with_a_rig_of_three_sensors() {
     for (k, e) in emitters.iter().enumerate() {
         for (id, model, pose) in &sensors {
             let p = pose.inverse().transform(e);
-            let m = measured_from_ray(model, &Vector2::new(p.x / p.z, p.y / p.z)).unwrap();
+            let m = measured_from_ray(
+                &psdcal_model::Model::standard(model),
+                &Vector2::new(p.x / p.z, p.y / p.z),
+            )
+            .unwrap();
             let a = electrode_currents(&PsdGeometry::default(), &m, 1.0);
             text.push_str(&format!(
                 "E{k},{id},{},{},{},{}\n",

@@ -114,7 +114,9 @@ fn plan_simulate_calibrate_next_and_focal_check() {
             truth.intrinsics.cx + truth.intrinsics.f * x * half / s,
             truth.intrinsics.cy + truth.intrinsics.f * y * half / s,
         );
-        let m = truth.distort(&ideal).unwrap();
+        let m = psdcal_model::Model::standard(&truth)
+            .measured_from_ideal_to_tolerance(&ideal)
+            .unwrap();
         corners += &format!("c{},{},{},0.0005\n", k + 1, m.x, m.y);
     }
     std::fs::write(dir.path().join("corners.csv"), corners).unwrap();

@@ -28,7 +28,7 @@ fn sensors(n: usize) -> Vec<RigSensor> {
 
 /// Emitter k at 2 m, between sensors k and k + 1, as both measure it.
 fn observations(rig: &Rig) -> Vec<Vec<(usize, Measurement)>> {
-    let model = SensorModel::paper_lens2();
+    let model = psdcal_model::Model::standard(&SensorModel::paper_lens2());
     (0..rig.sensors().len() - 1)
         .map(|k| {
             let emitter = Vector3::new(100.0 * k as f64 + 50.0, 30.0, 2000.0);

@@ -1,5 +1,7 @@
 //! Angle of arrival of a measured impact point (docs/model.md §5, the paper's
-//! (P39)), with its Jacobians.
+//! (P39)), with its Jacobians, through the model's chain of stages
+//! (psdcal-model's `Model`; a calibration's standard chain is
+//! `Model::standard` of its parameters).
 //!
 //! Sensor frame (CONVENTIONS.md): origin at the PSD's electrical centre, `z`
 //! along the optical axis towards the scene; millimetres, radians.
@@ -33,7 +35,7 @@
 //! active area the optical centre reaches without crossing a fold.
 
 use nalgebra::{Matrix2, SMatrix, Unit, Vector2, Vector3};
-use psdcal_model::{SensorModel, N_PARAMS};
+use psdcal_model::{Model, Param, N_PARAMS};
 
 use crate::error::{exceeds, finite, LocateError};
 
@@ -99,16 +101,16 @@ pub fn alpha_wrt_ray(ray_ab: &Vector2<f64>) -> Matrix2<f64> {
 /// ```
 /// use nalgebra::Vector2;
 /// use psdcal_locate::angle_of_arrival;
-/// use psdcal_model::SensorModel;
+/// use psdcal_model::{Model, SensorModel};
 ///
 /// // A distortion-free 8 mm lens centred on the PSD: αx = atan(x / f).
-/// let model = SensorModel::pinhole(8.0, 0.0, 0.0);
+/// let model = Model::standard(&SensorModel::pinhole(8.0, 0.0, 0.0));
 /// let aoa = angle_of_arrival(&model, &Vector2::new(2.0, 0.0)).unwrap();
 /// assert!((aoa.alpha.x - (2.0f64 / 8.0).atan()).abs() < 1e-15);
 /// assert_eq!(aoa.alpha.y, 0.0);
 /// ```
 pub fn angle_of_arrival(
-    model: &SensorModel,
+    model: &Model,
     measured: &Vector2<f64>,
 ) -> Result<AngleOfArrival, LocateError> {
     angle_of_arrival_with_jacobians(model, measured).map(|(aoa, _)| aoa)
@@ -117,7 +119,7 @@ pub fn angle_of_arrival(
 /// The angle of arrival of a measured point and its Jacobians with respect
 /// to the model parameters and the measured point.
 pub fn angle_of_arrival_with_jacobians(
-    model: &SensorModel,
+    model: &Model,
     measured: &Vector2<f64>,
 ) -> Result<(AngleOfArrival, AoaJacobians), LocateError> {
     finite(measured.x, "measured x")?;
@@ -128,22 +130,28 @@ pub fn angle_of_arrival_with_jacobians(
         y: measured.y,
         reason,
     };
-    let ju = model.undistort_with_jacobians(measured);
-    if !(ju.ideal.iter().all(|v| v.is_finite())
-        && ju.wrt_point.iter().all(|v| v.is_finite())
-        && ju.wrt_model.iter().all(|v| v.is_finite()))
+    let mut jac = model.jacobian_buffer();
+    let ideal = model.ideal_with_jacobians(measured, &mut jac);
+    if !(ideal.iter().all(|v| v.is_finite())
+        && jac.wrt_point.iter().all(|v| v.is_finite())
+        && jac.wrt_params.iter().all(|v| v.is_finite()))
     {
         return Err(outside("the distortion correction overflows"));
     }
-    if !exceeds(ju.wrt_point.determinant(), MIN_CORRECTION_DET) {
+    if !exceeds(jac.wrt_point.determinant(), MIN_CORRECTION_DET) {
         return Err(outside(
             "the distortion correction folds over there (its Jacobian is singular or reverses \
              orientation)",
         ));
     }
-    let (ray_ab, n_p, n_theta) = model.normalize_with_jacobians(&ju.ideal);
-    let ray_wrt_model = n_p * ju.wrt_model + n_theta;
-    let ray_wrt_measured = n_p * ju.wrt_point;
+    let ray_ab = model.ray_of_ideal_with_jacobians(&ideal, &mut jac);
+    let ray_wrt_measured = jac.wrt_point;
+    let mut ray_wrt_model = SMatrix::<f64, 2, N_PARAMS>::zeros();
+    for p in Param::ALL {
+        if let Some(c) = model.index(p.name()) {
+            ray_wrt_model.set_column(p.index(), &jac.column(c));
+        }
+    }
     if !(ray_ab.iter().all(|v| v.is_finite()) && ray_wrt_model.iter().all(|v| v.is_finite())) {
         return Err(outside("the ray overflows"));
     }
@@ -151,7 +159,7 @@ pub fn angle_of_arrival_with_jacobians(
     Ok((
         AngleOfArrival {
             measured: *measured,
-            ideal: ju.ideal,
+            ideal,
             ray_ab,
             alpha: alpha_from_ray(&ray_ab),
             direction,
@@ -167,44 +175,29 @@ pub fn angle_of_arrival_with_jacobians(
 /// The measured point whose ray is `(a, b, 1)` (the inverse of
 /// [`angle_of_arrival`]): the pinhole point `x = f a + γ b + cx`,
 /// `y = f b + cy`, distorted by Newton's method (docs/model.md §2) and polished
-/// by one more Newton step.
+/// by one more Newton step (`Model::measured_from_ideal`).
 ///
 /// ```
 /// use nalgebra::Vector2;
 /// use psdcal_locate::{angle_of_arrival, measured_from_ray};
-/// use psdcal_model::SensorModel;
+/// use psdcal_model::{Model, SensorModel};
 ///
-/// let model = SensorModel::paper_lens2();
+/// let model = Model::standard(&SensorModel::paper_lens2());
 /// let m = measured_from_ray(&model, &Vector2::new(0.2, -0.1)).unwrap();
 /// let aoa = angle_of_arrival(&model, &m).unwrap();
 /// assert!((aoa.ray_ab - Vector2::new(0.2, -0.1)).norm() < 1e-12);
 /// ```
 pub fn measured_from_ray(
-    model: &SensorModel,
+    model: &Model,
     ray_ab: &Vector2<f64>,
 ) -> Result<Vector2<f64>, LocateError> {
     finite(ray_ab.x, "ray a")?;
     finite(ray_ab.y, "ray b")?;
     model.validate()?;
-    let k = &model.intrinsics;
-    let ideal = Vector2::new(
-        k.f * ray_ab.x + k.skew * ray_ab.y + k.cx,
-        k.f * ray_ab.y + k.cy,
-    );
-    let measured = model.distort(&ideal)?;
-    // One more Newton step: `distort` stops at 1e-12 mm, which a 5 m lever
-    // arm turns into 1e-9 mm; the polished point is exact to rounding.
-    let jac = model.undistort_point_jacobian(&measured);
-    let polished = match jac.try_inverse() {
-        Some(inv) => measured - inv * (model.undistort(&measured) - ideal),
-        None => measured,
-    };
-    let residual = |m: &Vector2<f64>| (model.undistort(m) - ideal).norm();
-    Ok(if residual(&polished) < residual(&measured) {
-        polished
-    } else {
-        measured
-    })
+    // Polished by one more Newton step: Newton stops at 1e-12 mm, which a
+    // 5 m lever arm turns into 1e-9 mm; the polished point is exact to
+    // rounding.
+    Ok(model.measured_from_ideal(&model.ideal_of_ray(ray_ab))?)
 }
 
 /// The normalised ray `(a, b)` of a sensor-frame direction or point in front

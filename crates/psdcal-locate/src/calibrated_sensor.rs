@@ -337,7 +337,7 @@ impl CalibratedSensor {
         self.check_valid_region(&measured.point)?;
         let corrected = self.map_corrected(&measured.point)?;
         let (mut aoa, mut jacobians) =
-            angle_of_arrival_with_jacobians(&self.model, &corrected.point)?;
+            angle_of_arrival_with_jacobians(&Model::standard(&self.model), &corrected.point)?;
         // ∂(a, b)/∂m' before the map's chain rule, for the map's columns.
         let ray_wrt_corrected = jacobians.ray_wrt_measured;
         aoa.measured = measured.point;

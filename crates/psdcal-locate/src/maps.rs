@@ -27,7 +27,7 @@ use psdcal_model::{PsdGeometry, SensorModel, ValidRegion};
 
 use crate::calibrated_sensor::{check_region, CalibratedSensor, LocateOptions, Measurement};
 use crate::error::{exceeds, finite, LocateError};
-use crate::sensitivity::{aoa_deviation, check_distance, paper_aoa_error_at, ParameterErrors};
+use crate::sensitivity::{check_distance, deviation, paper_error_at, Chains, ParameterErrors};
 use crate::uncertainty::ParameterCovariance;
 
 /// Largest grid side accepted.
@@ -194,6 +194,10 @@ pub fn error_map(
         Some(s) => s.valid_region.clone(),
         None => ValidRegion::of_sensor_model(model, geometry),
     };
+    let chains = match source {
+        ErrorSource::Parameters(errors) => Some(Chains::new(model, errors)),
+        ErrorSource::Covariance { .. } => None,
+    };
     let n = options.grid;
     let last = (n - 1) as f64;
     let s = options.distance_mm;
@@ -204,14 +208,13 @@ pub fn error_map(
                 geometry.lx * (ix as f64 / last - 0.5),
                 geometry.ly * (iy as f64 / last - 0.5),
             );
-            let values = check_region(&region, &measured).and_then(|()| match (source, &sensor) {
-                (ErrorSource::Parameters(errors), _) => {
-                    parameter_cell(model, errors, &measured, s, options.paper_form)
-                }
-                (ErrorSource::Covariance { k, .. }, Some(sensor)) => {
-                    covariance_cell(sensor, &measured, s, *k)
-                }
-                (ErrorSource::Covariance { .. }, None) => unreachable_cell(),
+            let values = check_region(&region, &measured).and_then(|()| match (&chains, &sensor) {
+                (Some(chains), _) => parameter_cell(chains, &measured, s, options.paper_form),
+                (None, Some(sensor)) => match source {
+                    ErrorSource::Covariance { k, .. } => covariance_cell(sensor, &measured, s, *k),
+                    ErrorSource::Parameters(_) => unreachable_cell(),
+                },
+                (None, None) => unreachable_cell(),
             });
             cells.push(MapCell { measured, values });
         }
@@ -231,15 +234,14 @@ fn unreachable_cell() -> Result<MapValues, LocateError> {
 }
 
 fn parameter_cell(
-    model: &SensorModel,
-    errors: &ParameterErrors,
+    chains: &Chains,
     measured: &Vector2<f64>,
     distance_mm: f64,
     paper_form: bool,
 ) -> Result<MapValues, LocateError> {
-    let d = aoa_deviation(model, errors, measured, distance_mm)?;
+    let d = deviation(chains, measured, distance_mm)?;
     let paper_aoa_error = if paper_form {
-        Some(paper_aoa_error_at(model, errors, measured)?)
+        Some(paper_error_at(chains, measured)?)
     } else {
         None
     };

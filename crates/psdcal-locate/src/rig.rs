@@ -201,7 +201,7 @@ impl Rig {
     ///     .enumerate()
     ///     .map(|(k, s)| {
     ///         let p = s.world_from_sensor.inverse().transform(&emitter);
-    ///         let m = measured_from_ray(&model, &Vector2::new(p.x / p.z, p.y / p.z)).unwrap();
+    ///         let m = measured_from_ray(&psdcal_model::Model::standard(&model), &Vector2::new(p.x / p.z, p.y / p.z)).unwrap();
     ///         (k, Measurement::Point(m))
     ///     })
     ///     .collect();

@@ -25,7 +25,7 @@
 //! Radians and millimetres.
 
 use nalgebra::{Vector2, Vector3};
-use psdcal_model::{Param, SensorModel};
+use psdcal_model::{Model, Param, SensorModel};
 
 use crate::aoa::angle_of_arrival;
 use crate::error::{finite, LocateError};
@@ -130,8 +130,38 @@ pub fn aoa_deviation(
     distance_mm: f64,
 ) -> Result<AoaDeviation, LocateError> {
     check_distance(distance_mm)?;
-    let reference = angle_of_arrival(model, measured)?;
-    let perturbed = angle_of_arrival(&errors.apply(model), measured)?;
+    let chains = Chains::new(model, errors);
+    deviation(&chains, measured, distance_mm)
+}
+
+/// A model and its perturbed copy as chains (built once for a map's cells).
+pub(crate) struct Chains {
+    reference: SensorModel,
+    perturbed: SensorModel,
+    reference_chain: Model,
+    perturbed_chain: Model,
+}
+
+impl Chains {
+    pub(crate) fn new(model: &SensorModel, errors: &ParameterErrors) -> Self {
+        let perturbed = errors.apply(model);
+        Self {
+            reference: *model,
+            perturbed,
+            reference_chain: Model::standard(model),
+            perturbed_chain: Model::standard(&perturbed),
+        }
+    }
+}
+
+/// [`aoa_deviation`] of prepared chains (the distance already checked).
+pub(crate) fn deviation(
+    chains: &Chains,
+    measured: &Vector2<f64>,
+    distance_mm: f64,
+) -> Result<AoaDeviation, LocateError> {
+    let reference = angle_of_arrival(&chains.reference_chain, measured)?;
+    let perturbed = angle_of_arrival(&chains.perturbed_chain, measured)?;
     let (u, v): (Vector3<f64>, Vector3<f64>) = (
         reference.direction.into_inner(),
         perturbed.direction.into_inner(),
@@ -152,11 +182,18 @@ pub fn paper_aoa_error_at(
     errors: &ParameterErrors,
     measured: &Vector2<f64>,
 ) -> Result<Vector2<f64>, LocateError> {
-    let perturbed = errors.apply(model);
-    let reference = angle_of_arrival(model, measured)?;
-    let other = angle_of_arrival(&perturbed, measured)?;
-    let k = &model.intrinsics;
-    let kp = &perturbed.intrinsics;
+    paper_error_at(&Chains::new(model, errors), measured)
+}
+
+/// [`paper_aoa_error_at`] of prepared chains.
+pub(crate) fn paper_error_at(
+    chains: &Chains,
+    measured: &Vector2<f64>,
+) -> Result<Vector2<f64>, LocateError> {
+    let reference = angle_of_arrival(&chains.reference_chain, measured)?;
+    let other = angle_of_arrival(&chains.perturbed_chain, measured)?;
+    let k = &chains.reference.intrinsics;
+    let kp = &chains.perturbed.intrinsics;
     let offset = reference.ideal - Vector2::new(k.cx, k.cy);
     let offset_perturbed = other.ideal - Vector2::new(kp.cx, kp.cy);
     let d = offset_perturbed - offset;

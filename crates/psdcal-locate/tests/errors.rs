@@ -22,17 +22,33 @@ fn folding_model() -> SensorModel {
 #[test]
 fn points_outside_the_valid_region() {
     let model = folding_model();
-    let e = angle_of_arrival(&model, &Vector2::new(4.5, 4.5)).unwrap_err();
+    let e = angle_of_arrival(
+        &psdcal_model::Model::standard(&model),
+        &Vector2::new(4.5, 4.5),
+    )
+    .unwrap_err();
     assert_eq!(e.status(), "outside_valid_region", "{e}");
     assert!(e.to_string().contains("folds over"), "{e}");
-    assert!(angle_of_arrival(&model, &Vector2::new(1.0, 1.0)).is_ok());
-    let e = angle_of_arrival(&SensorModel::paper_lens2(), &Vector2::new(1e300, 0.0)).unwrap_err();
+    assert!(angle_of_arrival(
+        &psdcal_model::Model::standard(&model),
+        &Vector2::new(1.0, 1.0)
+    )
+    .is_ok());
+    let e = angle_of_arrival(
+        &psdcal_model::Model::standard(&SensorModel::paper_lens2()),
+        &Vector2::new(1e300, 0.0),
+    )
+    .unwrap_err();
     assert_eq!(e.status(), "outside_valid_region", "{e}");
-    let e = angle_of_arrival(&model, &Vector2::new(f64::NAN, 0.0)).unwrap_err();
+    let e = angle_of_arrival(
+        &psdcal_model::Model::standard(&model),
+        &Vector2::new(f64::NAN, 0.0),
+    )
+    .unwrap_err();
     assert_eq!(e.status(), "non_finite_input");
     let mut bad = model;
     bad.intrinsics.f = 0.0;
-    let e = angle_of_arrival(&bad, &Vector2::zeros()).unwrap_err();
+    let e = angle_of_arrival(&psdcal_model::Model::standard(&bad), &Vector2::zeros()).unwrap_err();
     assert_eq!(e.status(), "model_error");
 }
 
@@ -85,7 +101,11 @@ fn rays_that_miss_the_plane() {
     assert!((hit.position.x - 100.0).abs() < 1e-12);
     // Grazing: the ray meets the wall at about 5.7°.
     let sensor = CalibratedSensor::new(SensorModel::paper_lens2(), PsdGeometry::default());
-    let m = psdcal_locate::measured_from_ray(&sensor.model, &Vector2::new(0.1, 0.0)).unwrap();
+    let m = psdcal_locate::measured_from_ray(
+        &psdcal_model::Model::standard(&sensor.model),
+        &Vector2::new(0.1, 0.0),
+    )
+    .unwrap();
     let at = sensor
         .locate_on_plane(&Measurement::Point(m), &wall, &LocateOptions::default())
         .unwrap();

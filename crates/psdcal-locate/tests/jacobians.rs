@@ -33,9 +33,14 @@ fn aoa_jacobians_wrt_model_and_point() {
     let mut worst: f64 = 0.0;
     for (name, model) in models() {
         for m in sensor_points() {
-            let (_, jac) = angle_of_arrival_with_jacobians(&model, &m).unwrap();
-            let ray =
-                |model: &SensorModel, m: &Vector2<f64>| angle_of_arrival(model, m).unwrap().ray_ab;
+            let (_, jac) =
+                angle_of_arrival_with_jacobians(&psdcal_model::Model::standard(&model), &m)
+                    .unwrap();
+            let ray = |model: &SensorModel, m: &Vector2<f64>| {
+                angle_of_arrival(&psdcal_model::Model::standard(model), m)
+                    .unwrap()
+                    .ray_ab
+            };
             let scale = jac.ray_wrt_model.abs().max();
             for p in Param::ALL {
                 let h = step(p);
@@ -68,7 +73,9 @@ fn aoa_jacobians_wrt_model_and_point() {
                 }
             }
             // ∂α/∂(a, b).
-            let ab = angle_of_arrival(&model, &m).unwrap().ray_ab;
+            let ab = angle_of_arrival(&psdcal_model::Model::standard(&model), &m)
+                .unwrap()
+                .ray_ab;
             for c in 0..2 {
                 let h = 1e-7;
                 let mut e = Vector2::zeros();

@@ -36,7 +36,7 @@ fn the_corner_past_the_fold_is_never_ok() {
     let model = folding();
     // The per-point check alone answers the corner: its determinant is
     // positive again and its ideal point is mirrored through the centre.
-    let bare = angle_of_arrival(&model, &CORNER).unwrap();
+    let bare = angle_of_arrival(&psdcal_model::Model::standard(&model), &CORNER).unwrap();
     let c = Vector2::new(0.5, -0.7);
     assert!((bare.ideal - c).dot(&(CORNER - c)) < 0.0);
     let sensor = CalibratedSensor::new(model, PsdGeometry::default());
@@ -145,7 +145,7 @@ fn non_folding_sensors_answer_as_before() {
                 .unwrap();
             assert_eq!(
                 est.aoa,
-                angle_of_arrival(&model, &p).unwrap(),
+                angle_of_arrival(&psdcal_model::Model::standard(&model), &p).unwrap(),
                 "{name} {p:?}"
             );
         }

@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use nalgebra::{Vector2, Vector3};
 use psdcal_model::paper_setup::SCATTER14_MM;
 use psdcal_model::sensor::{electrode_currents, is_on_active_area, transimpedance_gain};
-use psdcal_model::{Pose, PsdGeometry, SensorModel};
+use psdcal_model::{Model, Pose, PsdGeometry, SensorModel};
 
 /// LED positions on the template (mm): `scatter14`, 14 LEDs, no three
 /// collinear (the paper's set-up as psdcal fixes it).
@@ -18,6 +18,7 @@ const TEMPLATE_MM: [(f64, f64); 14] = SCATTER14_MM;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let model = SensorModel::paper_lens2();
+    let chain = Model::standard(&model);
     let geometry = PsdGeometry::default();
     // Nine poses: the template's centre aimed at a 3 × 3 grid of sensor
     // positions, 0.7–1.5 m away, tilted up to about 30°.
@@ -65,7 +66,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let gain = transimpedance_gain(100e3, 100e-12, 1e3);
     for (k, pose) in poses.iter().enumerate() {
         for (i, (x, y)) in TEMPLATE_MM.iter().enumerate() {
-            let m = model.project(pose, &Vector2::new(*x, *y))?;
+            let m = chain.project_to_tolerance(pose, &Vector2::new(*x, *y))?;
             let margin = 4.5 - m.x.abs().max(m.y.abs());
             if !is_on_active_area(&geometry, &m) || margin < 0.05 {
                 return Err(format!(

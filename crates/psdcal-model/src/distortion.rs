@@ -1,7 +1,9 @@
 //! Distortion: measured (distorted) impact point → ideal pinhole point, and
 //! back (docs/model.md §2, the paper's (P7)–(P16)).
 //!
-//! For a measured point `(xd, yd)`, in this order:
+//! The maps are the [`Model`](crate::Model)'s stages ([`crate::stages`]);
+//! for a measured point `(xd, yd)`, the standard chain applies, in this
+//! order:
 //!
 //! ```text
 //! 1. PSD radial about (0, 0):   h² = xd² + yd²,  (xu, yu) = (xd, yd)(1 + l1 h² + l2 h⁴)
@@ -12,121 +14,22 @@
 //! 4. x = xu + dx ρ + tx,         y = yu + dy ρ + ty
 //! ```
 //!
-//! The Jacobians are analytic. Writing step 2–4 as `x = c + g(d)` with
-//! `d = u − c`, `D = ∂g/∂d`, we have `∂x/∂u = D` and `∂x/∂c = I − D`; step 1
-//! contributes `∂u/∂xd = s I + 2 s' xd xdᵀ` with `s = 1 + l1 h² + l2 h⁴`,
-//! `s' = l1 + 2 l2 h²`.
-//!
-//! The inverse (ideal → measured) has no closed form: it is solved per point
-//! by Newton's method on the 2×2 Jacobian, with step halving, to 1e-12 mm,
-//! and fails with a typed error when it does not converge or when the
-//! Jacobian is singular or folds over (`det ≤ 0`): outside the model's valid
-//! region there is no silent wrong point.
+//! This module holds the inverse (ideal → measured), which has no closed
+//! form: it is solved per point by Newton's method on the 2×2 Jacobian, with
+//! step halving, to 1e-12 mm, and fails with a typed error when it does not
+//! converge or when the Jacobian is singular or folds over (`det ≤ 0`):
+//! outside the model's valid region there is no silent wrong point
+//! ([`crate::Model::measured_from_ideal`] and
+//! [`crate::Model::measured_from_ideal_to_tolerance`]).
 
-use nalgebra::{Matrix2, SMatrix, Vector2};
+use nalgebra::{Matrix2, Vector2};
 
-use crate::params::{Param, SensorModel, N_PARAMS};
-use crate::stages::lens::LensCoefficients;
-use crate::stages::{Lens, PsdRadial};
 use crate::ModelError;
 
 /// Target accuracy of the inverse distortion, mm.
 pub const INVERSE_TOLERANCE_MM: f64 = 1e-12;
 /// Newton iteration budget of the inverse distortion.
 pub const INVERSE_MAX_ITERATIONS: usize = 60;
-
-/// A corrected point and its Jacobians.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CorrectionJacobian {
-    /// The ideal point, mm.
-    pub ideal: Vector2<f64>,
-    /// `∂ideal/∂measured` (2×2).
-    pub wrt_point: Matrix2<f64>,
-    /// `∂ideal/∂model` in [`Param::ALL`] order (2×11; the `f` and `skew`
-    /// columns are zero).
-    pub wrt_model: SMatrix<f64, 2, N_PARAMS>,
-}
-
-impl SensorModel {
-    /// The lens stage's coefficients of this model.
-    pub fn lens_coefficients(&self) -> LensCoefficients {
-        let d = &self.distortion;
-        LensCoefficients {
-            c: Vector2::new(self.intrinsics.cx, self.intrinsics.cy),
-            k: [d.k1, d.k2, d.k3],
-            p: [d.p1, d.p2],
-        }
-    }
-
-    /// Corrects a measured impact point to the ideal pinhole point (mm): the
-    /// PSD stage, then the lens stage ([`crate::stages`]).
-    pub fn undistort(&self, measured: &Vector2<f64>) -> Vector2<f64> {
-        let d = &self.distortion;
-        let u = PsdRadial::eval(d.l1, d.l2, measured, None);
-        Lens::eval(&self.lens_coefficients(), &u, None)
-    }
-
-    /// `∂ideal/∂measured` only (cheaper than [`Self::undistort_with_jacobians`]).
-    pub fn undistort_point_jacobian(&self, measured: &Vector2<f64>) -> Matrix2<f64> {
-        self.undistort_with_jacobians(measured).wrt_point
-    }
-
-    /// Corrects a measured point and returns the Jacobians with respect to the
-    /// point and to every model parameter (the stages' Jacobians chained).
-    pub fn undistort_with_jacobians(&self, measured: &Vector2<f64>) -> CorrectionJacobian {
-        let d = &self.distortion;
-        let (mut du_dm, mut dx_du) = (Matrix2::zeros(), Matrix2::zeros());
-        let (mut psd, mut lens) = ([0.0; 4], [0.0; 14]);
-        let u = PsdRadial::eval(d.l1, d.l2, measured, Some((&mut du_dm, &mut psd)));
-        let ideal = Lens::eval(&self.lens_coefficients(), &u, Some((&mut dx_du, &mut lens)));
-        let mut wrt_model = SMatrix::<f64, 2, N_PARAMS>::zeros();
-        let lens_params = [
-            Param::Cx,
-            Param::Cy,
-            Param::K1,
-            Param::K2,
-            Param::K3,
-            Param::P1,
-            Param::P2,
-        ];
-        for (k, p) in lens_params.iter().enumerate() {
-            wrt_model.set_column(p.index(), &Vector2::new(lens[2 * k], lens[2 * k + 1]));
-        }
-        for (k, p) in [Param::L1, Param::L2].iter().enumerate() {
-            let column = dx_du * Vector2::new(psd[2 * k], psd[2 * k + 1]);
-            wrt_model.set_column(p.index(), &column);
-        }
-        CorrectionJacobian {
-            ideal,
-            wrt_point: dx_du * du_dm,
-            wrt_model,
-        }
-    }
-
-    /// Distorts an ideal pinhole point into the measured impact point (the
-    /// inverse of [`Self::undistort`]), by Newton's method to 1e-12 mm.
-    pub fn distort(&self, ideal: &Vector2<f64>) -> Result<Vector2<f64>, ModelError> {
-        if !(ideal.x.is_finite() && ideal.y.is_finite()) {
-            return Err(ModelError::NonFinite {
-                what: "ideal point",
-            });
-        }
-        // Without distortion the map is the identity.
-        let d = &self.distortion;
-        if [d.k1, d.k2, d.k3, d.p1, d.p2, d.l1, d.l2]
-            .iter()
-            .all(|c| *c == 0.0)
-        {
-            return Ok(*ideal);
-        }
-        invert_newton(
-            ideal,
-            &|m| self.undistort(m),
-            &|m| self.undistort_point_jacobian(m),
-            false,
-        )
-    }
-}
 
 /// The point `m` with `map(m) = target` for a measured → ideal map with 2×2
 /// Jacobian `jacobian`: Newton's method with step halving (which keeps the

@@ -5,14 +5,17 @@
 //! Rodríguez-Navarro et al., *Sensors* 2016, 16(9), 1484):
 //!
 //! - [`sensor`]: electrode amplitudes ↔ impact point, channel gains (P1, P2, P43);
-//! - [`distortion`]: measured ↔ ideal point, PSD and lens distortion (P7–P16);
-//! - [`camera`]: the pinhole with one focal length and optional skew (P4);
+//! - [`stage`], [`stages`], [`model`], [`model_projection`]: the model, one
+//!   chain of stages with runtime-sized, named parameter blocks (docs/model.md
+//!   §8): PSD and lens distortion (P7–P16), the pinhole with one focal length
+//!   and optional skew (P4), template plane ↔ measured point (P5, P29), each
+//!   with analytic Jacobians; what calibration estimates and every map uses;
+//! - [`params`]: [`SensorModel`], the standard chain's parameters by name
+//!   ([`Param`]), a view converted to and from [`Model`] ([`Model::standard`],
+//!   [`Model::sensor_model`]);
+//! - [`distortion`]: the inverse of the distortion (ideal → measured point,
+//!   Newton's method);
 //! - [`pose`]: Rodrigues poses and their derivatives (P3);
-//! - [`projection`]: template plane ↔ measured point, the maps calibration
-//!   minimises over (P5, P29), with analytic Jacobians;
-//! - [`stage`], [`stages`], [`model`], [`model_projection`]: the model as a
-//!   chain of stages with runtime-sized, named parameter blocks (docs/model.md §8):
-//!   what calibration estimates;
 //! - [`covariance`]: [`ParameterCovariance`], the one covariance type (named
 //!   parameters, validated symmetric matrix);
 //! - [`hull`]: [`ConvexHull`], the domain of a stage fitted to a scan;
@@ -27,7 +30,6 @@
 // The paper's simulated set-up as psdcal fixes it (docs/model.md §7).
 pub mod paper_setup;
 
-pub mod camera;
 pub mod covariance;
 pub mod diagnostic;
 pub mod distortion;
@@ -38,7 +40,6 @@ pub mod model;
 pub mod model_projection;
 pub mod params;
 pub mod pose;
-pub mod projection;
 pub mod sensor;
 pub mod stage;
 pub mod stages;
@@ -46,7 +47,6 @@ pub mod valid_region;
 
 pub use covariance::{CovarianceError, ParameterCovariance};
 pub use diagnostic::{Diagnostic, DiagnosticCode, Severity};
-pub use distortion::CorrectionJacobian;
 pub use error::ModelError;
 pub use fit::{CostKind, MIN_IMAGES, MIN_POINTS_PER_IMAGE};
 pub use hull::ConvexHull;
@@ -54,7 +54,6 @@ pub use model::{ChainJacobian, Model};
 pub use model_projection::{PointJacobians, PoseJacobians};
 pub use params::{Distortion, Intrinsics, Param, SensorModel, UnknownParam, N_PARAMS};
 pub use pose::{Pose, RotationJacobian, N_POSE};
-pub use projection::{BackProjectionJacobians, ProjectionJacobians};
 pub use sensor::{Amplitudes, ChannelGains, PsdGeometry};
 pub use stage::{ParameterInfo, Stage, StageJacobian};
 pub use valid_region::{OutsideRegion, ValidRegion};

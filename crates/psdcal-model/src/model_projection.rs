@@ -5,8 +5,14 @@
 //!
 //! *Back-projection* (measured → template): the chain gives the ray `(a, b)`;
 //! the ray is cut with the template plane `Z_t = 0` of the pose
-//! ([`crate::projection::plane_intersection_with_jacobians`]):
-//! `∂XY/∂θ = ∂XY/∂(a,b) · ∂(a,b)/∂θ`.
+//! ([`plane_intersection_with_jacobians`]): `∂XY/∂θ = ∂XY/∂(a,b) · ∂(a,b)/∂θ`.
+//! The ray parameter `s` at which `P_t = Rᵀ(s n − t)`, `n = (a, b, 1)`, has
+//! zero `Z` is `s = (r3·t)/(r3·n)` with `r3` the third column of `R`; then
+//! `(X, Y)` are the first two components of `P_t`. `s` is the depth `Zc` of
+//! the point, and must be positive. With `w = s n − t` and `q = r3·n`:
+//! `∂P_t/∂n = Rᵀ(s I − (s/q) n r3ᵀ)`, `∂P_t/∂t = Rᵀ(n r3ᵀ/q − I)`,
+//! `∂P_t/∂v_i = (∂R/∂v_i)ᵀ w + Rᵀ n ∂s/∂v_i` with
+//! `∂s/∂v_i = −e3ᵀ(∂R/∂v_i)ᵀ w / q`.
 //!
 //! *Projection* (template → measured): `P_c = R P_t + t`, `(a, b) = (Xc, Yc)/Zc`,
 //! the ideal point `x = f a + γ b + cx`, `y = f b + cy` (P4), and the measured
@@ -17,11 +23,15 @@
 
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, SMatrix, Vector2, Vector3};
 
-use crate::camera::MIN_DEPTH_MM;
 use crate::model::{ChainJacobian, Model};
 use crate::pose::{Pose, RotationJacobian, N_POSE};
-use crate::projection::{intersect_template_plane, plane_intersection_with_jacobians};
 use crate::ModelError;
+
+/// Smallest depth accepted as "in front of the sensor", mm.
+pub const MIN_DEPTH_MM: f64 = 1e-9;
+
+/// Smallest `|r3·n|` (cosine-like obliquity of the ray to the plane) accepted.
+const MIN_OBLIQUITY: f64 = 1e-12;
 
 /// Jacobians of a point computed through the chain with a pose. The flat
 /// parameter columns live in the [`ChainJacobian`] passed along.
@@ -76,6 +86,35 @@ impl Model {
                 wrt_point: dxy_dab * jac.wrt_point,
             },
         ))
+    }
+
+    /// The ideal (undistorted) point of template point `(X, Y)` in pose
+    /// `sensor_from_template`: the pinhole alone.
+    pub fn project_ideal(
+        &self,
+        sensor_from_template: &Pose,
+        template_xy: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
+        let p_t = Vector3::new(template_xy.x, template_xy.y, 0.0);
+        self.ideal_of_point(&sensor_from_template.transform(&p_t))
+    }
+
+    /// The ideal point of a sensor-frame point `P_c` in front of the sensor:
+    /// `x = f Xc/Zc + γ Yc/Zc + cx`, `y = f Yc/Zc + cy` (P4).
+    pub fn ideal_of_point(&self, p_c: &Vector3<f64>) -> Result<Vector2<f64>, ModelError> {
+        Ok(self.ideal_of_ray(&normalised(p_c)?))
+    }
+
+    /// [`Self::project`] with the inverse of the distortion stopped at its
+    /// tolerance ([`Self::measured_from_ideal_to_tolerance`]): the
+    /// projection psdcal's simulators draw their data with.
+    pub fn project_to_tolerance(
+        &self,
+        sensor_from_template: &Pose,
+        template_xy: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
+        let ideal = self.project_ideal(sensor_from_template, template_xy)?;
+        self.measured_from_ideal_to_tolerance(&ideal)
     }
 
     /// The measured point of template point `(X, Y)` in pose
@@ -213,4 +252,59 @@ fn normalised(p_c: &Vector3<f64>) -> Result<Vector2<f64>, ModelError> {
         return Err(ModelError::BehindSensor { zc: p_c.z });
     }
     Ok(Vector2::new(p_c.x / p_c.z, p_c.y / p_c.z))
+}
+
+/// A template-plane point with `∂(X, Y)/∂(a, b)` and `∂(X, Y)/∂(rvec, t)`.
+pub type PlaneIntersection = (Vector2<f64>, Matrix2<f64>, SMatrix<f64, 2, N_POSE>);
+
+/// The template-plane point `(X, Y)` hit by the normalised ray `(a, b, 1)`
+/// for the pose `(R, t)` (its rotation Jacobian precomputed), with
+/// `∂(X, Y)/∂(a, b)` (2×2) and `∂(X, Y)/∂(rvec, t)` (2×6) (module
+/// documentation).
+pub fn plane_intersection_with_jacobians(
+    rotation: &RotationJacobian,
+    t: &Vector3<f64>,
+    ab: &Vector2<f64>,
+) -> Result<PlaneIntersection, ModelError> {
+    let (rot, drot) = (rotation.r, rotation.dr);
+    let (xy, s, q) = intersect_template_plane(&rot, t, ab)?;
+    let n = Vector3::new(ab.x, ab.y, 1.0);
+    let r3 = rot.column(2).into_owned();
+    let rt = rot.transpose();
+    let w = n * s - t;
+    // ∂P_t/∂n restricted to (a, b), and rows X, Y.
+    let dp_dn: Matrix3<f64> = rt * (Matrix3::identity() * s - n * r3.transpose() * (s / q));
+    let dxy_dab: Matrix2<f64> = dp_dn.fixed_view::<2, 2>(0, 0).into_owned();
+    let dp_dt: Matrix3<f64> = rt * (n * r3.transpose() / q - Matrix3::identity());
+    let mut wrt_pose = SMatrix::<f64, 2, N_POSE>::zeros();
+    for (i, dri) in drot.iter().enumerate() {
+        let drt_w = dri.transpose() * w;
+        let ds = -drt_w.z / q;
+        let dp = drt_w + rt * n * ds;
+        wrt_pose.set_column(i, &dp.fixed_rows::<2>(0));
+    }
+    wrt_pose
+        .fixed_view_mut::<2, 3>(0, 3)
+        .copy_from(&dp_dt.fixed_view::<2, 3>(0, 0));
+    Ok((xy, dxy_dab, wrt_pose))
+}
+
+/// Intersects the ray `s (a, b, 1)` (sensor frame) with the template plane
+/// `Z_t = 0` of pose `(rot, t)`; returns the template `(X, Y)`, the ray
+/// parameter `s` (the depth) and `q = r3·n`.
+pub(crate) fn intersect_template_plane(
+    rot: &Matrix3<f64>,
+    t: &Vector3<f64>,
+    ab: &Vector2<f64>,
+) -> Result<(Vector2<f64>, f64, f64), ModelError> {
+    let n = Vector3::new(ab.x, ab.y, 1.0);
+    let r3 = rot.column(2);
+    let q = r3.dot(&n);
+    let s = r3.dot(t) / q;
+    let grazing = q.is_nan() || q.abs() <= MIN_OBLIQUITY * n.norm();
+    if grazing || s.is_nan() || s <= 0.0 || !s.is_finite() {
+        return Err(ModelError::RayMissesPlane { s });
+    }
+    let p_t = rot.transpose() * (n * s - t);
+    Ok((Vector2::new(p_t.x, p_t.y), s, q))
 }

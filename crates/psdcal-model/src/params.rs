@@ -3,8 +3,12 @@
 //! A [`SensorModel`] is everything a calibration estimates about one sensor
 //! besides the poses: the pinhole intrinsics `f, cx, cy, skew` (docs/model.md §3,
 //! (P4)) and the distortion coefficients `k1, k2, k3, p1, p2, l1, l2`
-//! (docs/model.md §2, (P7)–(P16)). Parameter vectors and Jacobian columns always
-//! follow the order of [`Param::ALL`]:
+//! (docs/model.md §2, (P7)–(P16)). It is a named view of the standard chain's
+//! parameters, not a second model: every map (distortion, projection, rays,
+//! their Jacobians) is computed by [`crate::Model`], built from it with
+//! [`crate::Model::standard`] (and read back with
+//! [`crate::Model::sensor_model`]). Parameter vectors and Jacobian columns
+//! always follow the order of [`Param::ALL`]:
 //!
 //! ```text
 //! 0 f   1 cx   2 cy   3 skew   4 k1   5 k2   6 k3   7 p1   8 p2   9 l1   10 l2

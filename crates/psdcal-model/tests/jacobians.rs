@@ -13,7 +13,7 @@ use psdcal_model::sensor::{
     electrode_currents, impact_point, impact_point_amplitude_jacobian, impact_point_gain_jacobian,
     impact_point_with_gains,
 };
-use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel, N_PARAMS};
+use psdcal_model::{Amplitudes, ChannelGains, Model, Pose, PsdGeometry, SensorModel, N_PARAMS};
 
 const REL: f64 = 1e-6;
 
@@ -25,10 +25,17 @@ fn model_vec(m: &SensorModel) -> DVector<f64> {
     DVector::from_row_slice(&m.to_array())
 }
 
-fn model_of(v: &DVector<f64>) -> SensorModel {
+/// The standard chain of a parameter vector in `Param::ALL` order (the
+/// standard chain's flat order).
+fn chain_of(v: &DVector<f64>) -> Model {
     let mut a = [0.0; N_PARAMS];
     a.copy_from_slice(v.as_slice());
-    SensorModel::from_array(&a)
+    Model::standard(&SensorModel::from_array(&a))
+}
+
+/// A chain Jacobian's `∂/∂θ` (2×P, column-major) as a matrix.
+fn params_mat(wrt_params: &[f64]) -> DMatrix<f64> {
+    DMatrix::from_column_slice(2, wrt_params.len() / 2, wrt_params)
 }
 
 fn pose_of(v: &DVector<f64>) -> Pose {
@@ -53,25 +60,28 @@ fn measured_points() -> Vec<Vector2<f64>> {
 }
 
 #[test]
-fn undistort_jacobians() {
+fn ideal_jacobians() {
     for (name, model) in example_models() {
+        let chain = Model::standard(&model);
+        let mut jac = chain.jacobian_buffer();
         for m in measured_points() {
-            let j = model.undistort_with_jacobians(&m);
-            assert!((j.ideal - model.undistort(&m)).norm() == 0.0);
+            let ideal = chain.ideal_with_jacobians(&m, &mut jac);
+            assert!((ideal - chain.ideal(&m)).norm() == 0.0);
+            assert_eq!(jac.wrt_point, chain.ideal_point_jacobian(&m));
             check_jacobian(
-                &format!("undistort wrt point [{name} {m:?}]"),
+                &format!("ideal wrt point [{name} {m:?}]"),
                 &v2(m),
                 &[1.0; 2],
-                &|x| v2(model.undistort(&Vector2::new(x[0], x[1]))),
-                &dyn_mat(&j.wrt_point),
+                &|x| v2(chain.ideal(&Vector2::new(x[0], x[1]))),
+                &dyn_mat(&jac.wrt_point),
                 REL,
             );
             check_jacobian(
-                &format!("undistort wrt model [{name} {m:?}]"),
+                &format!("ideal wrt model [{name} {m:?}]"),
                 &model_vec(&model),
                 &MODEL_SCALES,
-                &|x| v2(model_of(x).undistort(&m)),
-                &dyn_mat(&j.wrt_model),
+                &|x| v2(chain_of(x).ideal(&m)),
+                &params_mat(&jac.wrt_params),
                 REL,
             );
         }
@@ -79,16 +89,33 @@ fn undistort_jacobians() {
 }
 
 #[test]
-fn distort_jacobian_is_inverse_of_undistort() {
+fn inverse_jacobian_is_inverse_of_ideal_jacobian() {
     for (name, model) in example_models() {
+        let chain = Model::standard(&model);
         for m in measured_points() {
-            let ideal = model.undistort(&m);
-            let inv = model.undistort_point_jacobian(&m).try_inverse().unwrap();
+            let ideal = chain.ideal(&m);
+            let inv = chain.ideal_point_jacobian(&m).try_inverse().unwrap();
             check_jacobian(
-                &format!("distort wrt point [{name} {m:?}]"),
+                &format!("measured_from_ideal wrt point [{name} {m:?}]"),
                 &v2(ideal),
                 &[1.0; 2],
-                &|x| v2(model.distort(&Vector2::new(x[0], x[1])).unwrap()),
+                &|x| {
+                    v2(chain
+                        .measured_from_ideal(&Vector2::new(x[0], x[1]))
+                        .unwrap())
+                },
+                &dyn_mat(&inv),
+                REL,
+            );
+            check_jacobian(
+                &format!("measured_from_ideal_to_tolerance wrt point [{name} {m:?}]"),
+                &v2(ideal),
+                &[1.0; 2],
+                &|x| {
+                    v2(chain
+                        .measured_from_ideal_to_tolerance(&Vector2::new(x[0], x[1]))
+                        .unwrap())
+                },
                 &dyn_mat(&inv),
                 REL,
             );
@@ -97,53 +124,51 @@ fn distort_jacobian_is_inverse_of_undistort() {
 }
 
 #[test]
-fn pinhole_and_normalize_jacobians() {
+fn pinhole_and_ray_jacobians() {
     let points = [
         Vector3::new(0.0, 0.0, 900.0),
         Vector3::new(-150.0, 80.0, 700.0),
         Vector3::new(220.0, -310.0, 1400.0),
     ];
     for (name, model) in example_models() {
+        let chain = Model::standard(&model);
         for p in points {
-            let (ideal, wrt_p, wrt_model) = model.pinhole_project_with_jacobians(&p).unwrap();
-            assert_eq!(ideal, model.pinhole_project(&p).unwrap());
-            check_jacobian(
-                &format!("pinhole wrt P_c [{name}]"),
-                &DVector::from_row_slice(p.as_slice()),
-                &[1000.0; 3],
-                &|x| {
-                    v2(model
-                        .pinhole_project(&Vector3::new(x[0], x[1], x[2]))
-                        .unwrap())
-                },
-                &dyn_mat(&wrt_p),
-                REL,
-            );
-            check_jacobian(
-                &format!("pinhole wrt model [{name}]"),
-                &model_vec(&model),
-                &MODEL_SCALES,
-                &|x| v2(model_of(x).pinhole_project(&p).unwrap()),
-                &dyn_mat(&wrt_model),
-                REL,
-            );
-            let (ab, wrt_ideal, wrt_model) = model.normalize_with_jacobians(&ideal);
+            let ideal = chain.ideal_of_point(&p).unwrap();
+            // A fresh buffer holds the identity: the pinhole's own Jacobians.
+            let mut jac = chain.jacobian_buffer();
+            let ab = chain.ray_of_ideal_with_jacobians(&ideal, &mut jac);
+            assert_eq!(ab, chain.ray_of_ideal(&ideal));
             // The normalised ray of a projected point is the point's direction.
             assert!((ab - Vector2::new(p.x / p.z, p.y / p.z)).norm() < 1e-14);
+            let direction = chain.direction_of_ideal(&ideal).into_inner();
+            assert!((direction - p.normalize()).norm() < 1e-14);
             check_jacobian(
-                &format!("normalize wrt ideal [{name}]"),
+                &format!("ray wrt ideal [{name}]"),
                 &v2(ideal),
                 &[1.0; 2],
-                &|x| v2(model.normalize(&Vector2::new(x[0], x[1]))),
-                &dyn_mat(&wrt_ideal),
+                &|x| v2(chain.ray_of_ideal(&Vector2::new(x[0], x[1]))),
+                &dyn_mat(&jac.wrt_point),
                 REL,
             );
             check_jacobian(
-                &format!("normalize wrt model [{name}]"),
+                &format!("ray wrt model, ideal point held [{name}]"),
                 &model_vec(&model),
                 &MODEL_SCALES,
-                &|x| v2(model_of(x).normalize(&ideal)),
-                &dyn_mat(&wrt_model),
+                &|x| v2(chain_of(x).ray_of_ideal(&ideal)),
+                &params_mat(&jac.wrt_params),
+                REL,
+            );
+            check_jacobian(
+                &format!("ideal of a sensor-frame point wrt model [{name}]"),
+                &model_vec(&model),
+                &MODEL_SCALES,
+                &|x| v2(chain_of(x).ideal_of_point(&p).unwrap()),
+                &DMatrix::from_fn(2, N_PARAMS, |r, c| match (r, c) {
+                    (_, 0) => ab[r],
+                    (0, 1) | (1, 2) => 1.0,
+                    (0, 3) => ab.y,
+                    _ => 0.0,
+                }),
                 REL,
             );
         }
@@ -221,53 +246,44 @@ fn transform_jacobians() {
 #[test]
 fn projection_jacobians() {
     for (name, model) in example_models() {
+        let chain = Model::standard(&model);
+        let mut jac = chain.jacobian_buffer();
         for (k, pose) in example_poses().into_iter().enumerate() {
+            let rotation = pose.rotation_jacobian();
             for xy in example_template_points() {
                 let label = format!("[{name} pose {k} {xy:?}]");
-                for measured_output in [false, true] {
-                    let project = |m: &SensorModel, p: &Pose, t: &Vector2<f64>| {
-                        if measured_output {
-                            m.project(p, t).unwrap()
-                        } else {
-                            m.project_ideal(p, t).unwrap()
-                        }
-                    };
-                    let (pt, j) = if measured_output {
-                        model.project_with_jacobians(&pose, &xy).unwrap()
-                    } else {
-                        model.project_ideal_with_jacobians(&pose, &xy).unwrap()
-                    };
-                    assert!((pt - project(&model, &pose, &xy)).norm() < 1e-12);
-                    let what = if measured_output {
-                        "project"
-                    } else {
-                        "project_ideal"
-                    };
-                    check_jacobian(
-                        &format!("{what} wrt model {label}"),
-                        &model_vec(&model),
-                        &MODEL_SCALES,
-                        &|x| v2(project(&model_of(x), &pose, &xy)),
-                        &dyn_mat(&j.wrt_model),
-                        REL,
-                    );
-                    check_jacobian(
-                        &format!("{what} wrt pose {label}"),
-                        &DVector::from_row_slice(&pose.to_array()),
-                        &POSE_SCALES,
-                        &|x| v2(project(&model, &pose_of(x), &xy)),
-                        &dyn_mat(&j.wrt_pose),
-                        REL,
-                    );
-                    check_jacobian(
-                        &format!("{what} wrt template {label}"),
-                        &v2(xy),
-                        &[100.0; 2],
-                        &|x| v2(project(&model, &pose, &Vector2::new(x[0], x[1]))),
-                        &dyn_mat(&j.wrt_template),
-                        REL,
-                    );
-                }
+                let (pt, j) = chain
+                    .project_with_jacobians(&pose, &rotation, &xy, &mut jac)
+                    .unwrap();
+                assert_eq!(pt, chain.project(&pose, &xy).unwrap());
+                let to_tolerance = chain.project_to_tolerance(&pose, &xy).unwrap();
+                assert!((pt - to_tolerance).norm() < 1e-12);
+                let ideal = chain.project_ideal(&pose, &xy).unwrap();
+                assert!((chain.ideal(&pt) - ideal).norm() < 1e-12);
+                check_jacobian(
+                    &format!("project wrt model {label}"),
+                    &model_vec(&model),
+                    &MODEL_SCALES,
+                    &|x| v2(chain_of(x).project(&pose, &xy).unwrap()),
+                    &params_mat(&jac.wrt_params),
+                    REL,
+                );
+                check_jacobian(
+                    &format!("project wrt pose {label}"),
+                    &DVector::from_row_slice(&pose.to_array()),
+                    &POSE_SCALES,
+                    &|x| v2(chain.project(&pose_of(x), &xy).unwrap()),
+                    &dyn_mat(&j.wrt_pose),
+                    REL,
+                );
+                check_jacobian(
+                    &format!("project wrt template {label}"),
+                    &v2(xy),
+                    &[100.0; 2],
+                    &|x| v2(chain.project(&pose, &Vector2::new(x[0], x[1])).unwrap()),
+                    &dyn_mat(&j.wrt_point),
+                    REL,
+                );
             }
         }
     }
@@ -276,25 +292,30 @@ fn projection_jacobians() {
 #[test]
 fn back_projection_jacobians() {
     for (name, model) in example_models() {
+        let chain = Model::standard(&model);
+        let mut jac = chain.jacobian_buffer();
         for (k, pose) in example_poses().into_iter().enumerate() {
+            let rotation = pose.rotation_jacobian();
             for xy in example_template_points() {
                 let label = format!("[{name} pose {k} {xy:?}]");
-                let measured = model.project(&pose, &xy).unwrap();
-                let (back, j) = model.back_project_with_jacobians(&pose, &measured).unwrap();
-                assert!((back - model.back_project(&pose, &measured).unwrap()).norm() < 1e-12);
+                let measured = chain.project(&pose, &xy).unwrap();
+                let (back, j) = chain
+                    .back_project_with_jacobians(&pose, &rotation, &measured, &mut jac)
+                    .unwrap();
+                assert!((back - chain.back_project(&pose, &measured).unwrap()).norm() < 1e-12);
                 check_jacobian(
                     &format!("back_project wrt model {label}"),
                     &model_vec(&model),
                     &MODEL_SCALES,
-                    &|x| v2(model_of(x).back_project(&pose, &measured).unwrap()),
-                    &dyn_mat(&j.wrt_model),
+                    &|x| v2(chain_of(x).back_project(&pose, &measured).unwrap()),
+                    &params_mat(&jac.wrt_params),
                     REL,
                 );
                 check_jacobian(
                     &format!("back_project wrt pose {label}"),
                     &DVector::from_row_slice(&pose.to_array()),
                     &POSE_SCALES,
-                    &|x| v2(model.back_project(&pose_of(x), &measured).unwrap()),
+                    &|x| v2(chain.back_project(&pose_of(x), &measured).unwrap()),
                     &dyn_mat(&j.wrt_pose),
                     REL,
                 );
@@ -303,11 +324,11 @@ fn back_projection_jacobians() {
                     &v2(measured),
                     &[1.0; 2],
                     &|x| {
-                        v2(model
+                        v2(chain
                             .back_project(&pose, &Vector2::new(x[0], x[1]))
                             .unwrap())
                     },
-                    &dyn_mat(&j.wrt_measured),
+                    &dyn_mat(&j.wrt_point),
                     REL,
                 );
             }

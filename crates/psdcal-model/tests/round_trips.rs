@@ -7,7 +7,7 @@ use common::{example_models, example_poses, example_template_points};
 use nalgebra::{Vector2, Vector3};
 use proptest::prelude::*;
 use psdcal_model::sensor::{electrode_currents, impact_point, impact_point_with_gains};
-use psdcal_model::{ChannelGains, ModelError, Pose, PsdGeometry, SensorModel};
+use psdcal_model::{ChannelGains, Model, ModelError, Pose, PsdGeometry, SensorModel};
 
 /// 41 × 41 points over the 9 × 9 mm active area, edges included.
 fn sensor_grid() -> impl Iterator<Item = Vector2<f64>> {
@@ -42,26 +42,34 @@ fn round_trip_models() -> Vec<(String, SensorModel)> {
 #[test]
 fn distortion_round_trip_on_the_sensor_grid() {
     for (name, model) in round_trip_models() {
-        let mut worst: f64 = 0.0;
-        for ideal in sensor_grid() {
-            let measured = model
-                .distort(&ideal)
-                .unwrap_or_else(|e| panic!("{name}: {ideal:?}: {e}"));
-            worst = worst.max((model.undistort(&measured) - ideal).norm());
+        let model = Model::standard(&model);
+        for polished in [true, false] {
+            let inverse = |ideal: &Vector2<f64>| {
+                if polished {
+                    model.measured_from_ideal(ideal)
+                } else {
+                    model.measured_from_ideal_to_tolerance(ideal)
+                }
+            };
+            let mut worst: f64 = 0.0;
+            for ideal in sensor_grid() {
+                let measured = inverse(&ideal).unwrap_or_else(|e| panic!("{name}: {ideal:?}: {e}"));
+                worst = worst.max((model.ideal(&measured) - ideal).norm());
+            }
+            assert!(
+                worst <= 1e-10,
+                "{name}: ideal → measured → ideal error {worst:.3e} mm"
+            );
+            let mut worst: f64 = 0.0;
+            for measured in sensor_grid() {
+                let back = inverse(&model.ideal(&measured)).unwrap();
+                worst = worst.max((back - measured).norm());
+            }
+            assert!(
+                worst <= 1e-10,
+                "{name}: measured → ideal → measured error {worst:.3e} mm"
+            );
         }
-        assert!(
-            worst <= 1e-10,
-            "{name}: ideal → measured → ideal error {worst:.3e} mm"
-        );
-        let mut worst: f64 = 0.0;
-        for measured in sensor_grid() {
-            let back = model.distort(&model.undistort(&measured)).unwrap();
-            worst = worst.max((back - measured).norm());
-        }
-        assert!(
-            worst <= 1e-10,
-            "{name}: measured → ideal → measured error {worst:.3e} mm"
-        );
     }
 }
 
@@ -74,7 +82,7 @@ fn distortion_round_trip_on_the_sensor_grid() {
 #[test]
 fn inverse_started_near_the_answer_is_the_same_point() {
     for (name, model) in round_trip_models() {
-        let chain = psdcal_model::Model::standard(&model);
+        let chain = Model::standard(&model);
         let mut worst: f64 = 0.0;
         for (k, measured) in sensor_grid().enumerate() {
             let ideal = chain.ideal(&measured);
@@ -100,46 +108,47 @@ fn inverse_started_near_the_answer_is_the_same_point() {
 }
 
 #[test]
-fn undistort_closed_form_cases() {
+fn ideal_closed_form_cases() {
     // Lens radial only: a point 3 mm right of the optical centre moves out by k1 r³.
-    let lens1 = SensorModel::paper_lens1();
+    let lens1 = Model::standard(&SensorModel::paper_lens1());
     let m = Vector2::new(0.5 + 3.0, -0.7);
-    let ideal = lens1.undistort(&m);
+    let ideal = lens1.ideal(&m);
     assert!((ideal - Vector2::new(0.5 + 3.0 * (1.0 + 2e-3 * 9.0), -0.7)).norm() < 1e-15);
     // The optical centre itself is a fixed point of the lens terms.
-    let lens2 = SensorModel::paper_lens2();
-    assert!((lens2.undistort(&Vector2::new(0.5, -0.7)) - Vector2::new(0.5, -0.7)).norm() < 1e-15);
+    let lens2 = Model::standard(&SensorModel::paper_lens2());
+    assert!((lens2.ideal(&Vector2::new(0.5, -0.7)) - Vector2::new(0.5, -0.7)).norm() < 1e-15);
     // PSD radial only: scales by (1 + l1 h²) about the electrical centre.
     let mut psd = SensorModel::pinhole(8.0, 0.0, 0.0);
     psd.distortion.l1 = SensorModel::PAPER_L1;
-    let p = psd.undistort(&Vector2::new(3.0, 4.0));
+    let p = Model::standard(&psd).ideal(&Vector2::new(3.0, 4.0));
     assert!((p - Vector2::new(3.0, 4.0) * (1.0 + SensorModel::PAPER_L1 * 25.0)).norm() < 1e-15);
     // Tangential only, at (dx, dy) = (1, 2): tx = p1 (5 + 2) + 2 p2·2, ty = p2 (5 + 8) + 2 p1·2.
     let mut tan = SensorModel::pinhole(8.0, 0.0, 0.0);
     tan.distortion.p1 = 1e-3;
     tan.distortion.p2 = 2e-3;
-    let t = tan.undistort(&Vector2::new(1.0, 2.0)) - Vector2::new(1.0, 2.0);
+    let t = Model::standard(&tan).ideal(&Vector2::new(1.0, 2.0)) - Vector2::new(1.0, 2.0);
     assert!((t - Vector2::new(1e-3 * 7.0 + 4.0 * 2e-3, 2e-3 * 13.0 + 4.0 * 1e-3)).norm() < 1e-15);
 }
 
 #[test]
 fn pinhole_closed_form_cases() {
-    let model = SensorModel::paper_lens2();
+    let sensor = SensorModel::paper_lens2();
+    let model = Model::standard(&sensor);
     // On the optical axis: the optical centre.
     let on_axis = model
-        .pinhole_project(&Vector3::new(0.0, 0.0, 1234.0))
+        .ideal_of_point(&Vector3::new(0.0, 0.0, 1234.0))
         .unwrap();
     assert_eq!(on_axis, Vector2::new(0.5, -0.7));
     // 45° off axis in x: f to the right of the centre.
     let p = model
-        .pinhole_project(&Vector3::new(1000.0, 0.0, 1000.0))
+        .ideal_of_point(&Vector3::new(1000.0, 0.0, 1000.0))
         .unwrap();
     assert!((p - Vector2::new(8.5, -0.7)).norm() < 1e-14);
     // Skew shifts x by γ · Yc/Zc.
-    let mut skewed = model;
+    let mut skewed = sensor;
     skewed.intrinsics.skew = 0.25;
-    let q = skewed
-        .pinhole_project(&Vector3::new(0.0, 500.0, 1000.0))
+    let q = Model::standard(&skewed)
+        .ideal_of_point(&Vector3::new(0.0, 500.0, 1000.0))
         .unwrap();
     assert!((q - Vector2::new(0.5 + 0.125, -0.7 + 4.0)).norm() < 1e-14);
 }
@@ -147,6 +156,7 @@ fn pinhole_closed_form_cases() {
 #[test]
 fn projection_back_projection_round_trip() {
     for (name, model) in example_models() {
+        let model = Model::standard(&model);
         for pose in example_poses() {
             for xy in example_template_points() {
                 let measured = model.project(&pose, &xy).unwrap();
@@ -166,16 +176,17 @@ fn outside_the_valid_region_is_a_typed_error() {
     // an ideal point at 10 mm has no measured point.
     let mut folded = SensorModel::pinhole(8.0, 0.0, 0.0);
     folded.distortion.k1 = -0.01;
-    match folded.distort(&Vector2::new(10.0, 0.0)) {
+    let folded = Model::standard(&folded);
+    match folded.measured_from_ideal(&Vector2::new(10.0, 0.0)) {
         Err(ModelError::SingularDistortion { .. })
         | Err(ModelError::DistortionNotConverged { .. }) => {}
         other => panic!("expected a distortion error, got {other:?}"),
     }
     assert!(matches!(
-        folded.distort(&Vector2::new(f64::NAN, 0.0)),
+        folded.measured_from_ideal(&Vector2::new(f64::NAN, 0.0)),
         Err(ModelError::NonFinite { .. })
     ));
-    let model = SensorModel::paper_lens2();
+    let model = Model::standard(&SensorModel::paper_lens2());
     let behind = Pose::new(Vector3::zeros(), Vector3::new(0.0, 0.0, -500.0));
     assert!(matches!(
         model.project(&behind, &Vector2::new(0.0, 0.0)),

@@ -91,8 +91,9 @@ fn the_reproducers_corner_is_past_the_fold_although_det_is_positive_there() {
     // mirrored through the centre (1 + k1 r² = −0.04).
     let model = radial(-0.02, 0.0);
     let corner = Vector2::new(-4.5, 4.5);
-    assert!(model.undistort_point_jacobian(&corner).determinant() > 0.08);
-    let ideal = model.undistort(&corner);
+    let chain = psdcal_model::Model::standard(&model);
+    assert!(chain.ideal_point_jacobian(&corner).determinant() > 0.08);
+    let ideal = chain.ideal(&corner);
     assert!((ideal - Vector2::new(0.5, -0.7)).dot(&(corner - Vector2::new(0.5, -0.7))) < 0.0);
     let region = ValidRegion::of_sensor_model(&model, &PsdGeometry::default());
     let e = region.check(&corner).unwrap_err();

@@ -29,7 +29,7 @@
 //! log-uniform, 35–45 dB).
 
 use nalgebra::{Matrix3, Unit, Vector2, Vector3};
-use psdcal_model::{Pose, PsdGeometry, SensorModel};
+use psdcal_model::{Model, Pose, PsdGeometry, SensorModel};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -218,6 +218,7 @@ impl InSituScene {
             poses.push(look_at(&mount, &aim, roll)?);
         }
         let mut emitters = Vec::with_capacity(o.emitters);
+        let truth = Model::standard(&o.truth);
         let mut tries = 0;
         while emitters.len() < o.emitters {
             tries += 1;
@@ -231,7 +232,7 @@ impl InSituScene {
             );
             let pose = &poses[emitters.len() % o.orientations];
             if (e - mount).norm() >= 500.0
-                && true_impact(&o.truth, &o.geometry, pose, &e, o.margin).is_some()
+                && true_impact(&truth, &o.geometry, pose, &e, o.margin).is_some()
             {
                 emitters.push(e);
             }
@@ -243,7 +244,7 @@ impl InSituScene {
                 .iter()
                 .enumerate()
                 .filter_map(|(j, e)| {
-                    true_impact(&o.truth, &o.geometry, pose, e, o.margin).map(|m| (j, m))
+                    true_impact(&truth, &o.geometry, pose, e, o.margin).map(|m| (j, m))
                 })
                 .collect();
             if seen.len() < MIN_SEEN {

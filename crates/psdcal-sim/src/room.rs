@@ -18,7 +18,7 @@
 //! (`SignalChain::measure_point`, §1, §6).
 
 use nalgebra::{Vector2, Vector3};
-use psdcal_model::{ChannelGains, Pose, PsdGeometry, SensorModel};
+use psdcal_model::{ChannelGains, Model, Pose, PsdGeometry, SensorModel};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
@@ -68,15 +68,15 @@ pub struct Room {
 /// `world_from_sensor`), or `None` when it is behind the sensor or off the
 /// central `margin` of the active area.
 pub fn true_impact(
-    truth: &SensorModel,
+    truth: &Model,
     geometry: &PsdGeometry,
     world_from_sensor: &Pose,
     emitter: &Vector3<f64>,
     margin: f64,
 ) -> Option<Vector2<f64>> {
     let p = world_from_sensor.inverse().transform(emitter);
-    let ideal = truth.pinhole_project(&p).ok()?;
-    let m = truth.distort(&ideal).ok()?;
+    let ideal = truth.ideal_of_point(&p).ok()?;
+    let m = truth.measured_from_ideal_to_tolerance(&ideal).ok()?;
     (m.x.abs() <= 0.5 * margin * geometry.lx && m.y.abs() <= 0.5 * margin * geometry.ly)
         .then_some(m)
 }
@@ -120,6 +120,7 @@ impl Room {
             + 0.5 * o.baseline_mm;
         let mut emitters = Vec::with_capacity(o.emitters);
         let mut tries = 0usize;
+        let chain = Model::standard(truth);
         while emitters.len() < o.emitters {
             tries += 1;
             if tries > 1000 * o.emitters {
@@ -139,7 +140,7 @@ impl Room {
             );
             if sensors
                 .iter()
-                .all(|s| true_impact(truth, geometry, s, &e, o.margin).is_some())
+                .all(|s| true_impact(&chain, geometry, s, &e, o.margin).is_some())
             {
                 emitters.push(e);
             }
@@ -161,8 +162,9 @@ pub struct EmitterObservation {
 /// area, its signal chain, the spot's photocurrent and the channels' SNR.
 #[derive(Debug, Clone, Copy)]
 pub struct RoomSensor<'a> {
-    /// The sensor's true model.
-    pub truth: &'a SensorModel,
+    /// The sensor's true model (the standard chain of its parameters,
+    /// `Model::standard`).
+    pub truth: &'a Model,
     /// Its active area.
     pub geometry: &'a PsdGeometry,
     /// Its electrode signal chain.

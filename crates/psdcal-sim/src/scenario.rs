@@ -27,7 +27,7 @@
 
 use nalgebra::{Vector2, Vector3};
 use psdcal_model::sensor::transimpedance_gain;
-use psdcal_model::{ChannelGains, Pose, PsdGeometry, SensorModel};
+use psdcal_model::{ChannelGains, Model, Pose, PsdGeometry, SensorModel};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -177,6 +177,7 @@ pub fn draw_poses(
 ) -> Option<Vec<Pose>> {
     let f = truth.intrinsics.f;
     let (half_x, half_y) = (0.5 * geometry.lx, 0.5 * geometry.ly);
+    let model = Model::standard(truth);
     let mut poses = Vec::with_capacity(n);
     while poses.len() < n {
         let k = poses.len() % 9;
@@ -203,8 +204,8 @@ pub fn draw_poses(
             );
             let pose = Pose::new(rvec, t);
             let inside = template.leds.iter().all(|xy| {
-                truth
-                    .project(&pose, xy)
+                model
+                    .project_to_tolerance(&pose, xy)
                     .is_ok_and(|m| m.x.abs() <= half_x - 0.1 && m.y.abs() <= half_y - 0.1)
             });
             if inside {

@@ -3,7 +3,7 @@
 //!
 //! For every template pose and LED: the LED's ideal image point
 //! (pinhole, docs/model.md §3) is distorted by the lens and — when switched on —
-//! the PSD (`SensorModel::distort`, §2) into the true impact point; the
+//! the PSD (`Model::measured_from_ideal_to_tolerance`, §2) into the true impact point; the
 //! pin-cushion forward model gives the four electrode currents for a total
 //! photocurrent `I0` (§1); the amplifiers multiply them by their gains (the
 //! chain's amplifier gain (`ChainConfig::amplifier_gain_v_per_a`), times the relative gains when the
@@ -18,7 +18,7 @@
 
 use nalgebra::Vector2;
 use psdcal_model::sensor::{electrode_currents, impact_point};
-use psdcal_model::{Amplitudes, ChannelGains, Pose, PsdGeometry, SensorModel};
+use psdcal_model::{Amplitudes, ChannelGains, Model, Pose, PsdGeometry, SensorModel};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
@@ -154,10 +154,11 @@ pub fn simulate_at(
     let truth = true_model(&options);
     let template = options.template.template();
     let (hx, hy) = (0.5 * options.geometry.lx, 0.5 * options.geometry.ly);
+    let chain = Model::standard(&truth);
     for (i, pose) in poses.iter().enumerate() {
         for (led, xy) in template.leds.iter().enumerate() {
-            let inside = truth
-                .project(pose, xy)
+            let inside = chain
+                .project_to_tolerance(pose, xy)
                 .is_ok_and(|m| m.x.abs() < hx && m.y.abs() < hy);
             if !inside {
                 return Err(SimError::Options(format!(
@@ -211,12 +212,13 @@ fn simulate_with(
         ChannelGains::UNIT
     };
     let gain_x1 = options.chain.config().amplifier_gain_v_per_a;
+    let model = Model::standard(&truth);
     let mut images = Vec::with_capacity(poses.len());
     for (i, pose) in poses.iter().enumerate() {
         let mut points = Vec::with_capacity(template.leds.len());
         for (led, xy) in template.leds.iter().enumerate() {
-            let ideal = truth.project_ideal(pose, xy)?;
-            let true_measured = truth.distort(&ideal)?;
+            let ideal = model.project_ideal(pose, xy)?;
+            let true_measured = model.measured_from_ideal_to_tolerance(&ideal)?;
             let reported = if options.psd_nonlinearity {
                 PsdNonlinearity::new(options.geometry).reported(&true_measured)
             } else {
@@ -275,13 +277,14 @@ impl Simulation {
     pub fn aoa_rms_error(&self, model: &SensorModel, gains: &ChannelGains) -> f64 {
         let geometry = &self.options.geometry;
         let (mut sum, mut n) = (0.0, 0usize);
+        let (estimate, truth) = (Model::standard(model), Model::standard(&self.truth));
         for i in 0..9 {
             for j in 0..9 {
                 let ideal = Vector2::new(
                     0.4 * geometry.lx * (i as f64 / 4.0 - 1.0),
                     0.4 * geometry.ly * (j as f64 / 4.0 - 1.0),
                 );
-                let Ok(true_measured) = self.truth.distort(&ideal) else {
+                let Ok(true_measured) = truth.measured_from_ideal_to_tolerance(&ideal) else {
                     continue;
                 };
                 let reported = if self.options.psd_nonlinearity {
@@ -295,9 +298,9 @@ impl Simulation {
                 else {
                     continue;
                 };
-                let est = model.ray_direction(&model.undistort(&measured));
-                let truth = self.truth.ray_direction(&ideal);
-                let angle = est.cross(&truth).norm().atan2(est.dot(&truth));
+                let est = estimate.direction(&measured);
+                let want = truth.direction_of_ideal(&ideal);
+                let angle = est.cross(&want).norm().atan2(est.dot(&want));
                 sum += angle * angle;
                 n += 1;
             }

@@ -3,7 +3,7 @@
 //! onto the emitter, determinism and refused layouts.
 
 use nalgebra::Vector3;
-use psdcal_model::{PsdGeometry, SensorModel};
+use psdcal_model::{Model, PsdGeometry, SensorModel};
 use psdcal_sim::room::{observe_emitter, true_impact, Room, RoomOptions, RoomSensor};
 use psdcal_sim::{SignalChain, SimError};
 use rand::SeedableRng;
@@ -30,7 +30,7 @@ fn layout_and_emitters_follow_the_options() {
     // Looking down: the optical axis is world −z.
     let axis = r.sensors[0].rotation() * Vector3::z();
     assert!((axis + Vector3::z()).norm() < 1e-12);
-    let truth = SensorModel::paper_lens2();
+    let truth = Model::standard(&SensorModel::paper_lens2());
     let g = PsdGeometry::default();
     for e in &r.emitters {
         assert_eq!(e.z, 0.0);
@@ -46,7 +46,7 @@ fn layout_and_emitters_follow_the_options() {
 #[test]
 fn noise_free_observations_back_project_onto_the_emitter() {
     let r = room(5, &RoomOptions::default()).unwrap();
-    let truth = SensorModel::paper_lens2();
+    let truth = Model::standard(&SensorModel::paper_lens2());
     let g = PsdGeometry::default();
     let chain = SignalChain::default();
     let sensor = RoomSensor {
@@ -61,10 +61,7 @@ fn noise_free_observations_back_project_onto_the_emitter() {
         for s in &r.sensors {
             let o = observe_emitter(&sensor, s, e, &mut rng).unwrap();
             assert!((o.measured - o.true_measured).norm() < 1e-9, "{o:?}");
-            let ray = s.rotation()
-                * truth
-                    .ray_direction(&truth.undistort(&o.true_measured))
-                    .into_inner();
+            let ray = s.rotation() * truth.direction(&o.true_measured).into_inner();
             let to_emitter = e - s.t;
             let miss = (to_emitter - ray * to_emitter.dot(&ray)).norm();
             assert!(miss < 1e-6, "miss {miss} mm");

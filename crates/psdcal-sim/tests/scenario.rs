@@ -2,7 +2,7 @@
 //! gain imbalance's spread (P43), the noise-free simulation against the model.
 
 use psdcal_model::sensor::{impact_point, transimpedance_gain};
-use psdcal_model::PsdGeometry;
+use psdcal_model::{Model, PsdGeometry};
 use psdcal_sim::scenario::{
     draw_imbalance, draw_poses, IMBALANCE_FREQUENCY_HZ, NOMINAL_C_FARAD, NOMINAL_R_OHM,
 };
@@ -19,6 +19,7 @@ fn poses_keep_every_led_on_the_sensor_and_cover_it() {
             let template = kind.template();
             let mut rng = ChaCha8Rng::seed_from_u64(3);
             let poses = draw_poses(&truth, &geometry, &template, 9, &mut rng).unwrap();
+            let model = Model::standard(&truth);
             let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
             for p in &poses {
                 let z = p.t.z / truth.intrinsics.f;
@@ -26,7 +27,7 @@ fn poses_keep_every_led_on_the_sensor_and_cover_it() {
                 let tilt = p.rotation()[(2, 2)].acos().to_degrees();
                 assert!(tilt <= 30.0 + 1e-9, "tilt {tilt}°");
                 for xy in &template.leds {
-                    let m = truth.project(p, xy).unwrap();
+                    let m = model.project_to_tolerance(p, xy).unwrap();
                     assert!(m.x.abs() <= 4.4 && m.y.abs() <= 4.4);
                     for k in 0..2 {
                         lo[k] = lo[k].min(m[k]);
@@ -81,9 +82,12 @@ fn noise_free_simulation_is_the_model() {
     };
     let sim = simulate(&options, &mut ChaCha8Rng::seed_from_u64(5)).unwrap();
     assert_eq!(sim.images.len(), 9);
+    let truth = Model::standard(&sim.truth);
     for (im, pose) in sim.images.iter().zip(&sim.poses) {
         for p in &im.points {
-            let expected = sim.truth.project(pose, &sim.template.leds[p.led]).unwrap();
+            let expected = truth
+                .project_to_tolerance(pose, &sim.template.leds[p.led])
+                .unwrap();
             assert!((p.measured - expected).norm() < 1e-12);
             assert!(
                 (impact_point(&options.geometry, &p.amplitudes).unwrap() - expected).norm() < 1e-12

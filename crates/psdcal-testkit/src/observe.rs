@@ -2,7 +2,7 @@
 //! sensor in given poses, and Gaussian (or any) point noise.
 
 use nalgebra::Vector2;
-use psdcal_model::{Pose, SensorModel};
+use psdcal_model::{Model, Pose, SensorModel};
 use rand::distr::Distribution;
 use rand::Rng;
 
@@ -10,9 +10,9 @@ use rand::Rng;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PointKind {
     /// The measured point: through the model's lens and PSD distortion
-    /// (`SensorModel::project`).
+    /// (`Model::project_to_tolerance`).
     Measured,
-    /// The ideal pinhole point (`SensorModel::project_ideal`).
+    /// The ideal pinhole point (`Model::project_ideal`).
     Ideal,
 }
 
@@ -25,13 +25,16 @@ pub fn image_points(
     poses: &[Pose],
     kind: PointKind,
 ) -> Vec<Vec<Vector2<f64>>> {
+    let model = Model::standard(model);
     poses
         .iter()
         .map(|pose| {
             template
                 .iter()
                 .map(|p| match kind {
-                    PointKind::Measured => model.project(pose, p).expect("projectable"),
+                    PointKind::Measured => {
+                        model.project_to_tolerance(pose, p).expect("projectable")
+                    }
                     PointKind::Ideal => model.project_ideal(pose, p).expect("in front"),
                 })
                 .collect()

@@ -14,7 +14,7 @@
 //!   fits.
 
 use nalgebra::{Rotation3, Unit, Vector2, Vector3};
-use psdcal_model::{Pose, SensorModel};
+use psdcal_model::{Model, Pose, SensorModel};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -31,6 +31,7 @@ pub fn covering_poses(
     rng: &mut ChaCha8Rng,
 ) -> Vec<Pose> {
     let mut out = Vec::with_capacity(n);
+    let model = Model::standard(truth);
     while out.len() < n {
         let k = out.len() % 9;
         let aim = Vector2::new(-2.6 + 2.6 * (k % 3) as f64, -2.6 + 2.6 * (k / 3) as f64)
@@ -52,8 +53,8 @@ pub fn covering_poses(
         );
         let pose = Pose::new(rot.rvec, t);
         let inside = template.iter().all(|xy| {
-            truth
-                .project(&pose, xy)
+            model
+                .project_to_tolerance(&pose, xy)
                 .map(|m| m.x.abs() < 4.4 && m.y.abs() < 4.4)
                 .unwrap_or(false)
         });
@@ -88,11 +89,13 @@ pub fn aimed_pose(
 
 /// Whether every template point of `pose` projects (with distortion) inside
 /// ±[`HALF_SIDE_MM`].
-pub fn fits(model: &SensorModel, pose: &Pose, template: &[Vector2<f64>]) -> bool {
-    template.iter().all(|p| match model.project(pose, p) {
-        Ok(m) => m.x.abs() <= HALF_SIDE_MM && m.y.abs() <= HALF_SIDE_MM,
-        Err(_) => false,
-    })
+pub fn fits(model: &Model, pose: &Pose, template: &[Vector2<f64>]) -> bool {
+    template
+        .iter()
+        .all(|p| match model.project_to_tolerance(pose, p) {
+            Ok(m) => m.x.abs() <= HALF_SIDE_MM && m.y.abs() <= HALF_SIDE_MM,
+            Err(_) => false,
+        })
 }
 
 /// `n` poses of [`aimed_grid_poses`]'s draw (module documentation) that keep
@@ -107,6 +110,7 @@ pub fn aimed_grid_poses(
 ) -> Vec<Pose> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut out = Vec::with_capacity(n);
+    let chain = Model::standard(model);
     for k in 0..n {
         let cell = Vector2::new((k % 3) as f64 - 1.0, ((k / 3) % 3) as f64 - 1.0);
         let mut reach = 2.8;
@@ -123,7 +127,7 @@ pub fn aimed_grid_poses(
                 } else {
                     aimed_pose(model, aim, z, 0.0, 0.0, 0.0)
                 };
-                if fits(model, &pose, template) {
+                if fits(&chain, &pose, template) {
                     out.push(pose);
                     break 'aim;
                 }

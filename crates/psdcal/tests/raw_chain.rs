@@ -16,7 +16,7 @@ use psdcal::{
     RawRequest, RecordStatus, SimulateRequest, TemplateKind,
 };
 use psdcal_io::{read_truth, Calibration, Signals};
-use psdcal_model::{Intrinsics, SensorModel};
+use psdcal_model::{Intrinsics, Model, SensorModel};
 
 fn request(dir: &Path, snr_db: Option<f64>, seed: u64) -> SimulateRequest {
     SimulateRequest {
@@ -108,6 +108,7 @@ fn aoa_rms(truth: &SensorModel, record: &Calibration) -> f64 {
         },
         distortion: record.distortion,
     };
+    let (model, truth) = (Model::standard(&model), Model::standard(truth));
     let (mut sum, mut n) = (0.0, 0.0);
     for a in 0..9 {
         for b in 0..9 {
@@ -115,9 +116,9 @@ fn aoa_rms(truth: &SensorModel, record: &Calibration) -> f64 {
                 0.4 * 9.0 * (a as f64 / 4.0 - 1.0),
                 0.4 * 9.0 * (b as f64 / 4.0 - 1.0),
             );
-            let measured = truth.distort(&ideal).unwrap();
-            let est = model.ray_direction(&model.undistort(&measured));
-            let want = truth.ray_direction(&ideal);
+            let measured = truth.measured_from_ideal_to_tolerance(&ideal).unwrap();
+            let est = model.direction(&measured);
+            let want = truth.direction_of_ideal(&ideal);
             let angle = est.cross(&want).norm().atan2(est.dot(&want));
             sum += angle * angle;
             n += 1.0;

@@ -58,13 +58,14 @@ fn scene(dir: &Path) -> Scene {
         let sensor = &loaded.sensor;
         let pose = &s.world_from_sensor;
         let r = pose.rotation();
+        let model = psdcal_model::Model::standard(&sensor.model);
         amps.push(
             truth
                 .iter()
                 .map(|p| {
                     let q: Vector3<f64> = r.transpose() * (p - pose.t);
                     let m = psdcal_locate::measured_from_ray(
-                        &sensor.model,
+                        &model,
                         &Vector2::new(q.x / q.z, q.y / q.z),
                     )
                     .unwrap();

@@ -15,7 +15,7 @@
 
 use psdcal_model::Model;
 
-use crate::calibrate::options::{start_model, CalibrateOptions};
+use crate::calibrate::options::{seeded_base, CalibrateOptions};
 use crate::data::CalibrationData;
 use crate::refine::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::refine::options::RefineOptions;
@@ -65,7 +65,7 @@ pub(crate) fn refine_from_gain_starts(
     // The gains freed from the start another start option finds.
     let freed_from = |init_options: &InitOptions| {
         initialize(data, init_options).and_then(|i| {
-            let m = start_model(options, &i.model)?;
+            let m = seeded_base(options, &i.model)?;
             refine_global(data, &m, &i.poses, &options.refine, global_options).map(|(r, _)| r)
         })
     };

@@ -76,16 +76,20 @@ impl Default for CalibrateOptions {
     }
 }
 
-/// The refinement's start: `options.base` with the freed parameters the
-/// initialisation estimates (`f, cx, cy, k1, k2`) taken from `init_model`.
-pub(crate) fn start_model(
+/// `options.base` seeded with the freed parameters the initialisation
+/// estimates (`f, cx, cy, k1, k2`), taken from its chain `init_model`: what
+/// the refinement starts from (`crate::refine::start_model` adds a gains
+/// stage when the gains are freed).
+pub(crate) fn seeded_base(
     options: &CalibrateOptions,
-    init_model: &SensorModel,
+    init_model: &Model,
 ) -> Result<Model, CalibError> {
     let mut start = options.base.clone();
     for p in [Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2] {
         if options.refine.free.contains(&p) {
-            start.set(p.name(), init_model.get(p))?;
+            if let Some(value) = init_model.get(p.name()) {
+                start.set(p.name(), value)?;
+            }
         }
     }
     // A fixed f, cx or cy must have been given; the poses come from the start.

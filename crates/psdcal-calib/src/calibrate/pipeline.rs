@@ -9,7 +9,7 @@ use std::sync::Arc;
 use crate::calibrate::finish::{check_data_in_domain, check_data_in_region, settle_block};
 use crate::calibrate::gain_starts::refine_from_gain_starts;
 use crate::calibrate::helper::Helper;
-use crate::calibrate::options::{start_model, CalibrateOptions, Uncertainty};
+use crate::calibrate::options::{seeded_base, CalibrateOptions, Uncertainty};
 use crate::calibrate::result::CalibrationResult;
 use crate::data::CalibrationData;
 use crate::diagnose::diagnostics::{diagnose_structure, diagnose_uncertainty};
@@ -145,7 +145,7 @@ fn refine_from_start(
         ..options.global.clone()
     };
     let global_options = &global_options;
-    let start = start_model(options, &init.model)?;
+    let start = seeded_base(options, &init.model)?;
     if options.refine.fit_gains {
         let (r, g, name) = refine_from_gain_starts(data, init, &start, options, global_options)?;
         Ok((r, g, Some(name)))

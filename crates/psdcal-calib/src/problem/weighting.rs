@@ -368,7 +368,9 @@ mod tests {
             .enumerate()
             .map(|(led, p)| Observation {
                 led,
-                measured: truth.project(&pose, p).unwrap(),
+                measured: Model::standard(&truth)
+                    .project_to_tolerance(&pose, p)
+                    .unwrap(),
             })
             .collect();
         let image = |id: &str| ImageObservations {

@@ -409,7 +409,7 @@ impl<'a> Search<'a> {
         let mut m = self.model.clone();
         for p in [Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2] {
             if self.options.free.contains(&p) {
-                m.set(p.name(), start.model.get(p)).ok()?;
+                m.set(p.name(), start.model.get(p.name())?).ok()?;
             }
         }
         m.set("l1", l1).ok()?;

@@ -78,7 +78,7 @@
 //! `k2` the preliminary estimate (0 when off); `k3, p1, p2, l1, l2, skew` zero.
 
 use nalgebra::Vector2;
-use psdcal_model::{Pose, PsdGeometry, SensorModel, MIN_POINTS_PER_IMAGE};
+use psdcal_model::{Model, Pose, PsdGeometry, MIN_POINTS_PER_IMAGE};
 
 use crate::start::focal_profile::{subset_images, Precision, Problem, Profile};
 pub use crate::start::focal_profile::{FocalSearchReport, REFINE_SUBSET_IMAGES};
@@ -196,8 +196,8 @@ pub struct InitReport {
 /// The starting point of the refinement.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Initialization {
-    /// `f, cx, cy, k1, k2` (module documentation).
-    pub model: SensorModel,
+    /// `f, cx, cy, k1, k2` (module documentation), the standard chain.
+    pub model: Model,
     /// One `sensor_from_template` per image, in `data.images` order.
     pub poses: Vec<Pose>,
     /// What was done.
@@ -242,7 +242,7 @@ pub fn initialize(
     start.model.validate()?;
     let n_points = data.point_count() as f64;
     Ok(Initialization {
-        model: start.model,
+        model: Model::standard(&start.model),
         poses: start.poses,
         report: InitReport {
             route,

@@ -56,11 +56,11 @@ pub fn hard_geometry(lens: Lens) -> u64 {
 pub fn renoised(s: &WideScenario, sigma_mm: f64, seed: u64) -> CalibrationData {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut d = data(s);
+    let truth = psdcal_model::Model::standard(&s.truth);
     for (image, wide) in d.images.iter_mut().zip(&s.images) {
         for obs in &mut image.points {
-            let exact = s
-                .truth
-                .project(&wide.view.pose, &s.template[obs.led])
+            let exact = truth
+                .project_to_tolerance(&wide.view.pose, &s.template[obs.led])
                 .expect("a wide scenario's point projects");
             let dx: f64 = rng.sample(StandardNormal);
             let dy: f64 = rng.sample(StandardNormal);

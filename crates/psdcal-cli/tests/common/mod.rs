@@ -3,7 +3,7 @@
 //!
 //! The fixtures are real model output: the template seen by the paper's lens
 //! 2 (`SensorModel::paper_lens2()`) in four poses, projected with
-//! `SensorModel::project`. `tests/cli.rs` checks that the committed files
+//! `Model::project_to_tolerance`. `tests/cli.rs` checks that the committed files
 //! equal what [`valid_fixtures`] generates; run the tests with
 //! `PSDCAL_BLESS=1` to rewrite them after changing the generator.
 #![allow(dead_code)]
@@ -151,13 +151,13 @@ pub fn poses() -> Vec<(String, Pose)> {
 
 /// Measured points of every (image, LED), in file order.
 pub fn measured_points() -> Vec<(String, String, Vector2<f64>)> {
-    let model = model();
+    let model = psdcal_model::Model::standard(&model());
     let geometry = PsdGeometry::default();
     let mut rows = Vec::new();
     for (image, pose) in poses() {
         for (led, x, y, _) in template_leds() {
             let m = model
-                .project(&pose, &Vector2::new(x, y))
+                .project_to_tolerance(&pose, &Vector2::new(x, y))
                 .expect("fixture points project");
             assert!(
                 is_on_active_area(&geometry, &m),

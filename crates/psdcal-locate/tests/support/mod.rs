@@ -47,7 +47,7 @@ pub fn sensor_points() -> Vec<Vector2<f64>> {
 /// The measured point of a sensor-frame point in front of the sensor.
 pub fn measure(model: &SensorModel, p_sensor: &Vector3<f64>) -> Vector2<f64> {
     measured_from_ray(
-        model,
+        &psdcal_model::Model::standard(model),
         &Vector2::new(p_sensor.x / p_sensor.z, p_sensor.y / p_sensor.z),
     )
     .expect("the point is in the model's valid region")

@@ -7,10 +7,10 @@
 //! into the flat columns of `θ_k`), `∂x/∂m = D_K ⋯ D_1`.
 //!
 //! The inverse (ideal → measured) is Newton's method on the 2×2 Jacobian with
-//! step halving, to 1e-12 mm, as for [`crate::SensorModel::distort`]; it fails
+//! step halving, to 1e-12 mm, with an optional polishing step; it fails
 //! with a typed error where the map folds (`det ≤ 0`) or does not converge.
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, Unit, Vector2, Vector3};
 
 use super::Model;
 use crate::distortion::invert_newton_from;
@@ -167,6 +167,19 @@ impl Model {
         p
     }
 
+    /// Unit direction, in the sensor frame, of the ray `(a, b, 1)` through a
+    /// measured point.
+    pub fn direction(&self, measured: &Vector2<f64>) -> Unit<Vector3<f64>> {
+        let ab = self.ray(measured);
+        Unit::new_normalize(Vector3::new(ab.x, ab.y, 1.0))
+    }
+
+    /// Unit direction, in the sensor frame, of the ray through an ideal point.
+    pub fn direction_of_ideal(&self, ideal: &Vector2<f64>) -> Unit<Vector3<f64>> {
+        let ab = self.ray_of_ideal(ideal);
+        Unit::new_normalize(Vector3::new(ab.x, ab.y, 1.0))
+    }
+
     /// The normalised ray with its Jacobians (written into `jac`).
     pub fn ray_with_jacobians(
         &self,
@@ -174,10 +187,22 @@ impl Model {
         jac: &mut ChainJacobian,
     ) -> Vector2<f64> {
         let ideal = self.ideal_with_jacobians(measured, jac);
+        self.ray_of_ideal_with_jacobians(&ideal, jac)
+    }
+
+    /// The pinhole applied to `ideal` with `jac` holding the ideal point's
+    /// Jacobians ([`Self::ideal_with_jacobians`] at the same point): `jac`
+    /// becomes the ray's (the second half of [`Self::ray_with_jacobians`], for
+    /// callers that inspect the ideal point's Jacobians first).
+    pub fn ray_of_ideal_with_jacobians(
+        &self,
+        ideal: &Vector2<f64>,
+        jac: &mut ChainJacobian,
+    ) -> Vector2<f64> {
         let mut dp = Matrix2::zeros();
         let ab = Pinhole::eval(
             &self.pinhole_intrinsics(),
-            &ideal,
+            ideal,
             Some((&mut dp, &mut jac.pinhole_params)),
         );
         jac.left_multiply(&dp);
@@ -270,6 +295,18 @@ impl Model {
         self.measured_from_ideal_near(ideal, ideal)
     }
 
+    /// The measured point whose ideal point is `ideal`, Newton stopped at
+    /// the tolerance (1e-12 mm) without the polishing step of
+    /// [`Self::measured_from_ideal`]: the inverse psdcal's simulators draw
+    /// their true measured points with (their data sets were made with it;
+    /// the two differ by less than the tolerance).
+    pub fn measured_from_ideal_to_tolerance(
+        &self,
+        ideal: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
+        self.inverse(ideal, ideal, false)
+    }
+
     /// [`Self::measured_from_ideal`] with Newton started at `near` (a point
     /// close to the answer, e.g. the measured point a prediction is compared
     /// with); the same answer to the inverse's tolerance.
@@ -277,6 +314,15 @@ impl Model {
         &self,
         ideal: &Vector2<f64>,
         near: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, ModelError> {
+        self.inverse(ideal, near, true)
+    }
+
+    fn inverse(
+        &self,
+        ideal: &Vector2<f64>,
+        near: &Vector2<f64>,
+        polish: bool,
     ) -> Result<Vector2<f64>, ModelError> {
         if !(ideal.x.is_finite() && ideal.y.is_finite()) {
             return Err(ModelError::NonFinite {
@@ -291,7 +337,7 @@ impl Model {
             near,
             &|m| self.ideal(m),
             &|m| self.ideal_point_jacobian(m),
-            true,
+            polish,
         )
     }
 }

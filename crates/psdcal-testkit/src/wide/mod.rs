@@ -19,7 +19,7 @@
 //!    otherwise Gaussian with σ log-uniform in 1e-5–1e-2 mm.
 //!
 //! Measured points go through the full model: the ideal pinhole point, then
-//! the inverse of the measured → ideal correction (`SensorModel::project`,
+//! the inverse of the measured → ideal correction (`Model::project_to_tolerance`,
 //! Newton to 1e-12 mm), then the noise. The scenario holds plain data
 //! (psdcal-testkit depends on psdcal-model only): each crate's test support
 //! turns the points into its own data type.

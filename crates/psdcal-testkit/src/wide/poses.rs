@@ -17,7 +17,7 @@
 //! is the region's centre pulled halfway to the electrical centre).
 
 use nalgebra::Vector2;
-use psdcal_model::{Pose, SensorModel};
+use psdcal_model::{Model, Pose, SensorModel};
 use rand::Rng;
 
 use super::{ACTIVE_HALF_SIDE_MM, MIN_POINTS_PER_IMAGE};
@@ -78,6 +78,7 @@ pub fn draw_view<R: Rng + ?Sized>(
     let extent = ((max.x - min.x) * (max.y - min.y)).sqrt();
     let side = 2.0 * ACTIVE_HALF_SIDE_MM;
     let f = truth.intrinsics.f;
+    let chain = Model::standard(truth);
     let mut redraws = 0;
     loop {
         let coverage = rng.random_range(COVERAGE_RANGE.0..COVERAGE_RANGE.1);
@@ -94,7 +95,7 @@ pub fn draw_view<R: Rng + ?Sized>(
             aim = 0.5 * region.centre;
         }
         let pose = aimed_pose(truth, aim, z, tilt, axis, roll);
-        let points = visible_points(truth, template, &pose);
+        let points = visible_points(&chain, template, &pose);
         if points.len() >= MIN_POINTS_PER_IMAGE {
             let view = WideView {
                 pose,
@@ -116,7 +117,7 @@ pub fn draw_view<R: Rng + ?Sized>(
 /// The LEDs of `template` whose measured point in `pose` lies strictly
 /// inside the active area, `(led, point)` in LED order.
 pub fn visible_points(
-    truth: &SensorModel,
+    truth: &Model,
     template: &[Vector2<f64>],
     pose: &Pose,
 ) -> Vec<(usize, Vector2<f64>)> {
@@ -124,7 +125,7 @@ pub fn visible_points(
         .iter()
         .enumerate()
         .filter_map(|(led, p)| {
-            let m = truth.project(pose, p).ok()?;
+            let m = truth.project_to_tolerance(pose, p).ok()?;
             (m.x.abs() < ACTIVE_HALF_SIDE_MM && m.y.abs() < ACTIVE_HALF_SIDE_MM).then_some((led, m))
         })
         .collect()

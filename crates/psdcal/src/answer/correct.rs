@@ -60,7 +60,7 @@ pub(crate) fn correct_point(
     sensor.check_valid_region(&measured)?;
     // A PSD map (docs/model.md §8.3) corrects the point first.
     let corrected = sensor.map_corrected(&measured)?.point;
-    let aoa = angle_of_arrival(&sensor.model, &corrected)?;
+    let aoa = angle_of_arrival(&psdcal_model::Model::standard(&sensor.model), &corrected)?;
     let cautions = if is_on_active_area(&sensor.geometry, &measured) {
         Vec::new()
     } else {

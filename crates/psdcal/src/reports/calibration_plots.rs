@@ -6,7 +6,7 @@
 
 use nalgebra::Vector2;
 use psdcal_model::sensor::is_on_active_area;
-use psdcal_model::{SensorModel, ValidRegion};
+use psdcal_model::{Model, SensorModel, ValidRegion};
 use psdcal_report::{Arrow, ArrowSet, Frame, Plot, PlotData, PointSet};
 
 use crate::calibration::residuals::ResidualTable;
@@ -287,13 +287,14 @@ pub(crate) fn model_plots(
     ly: f64,
 ) {
     let n = 11;
+    let chain = Model::standard(model);
     let field: Vec<Arrow> = (0..n * n)
         .filter_map(|k| {
             let m = Vector2::new(
                 lx * (-0.45 + 0.9 * (k % n) as f64 / (n - 1) as f64),
                 ly * (-0.45 + 0.9 * (k / n) as f64 / (n - 1) as f64),
             );
-            let i = model.undistort(&m);
+            let i = chain.ideal(&m);
             region.contains(&m).then_some(Arrow {
                 at: (m.x, m.y),
                 delta: (i.x - m.x, i.y - m.y),
@@ -397,12 +398,13 @@ type Points = Vec<(f64, f64)>;
 fn spiral(model: &SensorModel, region: &ValidRegion, radius: f64) -> (Points, Points) {
     let n = 120;
     let turns = 4.0;
+    let chain = Model::standard(model);
     (0..n)
         .filter_map(|k| {
             let u = k as f64 / (n - 1) as f64;
             let t = u * turns * std::f64::consts::TAU;
             let m = Vector2::new(radius * u * t.cos(), radius * u * t.sin());
-            let i = model.undistort(&m);
+            let i = chain.ideal(&m);
             region.contains(&m).then_some(((m.x, m.y), (i.x, i.y)))
         })
         .unzip()

@@ -174,7 +174,7 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
     };
     let (mut sx, mut sy, mut n) = (0.0, 0.0, 0usize);
     let sensor = RoomSensor {
-        truth: &truth,
+        truth: &psdcal_model::Model::standard(&truth),
         geometry: &geometry,
         chain: &chain,
         i0,

@@ -19,7 +19,7 @@ use psdcal_io::{
     Calibration, Led, Observation, Observations, Scan, ScanReading, ScanRow, Template,
 };
 use psdcal_locate::{LocateOptions, Measurement};
-use psdcal_model::{Param, PsdGeometry, SensorModel};
+use psdcal_model::{Model, Param, PsdGeometry, SensorModel};
 use psdcal_sim::{Lens, PsdNonlinearity, TemplateKind};
 
 use crate::answer::loaded_sensor::sensor_of;
@@ -172,7 +172,7 @@ pub(crate) fn data_set(seed: u64, nonlinearity: bool) -> Result<DataSet> {
 
 /// The RMS angle error of a calibration (module documentation), rad.
 pub(crate) fn aoa_error(record: &Calibration, nonlinearity: bool) -> Result<f64> {
-    let truth = SensorModel::paper_lens2();
+    let truth = Model::standard(&SensorModel::paper_lens2());
     let geometry = PsdGeometry::default();
     let nl = PsdNonlinearity::new(geometry);
     let sensor = sensor_of(record)?;
@@ -183,7 +183,7 @@ pub(crate) fn aoa_error(record: &Calibration, nonlinearity: bool) -> Result<f64>
                 0.4 * geometry.lx * (i as f64 / 4.0 - 1.0),
                 0.4 * geometry.ly * (j as f64 / 4.0 - 1.0),
             );
-            let spot = truth.distort(&ideal)?;
+            let spot = truth.measured_from_ideal_to_tolerance(&ideal)?;
             let m = if nonlinearity {
                 nl.reported(&spot)
             } else {
@@ -191,7 +191,7 @@ pub(crate) fn aoa_error(record: &Calibration, nonlinearity: bool) -> Result<f64>
             };
             let est = sensor.aoa(&Measurement::Point(m), &LocateOptions::default())?;
             let e = est.aoa.direction.into_inner();
-            let t = truth.ray_direction(&ideal).into_inner();
+            let t = truth.direction_of_ideal(&ideal).into_inner();
             let angle = e.cross(&t).norm().atan2(e.dot(&t));
             sum += angle * angle;
             n += 1;
