@@ -38,7 +38,7 @@ pub mod uncertainty;
 mod warning;
 
 // The former flat module paths.
-pub use diagnose::{diagnostics, report, residual_structure};
+pub use diagnose::{diagnostics, fit_statistics, residual_structure};
 pub use problem::{calibration_problem, prior, weighting};
 pub use refine::global;
 pub use start::{homography, initialize, misplaced, preliminary, straightness, zhang};
@@ -51,7 +51,7 @@ pub use calibrate::{
 };
 pub use data::{CalibrationData, DataPoint, ImageObservations, Observation};
 pub use diagnose::diagnostics::{diagnose, DiagnosticOptions, DiagnosticReport};
-pub use diagnose::report::{fit_statistics, FitStatistics, ImageStats, PointError};
+pub use diagnose::fit_statistics::{fit_statistics, FitStatistics, ImageStats, PointError};
 pub use electrical::{equal_current_gains, GainEstimate};
 pub use error::CalibError;
 pub use problem::prior::Prior;

@@ -14,7 +14,7 @@ mod support;
 use psdcal_calib::diagnostics::{diagnose, DiagnosticOptions, DiagnosticReport, FieldTest};
 use psdcal_calib::global::{GlobalReport, LocalMinimum};
 use psdcal_calib::{calibrate, CalibrateOptions, CalibrationData, RefineOptions};
-use psdcal_model::sensor::{electrode_currents, impact_point};
+use psdcal_model::psd::{electrode_currents, impact_point};
 use psdcal_model::{Amplitudes, ChannelGains, DiagnosticCode, Param, PsdGeometry, SensorModel};
 use psdcal_testkit::PointKind;
 use rand::SeedableRng;

@@ -14,7 +14,7 @@ use planning::some_poses;
 use psdcal_calib::plan::information::{point_jacobians, pose_points};
 use psdcal_calib::plan::{cell_centres, predict, AoaMetric, PlanSetup};
 use psdcal_calib::{refine, CalibrationData, RefineOptions};
-use psdcal_model::sensor::{electrode_currents, impact_point_with_gains};
+use psdcal_model::psd::{electrode_currents, impact_point_with_gains};
 use psdcal_model::{Amplitudes, ChannelGains, CostKind, Model, Pose, PsdGeometry, SensorModel};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -9,7 +9,7 @@ pub use psdcal::PointSource;
 use psdcal::{CalibrationOptions, DataSetFiles, LoadOptions, ReadLimits};
 
 use crate::args::{CalibrateArgs, CalibrateConfig, CorrectArgs, DataSetArgs};
-use crate::report::Output;
+use crate::messages::Output;
 
 /// psdcal: calibrate infrared position-sensitive-device (PSD) sensors.
 #[derive(Debug, Parser)]

@@ -11,7 +11,7 @@ use psdcal::option_text::{
 use psdcal::{LocateOptions, MapRequest, Param, Plane, ReadLimits};
 pub use psdcal::{LocateTarget, MapModel, MapSource};
 
-use crate::report::Output;
+use crate::messages::Output;
 
 /// Angles of arrival of measured points (or amplitudes) with their uncertainty
 #[derive(Debug, Clone, PartialEq, Args)]

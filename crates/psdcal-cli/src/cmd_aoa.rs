@@ -2,7 +2,7 @@
 //! amplitudes) with their uncertainty (the library's `aoa_table`).
 
 use crate::cli_locate::AoaArgs;
-use crate::report::Output;
+use crate::messages::Output;
 
 /// Runs `aoa`.
 pub fn run(args: &AoaArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
@@ -14,5 +14,5 @@ pub fn run(args: &AoaArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow
         .answer
         .summary("aoa", "aoa:", &args.calibration, out, extra, false);
     let summary = summary.warn(psdcal::covariance_warning(&table.sensor));
-    crate::report::emit(output, &summary)
+    crate::messages::emit(output, &summary)
 }

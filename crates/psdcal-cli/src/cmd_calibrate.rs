@@ -4,8 +4,8 @@
 use psdcal::{calibrate, DataSet};
 
 use crate::args::CalibrateConfig;
-use crate::report::Output;
-use crate::report::{emit, print_warnings};
+use crate::messages::Output;
+use crate::messages::{emit, print_warnings};
 
 /// Runs `calibrate`.
 pub fn run(config: &CalibrateConfig, output: Output) -> anyhow::Result<()> {

@@ -9,7 +9,7 @@ use clap::Args;
 use psdcal::option_text::non_negative_mm;
 use psdcal::DataSet;
 
-use crate::report::Output;
+use crate::messages::Output;
 
 /// Calibrate a mounted sensor in situ from emitters at surveyed 3-D positions (its pose in the room too)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -37,11 +37,11 @@ pub fn run(config: &InSituArgs, output: Output, limits: psdcal::ReadLimits) -> a
     let gains = config.gains.clone();
     let (files, load) = config.data.clone().into_files(gains, limits)?;
     let set = DataSet::from_files(&files, &load)?;
-    crate::report::print_warnings(set.warnings());
+    crate::messages::print_warnings(set.warnings());
     let mut result = psdcal::calibrate_in_situ(&set, config.survey_sigma)?;
     let argv: Vec<String> = std::env::args().collect();
     result.set_command(&argv.join(" "));
     result.write(&config.out, config.poses_out.as_deref())?;
     let summary = result.summary(&config.out, config.poses_out.as_deref());
-    crate::report::emit(output, &summary)
+    crate::messages::emit(output, &summary)
 }

@@ -2,8 +2,8 @@
 
 use psdcal::{DataSet, DataSetFiles, LoadOptions};
 
-use crate::report::print_warnings;
-use crate::report::Output;
+use crate::messages::print_warnings;
+use crate::messages::Output;
 
 /// Runs `check`.
 pub fn run(files: &DataSetFiles, load: &LoadOptions, output: Output) -> anyhow::Result<()> {
@@ -11,7 +11,7 @@ pub fn run(files: &DataSetFiles, load: &LoadOptions, output: Output) -> anyhow::
     print_warnings(set.warnings());
     let summary = set.summary();
     let json = serde_json::to_value(&summary)?;
-    crate::report::emit(
+    crate::messages::emit(
         output,
         &psdcal::Summary::new(psdcal::summary_text(&summary), json),
     )

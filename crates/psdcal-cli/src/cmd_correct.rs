@@ -2,7 +2,7 @@
 //! a status per row.
 
 use crate::args::CorrectArgs;
-use crate::report::Output;
+use crate::messages::Output;
 
 /// Runs `correct`.
 pub fn run(args: &CorrectArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
@@ -16,5 +16,5 @@ pub fn run(args: &CorrectArgs, output: Output, limits: psdcal::ReadLimits) -> an
         serde_json::json!({}),
         true,
     );
-    crate::report::emit(output, &summary)
+    crate::messages::emit(output, &summary)
 }

@@ -2,9 +2,9 @@
 //! printed.
 
 use crate::cli_sim::DemoArgs;
-use crate::report::Output;
+use crate::messages::Output;
 
 /// Runs `demo`.
 pub fn run(args: &DemoArgs, output: Output) -> anyhow::Result<()> {
-    crate::report::emit(output, &psdcal::demo(args.seed)?.summary())
+    crate::messages::emit(output, &psdcal::demo(args.seed)?.summary())
 }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::report::Output;
+use crate::messages::Output;
 use psdcal::ReadLimits;
 
 /// Demodulate a raw recording (raw.csv, raw.npy) into signals.csv with a per-record SNR
@@ -55,5 +55,5 @@ pub fn run(args: &DemodulateArgs, output: Output, limits: ReadLimits) -> anyhow:
     };
     let done = psdcal::demodulate(&request)?;
     let summary = psdcal::Summary::new(done.summary(&args.out), done.to_json());
-    crate::report::emit(output, &summary.warn(&done.warnings))
+    crate::messages::emit(output, &summary.warn(&done.warnings))
 }

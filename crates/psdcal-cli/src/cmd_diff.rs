@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::report::Output;
+use crate::messages::Output;
 
 /// Two calibrations of one sensor compared in angles over the active area (did it drift?)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -38,5 +38,5 @@ pub fn run(args: &DiffArgs, output: Output, limits: psdcal::ReadLimits) -> anyho
         limits,
     })?;
     let summary = psdcal::Summary::new(done.summary(), done.to_json());
-    crate::report::emit(output, &summary.warn(&done.warnings))
+    crate::messages::emit(output, &summary.warn(&done.warnings))
 }

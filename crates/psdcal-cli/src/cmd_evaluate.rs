@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::report::Output;
+use crate::messages::Output;
 
 /// Judge estimated positions against a surveyed truth (mean, RMS, 75th/95th percentiles, CE95, SE95, honest error bars)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -36,5 +36,5 @@ pub fn run(args: &EvaluateArgs, output: Output, limits: psdcal::ReadLimits) -> a
         Some(dir) => evaluation.write_report(dir)?,
         None => Vec::new(),
     };
-    crate::report::emit(output, &evaluation.summary(&files))
+    crate::messages::emit(output, &evaluation.summary(&files))
 }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::report::Output;
+use crate::messages::Output;
 
 /// A calibration as an OpenCV, mrcal or ROS camera model (fitted, with its error)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -38,5 +38,5 @@ pub fn run(args: &ExportArgs, output: Output, limits: psdcal::ReadLimits) -> any
         limits,
     })?;
     let summary = psdcal::Summary::new(done.summary(), done.to_json());
-    crate::report::emit(output, &summary.warn(&done.warnings))
+    crate::messages::emit(output, &summary.warn(&done.warnings))
 }

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use crate::report::Output;
+use crate::messages::Output;
 use clap::Args;
 use psdcal::option_text::{parse_sides_mm, positive_mm};
 
@@ -39,5 +39,5 @@ pub fn run(a: &FocalCheckArgs, output: Output, limits: psdcal::ReadLimits) -> an
         limits,
     })?;
     let summary = psdcal::Summary::new(check.text.clone(), check.json.clone());
-    crate::report::emit(output, &summary)
+    crate::messages::emit(output, &summary)
 }

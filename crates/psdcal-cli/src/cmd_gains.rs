@@ -1,6 +1,6 @@
 //! `psdcal gains`: relative channel gains from equal-current records.
 
-use crate::report::Output;
+use crate::messages::Output;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -30,5 +30,5 @@ pub fn run(args: &GainsArgs, output: Output, limits: psdcal::ReadLimits) -> anyh
         None => {}
     }
     let summary = psdcal::gains_summary(&file, &args.signals, args.out.as_deref())?;
-    crate::report::emit(output, &summary)
+    crate::messages::emit(output, &summary)
 }

@@ -3,7 +3,7 @@
 //! `locate_table`).
 
 use crate::cli_locate::LocateConfig;
-use crate::report::Output;
+use crate::messages::Output;
 use psdcal::ReadLimits;
 
 /// Runs `locate`.
@@ -15,5 +15,5 @@ pub fn run(config: &LocateConfig, output: Output, limits: ReadLimits) -> anyhow:
         .point_sigma_given
         .then_some(config.options.point_sigma_mm);
     let summary = answer.summary(&config.target, &config.points, out, &config.options, sigma);
-    crate::report::emit(output, &summary)
+    crate::messages::emit(output, &summary)
 }

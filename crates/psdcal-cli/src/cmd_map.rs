@@ -5,11 +5,11 @@ use std::path::Path;
 
 use psdcal::MapRequest;
 
-use crate::report::Output;
+use crate::messages::Output;
 
 /// Runs `map`.
 pub fn run(request: &MapRequest, out: Option<&Path>, output: Output) -> anyhow::Result<()> {
     let map = psdcal::map_table(request)?;
     map.table.write_to(out)?;
-    crate::report::emit(output, &map.summary(request, out))
+    crate::messages::emit(output, &map.summary(request, out))
 }

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use crate::report::Output;
+use crate::messages::Output;
 use clap::Args;
 use psdcal::option_text::{
     parse_assignment, parse_fit, parse_images, parse_range_mm, parse_sides_mm, parse_snr,
@@ -92,5 +92,5 @@ pub fn run(a: &PlanArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::
         limits,
     })?;
     let summary = psdcal::Summary::new(planned.text.clone(), planned.json.clone());
-    crate::report::emit(output, &summary)
+    crate::messages::emit(output, &summary)
 }

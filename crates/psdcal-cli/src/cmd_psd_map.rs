@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use psdcal::{PsdGeometry, PsdMapModel, PsdMapRequest};
 
-use crate::report::Output;
+use crate::messages::Output;
 use psdcal::option_text::side_mm;
 
 /// The PSD's own non-linearity map from a lensless scan (psd_map.json for calibrate --psd-map)
@@ -53,5 +53,5 @@ pub fn run(args: &PsdMapArgs, output: Output, limits: psdcal::ReadLimits) -> any
     outcome.write(&args.out)?;
     let json = serde_json::to_value(&outcome.file)?;
     let summary = psdcal::Summary::new(outcome.text.clone(), json).wrote([args.out.as_path()]);
-    crate::report::emit(output, &summary)
+    crate::messages::emit(output, &summary)
 }

@@ -5,7 +5,7 @@ use clap::Args;
 use psdcal::ReportRequest;
 use std::path::PathBuf;
 
-use crate::report::Output;
+use crate::messages::Output;
 
 /// A self-contained HTML report of a calibration with its plots (SVG and PNG)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -32,5 +32,5 @@ pub fn run(args: &ReportArgs, output: Output, limits: psdcal::ReadLimits) -> any
         out: args.out.clone(),
         limits,
     })?;
-    crate::report::emit(output, &written.summary(&args.out))
+    crate::messages::emit(output, &written.summary(&args.out))
 }

@@ -4,7 +4,7 @@
 use psdcal::SimulateRequest;
 
 use crate::cli_sim::SimulateArgs;
-use crate::report::Output;
+use crate::messages::Output;
 
 /// Runs `simulate`.
 pub fn run(args: &SimulateArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
@@ -35,5 +35,5 @@ pub fn run(args: &SimulateArgs, output: Output, limits: psdcal::ReadLimits) -> a
             },
         )?,
     };
-    crate::report::emit(output, &written.summary(&args.out, &files))
+    crate::messages::emit(output, &written.summary(&args.out, &files))
 }

@@ -7,7 +7,7 @@ use clap::Args;
 use psdcal::{PositioningRequest, RoomOptions};
 
 use crate::choice::choice;
-use crate::report::Output;
+use crate::messages::Output;
 use psdcal::option_text::positive_mm;
 use psdcal::option_text::{parse_images, parse_snr};
 
@@ -61,5 +61,5 @@ pub fn run(a: &PositioningArgs, output: Output) -> anyhow::Result<()> {
         out: a.out.clone(),
     })?;
     let summary = psdcal::Summary::new(rig.text(&a.out), rig.to_json(&a.out));
-    crate::report::emit(output, &summary)
+    crate::messages::emit(output, &summary)
 }

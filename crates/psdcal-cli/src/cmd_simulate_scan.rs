@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use psdcal::{PsdGeometry, ScanRequest};
 
-use crate::report::Output;
+use crate::messages::Output;
 use psdcal::option_text::side_mm;
 
 /// Simulate a lensless raster scan of the PSD (scan.csv for psd-map)
@@ -52,5 +52,5 @@ pub fn run(args: &SimulateScanArgs, output: Output) -> anyhow::Result<()> {
         seed: args.seed,
         out: args.out.clone(),
     })?;
-    crate::report::emit(output, &scan.summary(&args.out))
+    crate::messages::emit(output, &scan.summary(&args.out))
 }

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use psdcal::StudyRequest;
 
-use crate::report::Output;
+use crate::messages::Output;
 
 /// Runs `study`.
 pub fn run(config: &StudyRequest, output: Output) -> anyhow::Result<()> {
@@ -28,7 +28,7 @@ pub fn run(config: &StudyRequest, output: Output) -> anyhow::Result<()> {
     let outcome = plan.run(&tick, &cancel);
     bar.finish_and_clear();
     let outcome = outcome?;
-    crate::report::emit(output, &outcome.summary(&config.out))
+    crate::messages::emit(output, &outcome.summary(&config.out))
 }
 
 fn progress_bar(total: u64, output: Output) -> ProgressBar {

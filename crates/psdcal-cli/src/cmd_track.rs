@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use crate::report::Output;
+use crate::messages::Output;
 use clap::Args;
 
 /// Angles of arrival per window and LED from raw samples on standard input (live)

@@ -33,7 +33,7 @@ pub mod cmd_simulate_scan;
 mod cmd_study;
 pub mod cmd_track;
 mod guard;
-pub mod report;
+pub mod messages;
 
 use std::process::ExitCode;
 
@@ -89,7 +89,7 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            report::print_error(&report::lower(error));
+            messages::print_error(&messages::lower(error));
             ExitCode::FAILURE
         }
     }

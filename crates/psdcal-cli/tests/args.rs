@@ -5,7 +5,7 @@ use clap::{CommandFactory, Parser};
 use psdcal::{DataSetFiles, LoadOptions};
 use psdcal_cli::args::CorrectArgs;
 use psdcal_cli::cli::{Cli, Job, PointSource};
-use psdcal_cli::report::Output;
+use psdcal_cli::messages::Output;
 use psdcal_model::PsdGeometry;
 
 fn parse(args: &[&str]) -> Result<(Output, Job), clap::Error> {

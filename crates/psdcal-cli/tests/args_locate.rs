@@ -5,7 +5,7 @@ use clap::Parser;
 use psdcal::Plane;
 use psdcal_cli::cli::{Cli, Job};
 use psdcal_cli::cli_locate::{AoaArgs, LocateTarget, MapModel, MapSource};
-use psdcal_cli::report::Output;
+use psdcal_cli::messages::Output;
 use psdcal_model::Param;
 
 fn parse(args: &[&str]) -> Result<(Output, Job), clap::Error> {

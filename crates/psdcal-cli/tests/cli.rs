@@ -7,7 +7,7 @@ use std::path::Path;
 
 use common::{psdcal, stderr, stdout, valid};
 use nalgebra::Vector2;
-use psdcal_model::sensor::impact_point_with_gains;
+use psdcal_model::psd::impact_point_with_gains;
 use psdcal_model::{Amplitudes, PsdGeometry};
 use serde_json::Value;
 

@@ -13,7 +13,7 @@ use psdcal_io::{read_calibration, write_calibration, Calibration};
 use psdcal_locate::{
     angle_of_arrival, error_map, measured_from_ray, ErrorSource, MapOptions, ParameterErrors,
 };
-use psdcal_model::sensor::electrode_currents;
+use psdcal_model::psd::electrode_currents;
 use psdcal_model::{Param, Pose, PsdGeometry, SensorModel};
 use serde_json::Value;
 

@@ -372,7 +372,7 @@ fn is_non_finite(text: &str) -> bool {
 #[cfg(test)]
 mod tests {
     use approx::assert_relative_eq;
-    use psdcal_model::sensor::electrode_currents;
+    use psdcal_model::psd::electrode_currents;
 
     use super::*;
 

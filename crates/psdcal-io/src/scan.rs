@@ -221,7 +221,7 @@ pub fn write_scan(
 
 #[cfg(test)]
 mod tests {
-    use psdcal_model::sensor::electrode_currents;
+    use psdcal_model::psd::electrode_currents;
 
     use super::*;
 

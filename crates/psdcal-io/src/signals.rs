@@ -8,12 +8,12 @@
 //! | `snr_db` (optional) | the record's estimated SNR, dB (lowest channel), as `psdcal demodulate` writes it |
 //!
 //! [`Signals::to_observations`] turns each row into an impact point with the
-//! pin-cushion formulas of docs/model.md §1 (`psdcal_model::sensor`), after
+//! pin-cushion formulas of docs/model.md §1 (`psdcal_model::psd`), after
 //! dividing out the relative channel gains. A row whose amplitudes sum to zero
 //! or less gives no point and is an error naming its line.
 
 use nalgebra::Vector2;
-use psdcal_model::sensor::impact_point_with_gains;
+use psdcal_model::psd::impact_point_with_gains;
 use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
 
 use crate::csv_table::CsvTable;
@@ -171,7 +171,7 @@ pub(crate) fn impact_point_at(
 #[cfg(test)]
 mod tests {
     use approx::assert_relative_eq;
-    use psdcal_model::sensor::electrode_currents;
+    use psdcal_model::psd::electrode_currents;
 
     use super::*;
 

@@ -7,7 +7,7 @@
 //! - no image is left with enough points.
 //!
 //! Warnings (the offending data are dropped, the rest is usable):
-//! - a point off the sensor's active area (`psdcal_model::sensor::is_on_active_area`);
+//! - a point off the sensor's active area (`psdcal_model::psd::is_on_active_area`);
 //! - an image with fewer than [`MIN_POINTS_PER_IMAGE`] points left;
 //! - fewer than [`MIN_IMAGES`] usable images;
 //! - a template line group with fewer than 3 LEDs (see [`Template::warnings`]).
@@ -17,7 +17,7 @@
 use std::collections::HashMap;
 
 use nalgebra::Vector2;
-use psdcal_model::sensor::is_on_active_area;
+use psdcal_model::psd::is_on_active_area;
 use psdcal_model::PsdGeometry;
 
 use crate::error::IoError;

@@ -14,9 +14,7 @@
 //! ```
 
 use nalgebra::{DMatrix, Matrix2, Matrix2x3, Matrix3, Vector2};
-use psdcal_model::sensor::{
-    impact_point_gain_jacobian, impact_point_with_gains, is_on_active_area,
-};
+use psdcal_model::psd::{impact_point_gain_jacobian, impact_point_with_gains, is_on_active_area};
 use psdcal_model::{
     Amplitudes, ChannelGains, Model, Param, PsdGeometry, SensorModel, Stage, ValidRegion,
 };

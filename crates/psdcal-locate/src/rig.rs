@@ -28,7 +28,7 @@ use std::collections::HashMap;
 use std::sync::Mutex;
 
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
-use psdcal_model::sensor::is_on_active_area;
+use psdcal_model::psd::is_on_active_area;
 use psdcal_model::{Model, Pose, PsdGeometry};
 
 use crate::calibrated_sensor::{AoaEstimate, CalibratedSensor, LocateOptions, Measurement};

@@ -9,7 +9,7 @@ use psdcal_locate::{
     triangulate, CalibratedSensor, LocateOptions, Measurement, ParameterCovariance, Plane,
     WorldRay,
 };
-use psdcal_model::sensor::electrode_currents;
+use psdcal_model::psd::electrode_currents;
 use psdcal_model::stages::Gains;
 use psdcal_model::{ChannelGains, Param, PsdGeometry, SensorModel};
 use support::{models, rel, sensor_points};

@@ -7,7 +7,7 @@ mod support;
 
 use nalgebra::{Vector2, Vector3};
 use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, Plane};
-use psdcal_model::sensor::electrode_currents;
+use psdcal_model::psd::electrode_currents;
 use psdcal_model::{ChannelGains, PsdGeometry};
 use support::{measure, models, three_sensor_rig};
 

@@ -65,7 +65,7 @@ fn the_corner_past_the_fold_is_never_ok() {
     let inside = c + (CORNER - c).normalize() * fold_radius() * 0.99;
     assert!(sensor.aoa(&Measurement::Point(inside), &options).is_ok());
     // Amplitudes whose point is the corner: refused too.
-    let a = psdcal_model::sensor::electrode_currents(&PsdGeometry::default(), &CORNER, 1.0);
+    let a = psdcal_model::psd::electrode_currents(&PsdGeometry::default(), &CORNER, 1.0);
     let e = sensor
         .aoa(&Measurement::Amplitudes(a), &options)
         .unwrap_err();

@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 
 use nalgebra::{Vector2, Vector3};
 use psdcal_model::paper_setup::SCATTER14_MM;
-use psdcal_model::sensor::{electrode_currents, is_on_active_area, transimpedance_gain};
+use psdcal_model::psd::{electrode_currents, is_on_active_area, transimpedance_gain};
 use psdcal_model::{Model, Pose, PsdGeometry, SensorModel};
 
 /// LED positions on the template (mm): `scatter14`, 14 LEDs, no three

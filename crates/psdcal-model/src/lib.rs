@@ -4,7 +4,7 @@
 //! behind a lens, as specified in psdcal's `docs/model.md` §1–3 (after
 //! Rodríguez-Navarro et al., *Sensors* 2016, 16(9), 1484):
 //!
-//! - [`sensor`]: electrode amplitudes ↔ impact point, channel gains (P1, P2, P43);
+//! - [`psd`]: electrode amplitudes ↔ impact point, channel gains (P1, P2, P43);
 //! - [`stage`], [`stages`], [`model`], [`model_projection`]: the model, one
 //!   chain of stages with runtime-sized, named parameter blocks (docs/model.md
 //!   §8): PSD and lens distortion (P7–P16), the pinhole with one focal length
@@ -40,7 +40,7 @@ pub mod model;
 pub mod model_projection;
 pub mod params;
 pub mod pose;
-pub mod sensor;
+pub mod psd;
 pub mod stage;
 pub mod stages;
 pub mod valid_region;
@@ -54,6 +54,6 @@ pub use model::{ChainJacobian, Model};
 pub use model_projection::{PointJacobians, PoseJacobians};
 pub use params::{Distortion, Intrinsics, Param, SensorModel, UnknownParam, N_PARAMS};
 pub use pose::{Pose, RotationJacobian, N_POSE};
-pub use sensor::{Amplitudes, ChannelGains, PsdGeometry};
+pub use psd::{Amplitudes, ChannelGains, PsdGeometry};
 pub use stage::{ParameterInfo, Stage, StageJacobian};
 pub use valid_region::{OutsideRegion, ValidRegion};

@@ -52,7 +52,7 @@ use nalgebra::Vector2;
 
 use crate::model::Model;
 use crate::params::SensorModel;
-use crate::sensor::PsdGeometry;
+use crate::psd::PsdGeometry;
 use crate::ModelError;
 
 /// Rays of a region computed by [`ValidRegion::of_model`].

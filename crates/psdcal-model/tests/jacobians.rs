@@ -9,7 +9,7 @@ use common::{
     POSE_SCALES,
 };
 use nalgebra::{DMatrix, DVector, Vector2, Vector3};
-use psdcal_model::sensor::{
+use psdcal_model::psd::{
     electrode_currents, impact_point, impact_point_amplitude_jacobian, impact_point_gain_jacobian,
     impact_point_with_gains,
 };

@@ -6,7 +6,7 @@ mod common;
 use common::{example_models, example_poses, example_template_points};
 use nalgebra::{Vector2, Vector3};
 use proptest::prelude::*;
-use psdcal_model::sensor::{electrode_currents, impact_point, impact_point_with_gains};
+use psdcal_model::psd::{electrode_currents, impact_point, impact_point_with_gains};
 use psdcal_model::{ChannelGains, Model, ModelError, Pose, PsdGeometry, SensorModel};
 
 /// 41 × 41 points over the 9 × 9 mm active area, edges included.

@@ -17,7 +17,7 @@
 //! | `demodulation` | [`Demodulation::Iq`] | unbiased, phase-independent |
 //! | `amplifier_gain_v_per_a` | 94 088 | the paper's transimpedance (P43), R = 100 kΩ, C = 100 pF, at f0 = 1 kHz (used by [`SignalChain::measure_point`](crate::signal::SignalChain::measure_point) only) |
 
-use psdcal_model::sensor::transimpedance_gain;
+use psdcal_model::psd::transimpedance_gain;
 use serde::{Deserialize, Serialize};
 
 use crate::butterworth::BandPlacement;

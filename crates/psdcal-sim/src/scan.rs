@@ -13,7 +13,7 @@
 //! (`c`, amplitudes, measured point).
 
 use nalgebra::Vector2;
-use psdcal_model::sensor::{electrode_currents, impact_point};
+use psdcal_model::psd::{electrode_currents, impact_point};
 use psdcal_model::{Amplitudes, PsdGeometry};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};

@@ -26,7 +26,7 @@
 //! `g_k = K_k / K_x1` are what biases the impact point.
 
 use nalgebra::{Vector2, Vector3};
-use psdcal_model::sensor::transimpedance_gain;
+use psdcal_model::psd::transimpedance_gain;
 use psdcal_model::{ChannelGains, Model, Pose, PsdGeometry, SensorModel};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;

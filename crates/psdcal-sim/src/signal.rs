@@ -118,7 +118,7 @@ use std::f64::consts::TAU;
 use std::fmt;
 
 use nalgebra::Vector2;
-use psdcal_model::sensor::{electrode_currents, impact_point, is_on_active_area};
+use psdcal_model::psd::{electrode_currents, impact_point, is_on_active_area};
 use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;

@@ -17,7 +17,7 @@
 //! exactly (its own tests show it), and skipping keeps noise-free studies fast.
 
 use nalgebra::Vector2;
-use psdcal_model::sensor::{electrode_currents, impact_point};
+use psdcal_model::psd::{electrode_currents, impact_point};
 use psdcal_model::{Amplitudes, ChannelGains, Model, Pose, PsdGeometry, SensorModel};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -294,7 +294,7 @@ impl Simulation {
                 };
                 let amps = electrode_currents(geometry, &reported, 1.0).apply_gains(&self.gains);
                 let Ok(measured) =
-                    psdcal_model::sensor::impact_point_with_gains(geometry, &amps, gains)
+                    psdcal_model::psd::impact_point_with_gains(geometry, &amps, gains)
                 else {
                     continue;
                 };

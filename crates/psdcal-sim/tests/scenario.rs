@@ -1,7 +1,7 @@
 //! Scenarios and the simulator: poses on the sensor and covering it, the
 //! gain imbalance's spread (P43), the noise-free simulation against the model.
 
-use psdcal_model::sensor::{impact_point, transimpedance_gain};
+use psdcal_model::psd::{impact_point, transimpedance_gain};
 use psdcal_model::{Model, PsdGeometry};
 use psdcal_sim::scenario::{
     draw_imbalance, draw_poses, IMBALANCE_FREQUENCY_HZ, NOMINAL_C_FARAD, NOMINAL_R_OHM,
@@ -103,7 +103,7 @@ fn noise_free_simulation_is_the_model() {
     let sim = simulate(&options, &mut ChaCha8Rng::seed_from_u64(5)).unwrap();
     let p = &sim.images[0].points[0];
     let corrected =
-        psdcal_model::sensor::impact_point_with_gains(&options.geometry, &p.amplitudes, &sim.gains)
+        psdcal_model::psd::impact_point_with_gains(&options.geometry, &p.amplitudes, &sim.gains)
             .unwrap();
     assert!((corrected - p.true_measured).norm() < 1e-12);
     assert!(

@@ -9,7 +9,7 @@
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 
 use nalgebra::Vector2;
-use psdcal_model::sensor::{electrode_currents, impact_point};
+use psdcal_model::psd::{electrode_currents, impact_point};
 use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
 use psdcal_sim::butterworth::{BandPass, BandPlacement, FilterState, MAX_ORDER};
 use psdcal_sim::signal::{noise_sigma, ChainConfig, Demodulation, SignalChain, SignalError};

@@ -158,7 +158,7 @@ fn self_calibration_removes_the_imbalance_at_40_db() {
 /// Monte Carlo spread and the mean reported σ.
 fn monte_carlo_spread(noise: NoiseModel, trials: u64) -> Vec<(String, f64, f64)> {
     use psdcal_calib::Observation;
-    use psdcal_model::sensor::{electrode_currents, impact_point};
+    use psdcal_model::psd::{electrode_currents, impact_point};
     let options = SimulationOptions {
         lens: Lens::Two,
         snr_db: Some(40.0),

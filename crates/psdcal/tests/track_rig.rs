@@ -18,7 +18,7 @@ use psdcal::{
     TrackRequest, TrackTarget,
 };
 use psdcal_io::{read_rig, PositionTruth};
-use psdcal_model::sensor::electrode_currents;
+use psdcal_model::psd::electrode_currents;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -3,7 +3,7 @@
 //! form or focal search), Levenberg–Marquardt on the template-plane cost
 //! (P29) with the global search over `l1` when it is freed
 //! ([`crate::global`]), the covariance ([`mod@crate::covariance`]) and the fit
-//! statistics ([`crate::report`]), then the diagnostics
+//! statistics ([`mod@crate::fit_statistics`]), then the diagnostics
 //! ([`crate::diagnostics`]: misfit, gain imbalance, local minima,
 //! unreliable uncertainty).
 //!

@@ -13,7 +13,7 @@ use crate::calibrate::options::{seeded_base, CalibrateOptions, Uncertainty};
 use crate::calibrate::result::CalibrationResult;
 use crate::data::CalibrationData;
 use crate::diagnose::diagnostics::{diagnose_structure, diagnose_uncertainty};
-use crate::diagnose::report::{fit_statistics, FitStatistics};
+use crate::diagnose::fit_statistics::{fit_statistics, FitStatistics};
 use crate::diagnose::residual_structure::DiagnosticReport;
 use crate::problem::prior::Prior;
 use crate::refine::global::{refine_global, GlobalOptions, GlobalReport};

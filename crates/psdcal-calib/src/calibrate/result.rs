@@ -8,7 +8,7 @@ use nalgebra::DMatrix;
 use psdcal_model::{ChannelGains, CostKind, Diagnostic, Model, Pose, SensorModel, ValidRegion};
 use psdcal_solver::solver::{RobustLoss, SolverReport as RefineReport};
 
-use crate::diagnose::report::FitStatistics;
+use crate::diagnose::fit_statistics::FitStatistics;
 use crate::problem::weighting::NoiseModel;
 use crate::refine::global::GlobalReport;
 use crate::refine::refined::Refined;

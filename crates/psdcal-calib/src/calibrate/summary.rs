@@ -9,7 +9,7 @@ use psdcal_model::Diagnostic;
 use serde::Serialize;
 
 use crate::calibrate::result::CalibrationResult;
-use crate::diagnose::report::FitStatistics;
+use crate::diagnose::fit_statistics::FitStatistics;
 use crate::problem::weighting::NoiseModel;
 use crate::refine::global::GlobalReport;
 use crate::start::initialize::InitRoute;

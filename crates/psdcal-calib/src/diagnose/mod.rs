@@ -1,9 +1,9 @@
 //! What a finished fit says about itself (docs/model.md §4.6–4.7): the fit
-//! statistics ([`report`]: the paper's residual, RMS errors, worst points),
+//! statistics ([`mod@fit_statistics`]: the paper's residual, RMS errors, worst points),
 //! the tests of the residuals for a smooth field the model does not contain
 //! ([`residual_structure`]), and the diagnostics with stable codes built on
 //! them, the covariance and the global search ([`diagnostics`]).
 
 pub mod diagnostics;
-pub mod report;
+pub mod fit_statistics;
 pub mod residual_structure;

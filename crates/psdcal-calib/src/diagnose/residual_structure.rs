@@ -63,7 +63,7 @@
 //! 25 % above σ. Nothing is tested on an exact fit (RMS below 1e-9 mm).
 
 use nalgebra::{DMatrix, DVector, Matrix2x3, SymmetricEigen, Vector2};
-use psdcal_model::sensor::{electrode_currents, impact_point_gain_jacobian};
+use psdcal_model::psd::{electrode_currents, impact_point_gain_jacobian};
 use psdcal_model::{ChannelGains, Diagnostic, DiagnosticCode, Model, PsdGeometry};
 use psdcal_solver::normal_equations::{ResidualTerm, Step};
 use psdcal_solver::solver::{self, Problem};

@@ -36,7 +36,7 @@
 //! does not either (dividing by the gains keeps it relative).
 
 use nalgebra::{DMatrix, Matrix2, SMatrix};
-use psdcal_model::sensor::electrode_currents;
+use psdcal_model::psd::electrode_currents;
 use psdcal_model::{Amplitudes, CostKind, Model, Pose, PsdGeometry};
 
 use crate::data::CalibrationData;

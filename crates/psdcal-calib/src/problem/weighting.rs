@@ -27,7 +27,7 @@
 //!   simulated noise, docs/model.md §6): `C_m ∝ Σ_k q_k² d_k d_kᵀ` with the
 //!   channel fractions `q_k = w_k / S` — from the amplitudes when the data
 //!   carry them, else from the forward model at the point
-//!   (`psdcal_model::sensor::electrode_currents`, `q = (1±u)(1±v)/4`). Points near the electrodes are far less noisy
+//!   (`psdcal_model::psd::electrode_currents`, `q = (1±u)(1±v)/4`). Points near the electrodes are far less noisy
 //!   than points at the centre (at `u = v = 0.9`, a quarter of the centre's
 //!   standard deviation);
 //!   With a per-record SNR ([`CalibrationData::noise_scale`], `10^(−SNR/10)`
@@ -54,7 +54,7 @@
 //! ([`mod@crate::refine`]).
 
 use nalgebra::{Matrix2, Vector2};
-use psdcal_model::sensor::{electrode_currents, impact_point_amplitude_jacobian};
+use psdcal_model::psd::{electrode_currents, impact_point_amplitude_jacobian};
 use psdcal_model::{Amplitudes, ChannelGains, Model, Pose, PsdGeometry};
 use serde::Serialize;
 
@@ -275,7 +275,7 @@ impl PointWeights {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use psdcal_model::sensor::{electrode_currents, impact_point};
+    use psdcal_model::psd::{electrode_currents, impact_point};
 
     /// The covariance of the point computed from amplitudes with independent
     /// channel noise, by Monte Carlo-free linear propagation through central

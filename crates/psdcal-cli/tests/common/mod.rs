@@ -13,7 +13,7 @@ use std::process::{Command, Output};
 
 use nalgebra::{Vector2, Vector3};
 use psdcal_io::{Calibration, CostKind, Covariance, FitSummary, GainsRecord, ImageFit, StdDevs};
-use psdcal_model::sensor::{electrode_currents, is_on_active_area};
+use psdcal_model::psd::{electrode_currents, is_on_active_area};
 use psdcal_model::{ChannelGains, Param, Pose, PsdGeometry, SensorModel};
 
 /// Runs `psdcal` with `args`.

@@ -4,12 +4,12 @@
 //! Amplitudes measured through channels of relative gains `g_k = K_k/K_x1`
 //! are divided by them, `w_k = V_k / g_k`, before the pin-cushion formulas
 //! give the impact point; `∂p/∂g_k = −(∂p/∂w_k) w_k / g_k`
-//! ([`crate::sensor::impact_point_gain_jacobian`]). Parameters `g_x2, g_y1,
+//! ([`crate::psd::impact_point_gain_jacobian`]). Parameters `g_x2, g_y1,
 //! g_y2` (dimensionless; `g_x1 = 1`).
 
 use nalgebra::{Matrix2x3, Vector2};
 
-use crate::sensor::{impact_point_gain_jacobian, impact_point_with_gains};
+use crate::psd::{impact_point_gain_jacobian, impact_point_with_gains};
 use crate::stage::ParameterInfo;
 use crate::{Amplitudes, ChannelGains, ModelError, PsdGeometry};
 

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use nalgebra::Vector2;
 use psdcal_locate::{angle_of_arrival, CalibratedSensor, Caution, LocateError, Measurement};
-use psdcal_model::sensor::is_on_active_area;
+use psdcal_model::psd::is_on_active_area;
 
 use crate::answer::loaded_sensor::LoadedSensor;
 use crate::answer::point_rows::{answer_points, PointsAnswer};

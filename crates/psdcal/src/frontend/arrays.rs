@@ -28,7 +28,7 @@ use psdcal_io::{Led, Observation, Observations, SignalRow, Signals, Template};
 use psdcal_locate::{
     sigmas_and_correlation, CalibratedSensor, LocateError, LocateOptions, Measurement, Plane,
 };
-use psdcal_model::sensor::Amplitudes;
+use psdcal_model::psd::Amplitudes;
 
 use crate::answer::correct::correct_point;
 use crate::base::error::{Error, Result};

@@ -5,7 +5,7 @@
 //! field of micrometres visible on a sensor of millimetres.
 
 use nalgebra::Vector2;
-use psdcal_model::sensor::is_on_active_area;
+use psdcal_model::psd::is_on_active_area;
 use psdcal_model::{Model, SensorModel, ValidRegion};
 use psdcal_report::{Arrow, ArrowSet, Frame, Plot, PlotData, PointSet};
 

@@ -22,7 +22,7 @@ use std::path::Path;
 
 use psdcal_io::Tones;
 use psdcal_locate::{status_of, triangulate, LocateOptions, Measurement, Rig, WorldRay};
-use psdcal_model::sensor::impact_point_amplitude_jacobian;
+use psdcal_model::psd::impact_point_amplitude_jacobian;
 use psdcal_model::Amplitudes;
 use psdcal_signal::{RecordEstimate, SignalError};
 

@@ -19,7 +19,7 @@ use psdcal_io::{
     npy_header, write_atomic, write_csv_frames, write_npy_frames, write_schedule, write_tones,
     IoError, RawFormat, ScheduleRow, Tone, RAW_CSV_HEADER,
 };
-use psdcal_model::sensor::electrode_currents;
+use psdcal_model::psd::electrode_currents;
 use psdcal_sim::raw::Frame;
 use psdcal_sim::{Impairments, RawPlan, RawRecord, SimError};
 use rand::SeedableRng;
