@@ -7,7 +7,7 @@ use clap::Args;
 use psdcal::option_text::{parse_images, parse_snr, parse_threads, parse_trials};
 use psdcal::{parse_record_cycles, StudyRequest};
 
-use crate::choice::{choice, name, TableArg};
+use crate::choice::choice;
 
 /// Simulate a calibration data set through the whole signal chain
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -57,16 +57,16 @@ pub struct SimulateArgs {
     pub fdma: bool,
     /// With --raw: the card's impairments (docs/model.md §8), comma-separated, or none
     #[arg(long, value_name = "LIST", value_delimiter = ',', requires = "raw",
-          default_value = "dc,hum,drift,quantise,clock,transients", value_parser = choice::<crate::choice::ImpairmentArg>)]
-    pub impairments: Vec<crate::choice::ImpairmentArg>,
+          default_value = "dc,hum,drift,quantise,clock,transients", value_parser = psdcal::Impairment::parse_item)]
+    pub impairments: Vec<Option<psdcal::Impairment>>,
 }
 
 /// Run the paper's Monte Carlo evaluation (Tables 1-10, Figure 9) next to the paper's numbers
 #[derive(Debug, Args)]
 pub struct StudyArgs {
     /// Tables to run: table1 ... table10, fig9, psdmap (the PSD map's condition), or all
-    #[arg(value_name = "TABLE", default_value = "all", value_parser = choice::<TableArg>)]
-    pub tables: Vec<TableArg>,
+    #[arg(value_name = "TABLE", default_value = "all", value_parser = psdcal::parse_study_id)]
+    pub tables: Vec<String>,
     /// Trials per condition
     #[arg(long, value_name = "N", default_value = "200", value_parser = parse_trials)]
     pub trials: usize,
@@ -101,9 +101,8 @@ pub struct DemoArgs {
 impl StudyArgs {
     /// The configuration: `all` expands, duplicates go, the paper's order.
     pub fn into_config(self) -> StudyRequest {
-        let ids: Vec<String> = self.tables.iter().map(name).collect();
         StudyRequest {
-            tables: psdcal::expand_tables(&ids),
+            tables: psdcal::expand_tables(&self.tables),
             trials: self.trials,
             threads: self.threads,
             seed: self.seed,

@@ -31,7 +31,14 @@ pub fn run(args: &SimulateArgs, output: Output, limits: psdcal::ReadLimits) -> a
             &psdcal::RawRequest {
                 format,
                 fdma: args.fdma,
-                impairments: crate::choice::impairments(&args.impairments),
+                impairments: psdcal::Impairments::only(
+                    &args
+                        .impairments
+                        .iter()
+                        .flatten()
+                        .copied()
+                        .collect::<Vec<_>>(),
+                ),
             },
         )?,
     };

@@ -114,6 +114,51 @@ pub enum Impairment {
     Transients,
 }
 
+impl Impairment {
+    /// Every impairment, in the order the command line lists them.
+    pub const ALL: [Impairment; 6] = [
+        Impairment::Dc,
+        Impairment::Hum,
+        Impairment::Drift,
+        Impairment::Quantise,
+        Impairment::Clock,
+        Impairment::Transients,
+    ];
+
+    /// Its name (the command line's, and its serialisation).
+    pub fn name(self) -> &'static str {
+        match self {
+            Impairment::Dc => "dc",
+            Impairment::Hum => "hum",
+            Impairment::Drift => "drift",
+            Impairment::Quantise => "quantise",
+            Impairment::Clock => "clock",
+            Impairment::Transients => "transients",
+        }
+    }
+
+    /// One item of a list of impairments (`--impairments`, any case):
+    /// an impairment's name, or `none` (`Ok(None)`: a clean card);
+    /// refused with the accepted names.
+    pub fn parse_item(text: &str) -> Result<Option<Impairment>, String> {
+        let wanted = text.trim().to_ascii_lowercase();
+        if wanted == "none" {
+            return Ok(None);
+        }
+        Self::ALL
+            .into_iter()
+            .find(|i| i.name() == wanted)
+            .map(Some)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Self::ALL.iter().map(|i| i.name()).collect();
+                format!(
+                    "unknown value '{text}'; expected one of {}, none",
+                    names.join(", ")
+                )
+            })
+    }
+}
+
 impl Impairments {
     /// The listed impairments at their defaults, the others off.
     pub fn only(list: &[Impairment]) -> Self {

@@ -139,7 +139,8 @@ pub use simulation::simulate_raw::{
 };
 pub use simulation::simulate_scan::{scan_samples, simulate_scan_file, ScanRequest, SimulatedScan};
 pub use study::monte_carlo::{
-    expand_tables, is_study_id, plan_study, StudyOutcome, StudyPlan, StudyRequest,
+    expand_tables, is_study_id, parse_study_id, plan_study, study_ids, StudyOutcome, StudyPlan,
+    StudyRequest,
 };
 pub use study::study_psd_map::{pooled, psd_map_seed, SeedErrors};
 #[cfg(feature = "testing")]

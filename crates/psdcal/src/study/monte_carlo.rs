@@ -127,6 +127,27 @@ pub const PSD_MAP_STUDY: &str = "psdmap";
 
 /// Whether `id` names something `study` runs: `table1` … `table10`, `fig9`,
 /// `psdmap` or `all`.
+/// Every id `study` accepts, in the order the command line lists them.
+pub fn study_ids() -> Vec<&'static str> {
+    let mut ids = TABLE_IDS.to_vec();
+    ids.extend(["fig9", PSD_MAP_STUDY, "all"]);
+    ids
+}
+
+/// `study TABLE`: a study id (any case), refused with the accepted ids.
+pub fn parse_study_id(text: &str) -> std::result::Result<String, String> {
+    let id = text.trim().to_ascii_lowercase();
+    if is_study_id(&id) {
+        Ok(id)
+    } else {
+        Err(format!(
+            "unknown value '{text}'; expected one of {}",
+            study_ids().join(", ")
+        ))
+    }
+}
+
+/// Whether `id` is one of [`study_ids`].
 pub fn is_study_id(id: &str) -> bool {
     id == "all" || id == "fig9" || id == PSD_MAP_STUDY || TABLE_IDS.contains(&id)
 }
