@@ -7,6 +7,10 @@ use serde::{Deserialize, Serialize};
 
 /// Fewest points an image needs (a homography has 8 degrees of freedom).
 pub const MIN_POINTS_PER_IMAGE: usize = 4;
+/// Mean squared residual per point (mm², both coordinates) at or below
+/// which a fit is exact, rounding only (RMS 1e-10 mm): the solver stops
+/// there and no uncertainty is checked. One definition for every fit.
+pub const EXACT_FIT_MEAN_SQUARE_MM2: f64 = 1e-20;
 /// Fewest images a calibration needs (docs/model.md §4).
 pub const MIN_IMAGES: usize = 3;
 

@@ -13,9 +13,6 @@ use crate::refine::options::RefineOptions;
 use crate::refine::refined::{Linearization, Refined};
 use crate::CalibError;
 
-/// Mean squared residual per point below which the fit is exact (RMS 1e-10).
-const EXACT_FIT_MS: f64 = 1e-20;
-
 fn validate(data: &CalibrationData, poses: &[Pose]) -> Result<(), CalibError> {
     if poses.len() != data.images.len() {
         return Err(CalibError::Numerical {
@@ -44,7 +41,7 @@ fn solver_options(data: &CalibrationData, options: &RefineOptions) -> SolverOpti
         cost_tolerance: options.cost_tolerance,
         step_tolerance: options.step_tolerance,
         initial_lambda: options.initial_lambda,
-        exact_cost: EXACT_FIT_MS * points,
+        exact_cost: psdcal_model::fit::EXACT_FIT_MEAN_SQUARE_MM2 * points,
         step_floor: 1e-26 * points,
         robust: options.robust,
     }

@@ -178,7 +178,7 @@ pub fn refine_surveyed(
         cost_tolerance: 1e-12,
         step_tolerance: 1e-12,
         initial_lambda: 1e-3,
-        exact_cost: 1e-20 * points,
+        exact_cost: psdcal_model::fit::EXACT_FIT_MEAN_SQUARE_MM2 * points,
         step_floor: 1e-26 * points,
         robust: None,
     };

@@ -23,6 +23,7 @@
 //! An exact fit (cost at the solver's exact-fit floor) has nothing to check.
 
 use nalgebra::{DVector, Vector6};
+use psdcal_model::fit::EXACT_FIT_MEAN_SQUARE_MM2;
 use psdcal_solver::normal_equations::{NormalEquations, Step};
 use psdcal_solver::solver::{self, Problem};
 use serde::Serialize;
@@ -43,10 +44,6 @@ use psdcal_solver::solver::RobustLoss;
 /// lens 1 at 0.05 mm (median 8) and weak-geometry 40 dB fits (up to 260)
 /// go beyond.
 pub const LINEARITY_TOLERANCE: f64 = 0.5;
-
-/// Mean squared template-plane residual per coordinate below which a fit
-/// counts as exact (rounding only): nothing to check.
-const EXACT_VARIANCE: f64 = 1e-24;
 
 /// The cost rise at `θ̂ ± 3σ_k` over its quadratic prediction.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -205,7 +202,10 @@ where
     let base = solver::cost(problem, state, fit.robust)?;
     let observations = fit.observations;
     let unknowns = names.len() + 6 * state.poses.len();
-    if observations <= unknowns || base <= EXACT_VARIANCE * observations as f64 {
+    // An exact fit (the solver's own criterion, per point of two
+    // coordinates): nothing to check.
+    let exact = EXACT_FIT_MEAN_SQUARE_MM2 * observations as f64 / 2.0;
+    if observations <= unknowns || base <= exact {
         return Ok(LinearityCheck {
             parameters: Vec::new(),
             profile: Vec::new(),
