@@ -13,7 +13,9 @@
 //! as ext4 flush a file renamed over another before committing the rename).
 //! Run `sync` if the power may fail right after a run.
 //!
-//! Temporary files are named `.<name>.<pid>.<n>.tmp`. A process killed
+//! Temporary files are named `.<name>.<pid>.<n>.tmp`, or
+//! `.<name>.<pid>.<n>.tmp.<ext>` for a writer that tells the format by the
+//! extension ([`write_atomic_at`]). A process killed
 //! while writing (SIGKILL, power loss) cannot remove its own: the next write
 //! into the same folder removes every such file whose process is no longer
 //! running (on systems without `/proc`, those older than a day).
@@ -37,8 +39,37 @@ where
         source,
     };
     remove_stale_temps(path);
-    let (temp_path, file) = create_temp(path).map_err(error)?;
+    let (temp_path, file) = create_temp(path, false).map_err(error)?;
     let result = fill(file, write).and_then(|()| fs::rename(&temp_path, path));
+    if let Err(source) = result {
+        // Best effort: the temporary file may already be gone.
+        let _ = fs::remove_file(&temp_path);
+        return Err(error(source));
+    }
+    Ok(())
+}
+
+/// Writes a file atomically with a writer that opens the file itself (a
+/// plotting library given a path): `write` writes the temporary file whose
+/// path it is given (a fresh, empty file with a name no other writer uses),
+/// which then replaces `path`; on failure it is removed and `path` is left as
+/// it was. `write`'s error is reported as the write error of `path`.
+pub fn write_atomic_at<F, E>(path: impl AsRef<Path>, write: F) -> Result<(), IoError>
+where
+    F: FnOnce(&Path) -> Result<(), E>,
+    E: std::fmt::Display,
+{
+    let path = path.as_ref();
+    let error = |source| IoError::Write {
+        file: path.display().to_string(),
+        source,
+    };
+    remove_stale_temps(path);
+    let (temp_path, file) = create_temp(path, true).map_err(error)?;
+    drop(file);
+    let result = write(&temp_path)
+        .map_err(|e| io::Error::other(e.to_string()))
+        .and_then(|()| fs::rename(&temp_path, path));
     if let Err(source) = result {
         // Best effort: the temporary file may already be gone.
         let _ = fs::remove_file(&temp_path);
@@ -71,8 +102,10 @@ fn reserve(file: &File, len: u64) {
 #[cfg(not(target_os = "linux"))]
 fn reserve(_file: &File, _len: u64) {}
 
-/// A new, exclusively created temporary file in the destination's directory.
-fn create_temp(path: &Path) -> io::Result<(PathBuf, File)> {
+/// A new, exclusively created temporary file in the destination's
+/// directory; with `keep_extension`, its name ends in the destination's
+/// extension too.
+fn create_temp(path: &Path, keep_extension: bool) -> io::Result<(PathBuf, File)> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let name = path.file_name().ok_or_else(|| {
         io::Error::new(
@@ -89,6 +122,10 @@ fn create_temp(path: &Path) -> io::Result<(PathBuf, File)> {
         let mut temp_name = std::ffi::OsString::from(".");
         temp_name.push(name);
         temp_name.push(format!(".{}.{n}.tmp", std::process::id()));
+        if let Some(ext) = path.extension().filter(|_| keep_extension) {
+            temp_name.push(".");
+            temp_name.push(ext);
+        }
         let temp_path = dir.join(temp_name);
         match OpenOptions::new()
             .write(true)
@@ -111,9 +148,14 @@ fn folder_of(path: &Path) -> &Path {
 }
 
 /// The process id in a name of psdcal's temporary files
-/// (`.<name>.<pid>.<n>.tmp`), if the name is one.
+/// (`.<name>.<pid>.<n>.tmp`, optionally followed by `.<ext>`), if the name
+/// is one.
 fn temp_owner(file_name: &str) -> Option<u32> {
-    let inner = file_name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let inner = file_name.strip_prefix('.')?;
+    let inner = match inner.rsplit_once(".tmp.") {
+        Some((head, ext)) if !ext.is_empty() && !ext.contains('.') => head,
+        _ => inner.strip_suffix(".tmp")?,
+    };
     let mut parts = inner.rsplitn(3, '.');
     let n = parts.next()?;
     let pid = parts.next()?;
@@ -179,6 +221,40 @@ mod tests {
             .collect();
         names.sort();
         names
+    }
+
+    #[test]
+    fn a_writer_given_a_path_writes_atomically_with_the_extension_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("plot.png");
+        write_atomic_bytes(&path, b"old").unwrap();
+        // The writer sees a fresh temporary file ending in .png.
+        write_atomic_at(&path, |tmp: &Path| {
+            assert!(tmp.extension().is_some_and(|e| e == "png"), "{tmp:?}");
+            let name = tmp.file_name().unwrap().to_str().unwrap();
+            assert_eq!(temp_owner(name), Some(std::process::id()));
+            fs::write(tmp, b"new")
+        })
+        .unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"new");
+        // A failing writer leaves the destination and no temporary file.
+        let err = write_atomic_at(&path, |tmp: &Path| {
+            fs::write(tmp, b"partial").unwrap();
+            Err("the disk is full")
+        })
+        .unwrap_err();
+        assert!(err.to_string().contains("the disk is full"), "{err}");
+        assert_eq!(fs::read(&path).unwrap(), b"new");
+        assert_eq!(entries(dir.path()), ["plot.png"]);
+    }
+
+    #[test]
+    fn temporary_names_with_an_extension_are_recognised_and_others_not() {
+        assert_eq!(temp_owner(".coverage.png.42.7.tmp.png"), Some(42));
+        assert_eq!(temp_owner(".out.csv.42.7.tmp"), Some(42));
+        assert_eq!(temp_owner(".foo.tmp.bar.42.7.tmp"), Some(42));
+        assert_eq!(temp_owner(".coverage.png.tmp.png"), None);
+        assert_eq!(temp_owner("coverage.png"), None);
     }
 
     #[test]

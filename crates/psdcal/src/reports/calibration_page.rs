@@ -121,12 +121,9 @@ pub(crate) fn write_plots(dir: &Path, plots: &[Plot], svgs: &[String]) -> Result
         let svg_path = dir.join(format!("{}.svg", plot.name));
         write_atomic_bytes(&svg_path, svg.as_bytes())?;
         let png_path = dir.join(format!("{}.png", plot.name));
-        let tmp = dir.join(format!(".{}.tmp.png", plot.name));
-        plot.png(&tmp)?;
-        std::fs::rename(&tmp, &png_path).map_err(|e| Error::OutputFolder {
-            path: dir.to_path_buf(),
-            message: format!("cannot write {}: {e}", png_path.display()),
-        })?;
+        // A temporary file of its own (two reports into one folder never
+        // share one), removed if drawing fails.
+        psdcal_io::write_atomic_at(&png_path, |tmp| plot.png(tmp))?;
         files.push(svg_path);
         files.push(png_path);
     }

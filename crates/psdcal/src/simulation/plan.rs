@@ -234,13 +234,9 @@ fn write_heat_map(dir: &Path, setup: &PlanSetup, plan: &Plan) -> Result<()> {
     let size = (lx / n, ly / n);
     let svg = heat_map_svg(&cells, size, &frame, "AoA σ (°)")?;
     psdcal_io::write_atomic_bytes(dir.join("plan_sigma.svg"), svg.as_bytes())?;
-    heat_map_png(
-        &cells,
-        size,
-        &frame,
-        "AoA σ (°)",
-        &dir.join("plan_sigma.png"),
-    )?;
+    psdcal_io::write_atomic_at(dir.join("plan_sigma.png"), |tmp| {
+        heat_map_png(&cells, size, &frame, "AoA σ (°)", tmp)
+    })?;
     Ok(())
 }
 
