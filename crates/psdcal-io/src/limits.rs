@@ -59,8 +59,7 @@ pub(crate) fn too_large(source: &str, limit: u64) -> IoError {
     IoError::TooLarge {
         at: Location::file(source),
         message: format!(
-            "the file is larger than {}; expected a smaller file (raise the limit with \
-             --max-input-mb)",
+            "the file is larger than {}, the largest file read whole",
             bytes_text(limit)
         ),
     }
@@ -162,8 +161,7 @@ mod tests {
         assert!(matches!(e, IoError::TooLarge { .. }), "{e}");
         assert_eq!(
             e.to_string(),
-            "zero: the file is larger than 4 MiB; expected a smaller file (raise the limit \
-             with --max-input-mb)"
+            "zero: the file is larger than 4 MiB, the largest file read whole"
         );
         assert_eq!(read_all_limited("s", &b"abc"[..], 3).unwrap(), b"abc");
         assert!(read_all_limited("s", &b"abcd"[..], 3).is_err());
@@ -189,8 +187,7 @@ mod tests {
         assert_eq!(
             a.unwrap_err().to_string(),
             format!(
-                "{}: the file is larger than 1.0 KiB; expected a smaller file (raise the \
-                 limit with --max-input-mb)",
+                "{}: the file is larger than 1.0 KiB, the largest file read whole",
                 path.display()
             )
         );
