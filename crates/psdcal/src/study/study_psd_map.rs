@@ -234,17 +234,9 @@ pub fn psd_map_seed(seed: u64, amplitudes: bool) -> Result<SeedErrors> {
         .map(|(_, v)| *v)
         .collect();
     let refined_map_error_mm = map_error(&fitted.fit.map, &refined_block)?;
-    let free_l1 = CalibrationOptions {
-        free: vec![
-            Param::F,
-            Param::Cx,
-            Param::Cy,
-            Param::K1,
-            Param::K2,
-            Param::L1,
-        ],
-        ..CalibrationOptions::default()
-    };
+    // The default fit with l1 freed too.
+    let mut free_l1 = CalibrationOptions::default();
+    free_l1.free.push(Param::L1);
     let l1 = aoa_error(&calibrate(&noisy, &free_l1)?.record, true)?;
     let clean_set = data_set(seed, false)?;
     let clean = aoa_error(
