@@ -14,7 +14,7 @@ use common::{
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 use psdcal_model::stages::lens::LensCoefficients;
 use psdcal_model::stages::pinhole::PinholeIntrinsics;
-use psdcal_model::stages::{Gains, Lens, MapBasis, MapFrame, Pinhole, PsdMap, PsdRadial};
+use psdcal_model::stages::{Aspect, Gains, Lens, MapBasis, MapFrame, Pinhole, PsdMap, PsdRadial};
 use psdcal_model::{
     Amplitudes, ChannelGains, Model, Pose, PsdGeometry, SensorModel, Stage, StageJacobian,
 };
@@ -29,6 +29,7 @@ fn all_stages() -> Vec<Box<dyn Stage>> {
         Box::new(PsdRadial::new()),
         Box::new(Lens::new()),
         Box::new(Pinhole::new()),
+        Box::new(Aspect::new()),
         Box::new(PolyField::new(10, 4.5)),
         Box::new(psd_map(MapBasis::Polynomial { order: 5 })),
         Box::new(psd_map(MapBasis::Spline {
@@ -469,5 +470,24 @@ fn restricted_jacobians_are_the_full_ones_column_for_column() {
                 }
             }
         }
+    }
+}
+
+/// The aspect stage before the pinhole is the pinhole with a y focal length
+/// of its own, written out independently: `x = f X/Z + γ Y/Z + cx`,
+/// `y = f (1 + a) Y/Z + cy` (docs/model.md §3.3).
+#[test]
+fn aspect_is_the_pinhole_with_its_own_y_focal_length() {
+    let (f, a, cx, cy, skew) = (8.0, -0.5, 0.3, -0.4, 0.02);
+    let model = Model::new(
+        vec![Box::new(Aspect::new())],
+        None,
+        &[("f", f), ("a", a), ("cx", cx), ("cy", cy), ("skew", skew)],
+    )
+    .unwrap();
+    for (xz, yz) in [(0.0, 0.0), (0.2, -0.1), (-0.35, 0.27), (0.05, 0.4)] {
+        let measured = Vector2::new(f * xz + skew * yz + cx, f * (1.0 + a) * yz + cy);
+        let ray = model.ray(&measured);
+        assert!((ray - Vector2::new(xz, yz)).norm() < 1e-14, "{ray:?}");
     }
 }
