@@ -15,6 +15,7 @@
 //! - [`start`]: preliminary correction, homographies, closed form, focal search;
 //! - [`mod@refine`]: Levenberg–Marquardt and the global search over `l1`;
 //! - [`uncertainty`]: covariance, linearity check, profile, bootstrap;
+//! - [`select`]: each image's influence, the parameter set the data choose;
 //! - [`mod@diagnose`]: fit statistics, residual structure, diagnostics;
 //! - [`surveyed`]: the calibration from surveyed 3-D points;
 //! - [`mod@calibrate`]: the whole calibration, end to end;
@@ -32,6 +33,7 @@ mod error;
 pub mod plan;
 pub mod problem;
 pub mod refine;
+pub mod select;
 pub mod start;
 pub mod surveyed;
 pub mod uncertainty;
@@ -63,6 +65,8 @@ pub use refine::{
     refine, CalibrationProblem, CostKind, FitState, RefineOptions, RefineReport, Refined,
     RobustLoss, Termination,
 };
+pub use select::choose::{CandidateScore, ModelChoice, ModelChoiceReport};
+pub use select::influence::ImageInfluence;
 pub use start::homography::{fit_homography, Homography, HomographyFit, HomographyOptions};
 pub use start::initialize::{initialize, InitOptions, InitReport, InitRoute, Initialization};
 pub use start::preliminary::{

@@ -42,10 +42,12 @@ pub struct CalibrateArgs {
     /// Where to write calibration.json (atomically)
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
-    /// Parameters to estimate, comma-separated (the others stay fixed); add
-    /// `gains` to self-calibrate the amplifier gains (needs --signals)
-    #[arg(long, value_name = "LIST", default_value = "f,cx,cy,k1,k2", value_parser = parse_fit)]
-    pub fit: FitList,
+    /// Parameters to estimate, exactly these, comma-separated (the others
+    /// stay fixed); add `gains` to self-calibrate the amplifier gains (needs
+    /// --signals). Without it: f,cx,cy,k1,k2 and whichever of k3; p1,p2;
+    /// l1; skew lower the held-out angle error beyond its noise
+    #[arg(long, value_name = "LIST", value_parser = parse_fit)]
+    pub fit: Option<FitList>,
     /// Nominal focal length of the lens, mm (narrows the start's search)
     #[arg(long, value_name = "MM", value_parser = positive_mm)]
     pub focal_guess: Option<f64>,
@@ -73,10 +75,11 @@ pub struct CalibrateArgs {
     /// Robust loss: huber:SCALE or cauchy:SCALE (SCALE in mm of the cost)
     #[arg(long, value_name = "LOSS:SCALE", value_parser = parse_robust)]
     pub robust: Option<RobustLoss>,
-    /// Covariance of the estimate: linear (analytic, the default) or
-    /// bootstrap:N[:SEED] (N ≥ 10 refits of images resampled with
-    /// replacement; seed 1 by default), where the linear one is not enough
-    #[arg(long, value_name = "METHOD", default_value = "linear", value_parser = parse_uncertainty)]
+    /// Covariance of the estimate: jackknife (the default: the analytic σ
+    /// raised to the jackknife over images where larger), linear (analytic)
+    /// or bootstrap:N[:SEED] (N ≥ 10 refits of images resampled with
+    /// replacement; seed 1 by default)
+    #[arg(long, value_name = "METHOD", default_value = "jackknife", value_parser = parse_uncertainty)]
     pub uncertainty: Uncertainty,
     /// The PSD's non-linearity map from `psdcal psd-map`, first in the
     /// model and held fixed (its uncertainty carried)

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::{CommandFactory, Parser, Subcommand};
 use psdcal::option_text::FitList;
 pub use psdcal::PointSource;
-use psdcal::{CalibrationOptions, DataSetFiles, LoadOptions, ReadLimits};
+use psdcal::{CalibrationOptions, DataSetFiles, LoadOptions, ModelChoice, ReadLimits};
 
 use crate::args::{CalibrateArgs, CalibrateConfig, CorrectArgs, DataSetArgs};
 use crate::messages::Output;
@@ -178,9 +178,16 @@ impl Cli {
             Command::CalibrateInSitu(args) => Job::CalibrateInSitu(args),
             Command::Calibrate(args) => {
                 let (files, load) = args.data.into_files(args.gains, limits)?;
-                let FitList(free, fit_gains) = args.fit;
+                let choice = args
+                    .fit
+                    .as_ref()
+                    .map_or(ModelChoice::HeldOut, |_| ModelChoice::Given);
+                let FitList(free, fit_gains) = args
+                    .fit
+                    .unwrap_or_else(|| FitList(CalibrationOptions::default().free, false));
                 let options = CalibrationOptions {
                     free,
+                    choice,
                     fit_gains,
                     fixed: args.set,
                     focal_guess: args.focal_guess,

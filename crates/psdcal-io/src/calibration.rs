@@ -128,6 +128,19 @@ pub struct Calibration {
     /// (version 2 only, docs/model.md §8.3); `None` without one.
     #[serde(skip)]
     pub psd_map: Option<PsdMapStageRecord>,
+    /// The y axis's own scale (version 2 only, docs/model.md §3.3): the
+    /// `aspect` stage between `psd_radial` and `lens`; `None` without one.
+    #[serde(skip)]
+    pub aspect: Option<AspectRecord>,
+}
+
+/// The aspect stage of a calibration: `fy = f (1 + a)` (docs/model.md §3.3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AspectRecord {
+    /// The aspect `a` (dimensionless, above −1).
+    pub a: f64,
+    /// Whether the fit estimated it.
+    pub estimated: bool,
 }
 
 impl Calibration {
@@ -161,6 +174,7 @@ impl Calibration {
             provenance: None,
             valid_region: None,
             psd_map: None,
+            aspect: None,
         }
     }
 
@@ -223,6 +237,9 @@ impl Calibration {
         let mut names: Vec<&'static str> = self.estimated.iter().map(|p| p.name()).collect();
         if self.gains.is_some_and(|g| g.estimated) {
             names.extend(GAIN_NAMES);
+        }
+        if self.aspect.is_some_and(|a| a.estimated) {
+            names.push("a");
         }
         names
     }

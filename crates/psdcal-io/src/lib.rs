@@ -80,8 +80,8 @@ mod warning;
 
 pub use atomic::{write_atomic, write_atomic_at, write_atomic_bytes};
 pub use calibration::{
-    read_calibration, read_calibration_with, write_calibration, BootstrapRecord, Calibration,
-    CostKind, Covariance, Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile,
+    read_calibration, read_calibration_with, write_calibration, AspectRecord, BootstrapRecord,
+    Calibration, CostKind, Covariance, Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile,
     IntrinsicsRecord, Provenance, PsdMapScanRecord, PsdMapStageCovariance, PsdMapStageRecord,
     ScanResidualCells, SensorSize, Software, StdDevs, ValidRegionRecord, CALIBRATION_FORMAT,
     CALIBRATION_VERSION, GAIN_NAMES,

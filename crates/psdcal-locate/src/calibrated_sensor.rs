@@ -15,6 +15,7 @@
 
 use nalgebra::{DMatrix, Matrix2, Matrix2x3, Matrix3, Vector2};
 use psdcal_model::psd::{impact_point_gain_jacobian, impact_point_with_gains, is_on_active_area};
+use psdcal_model::stages::Aspect;
 use psdcal_model::{
     Amplitudes, ChannelGains, Model, Param, PsdGeometry, SensorModel, Stage, ValidRegion,
 };
@@ -101,6 +102,27 @@ pub struct CalibratedSensor {
     /// The PSD's non-linearity map, applied to the measured point before
     /// `model` (docs/model.md §8.3); `None` without one.
     pub psd_map: Option<SensorPsdMap>,
+    /// The y axis's own scale `a` (`fy = f (1 + a)`, docs/model.md §3.3):
+    /// the aspect stage after the PSD's radial one in [`Self::chain`];
+    /// `None` without one.
+    pub aspect: Option<f64>,
+}
+
+/// `chain` with the aspect stage `a` after its PSD radial stage (before
+/// the lens, docs/model.md §3.3).
+fn with_aspect_stage(chain: &Model, a: f64) -> Model {
+    let at = chain
+        .stage_kinds()
+        .iter()
+        .position(|k| *k == "lens")
+        .unwrap_or(0);
+    match chain.with_stage(at, Box::new(Aspect::new())) {
+        Ok(mut with) => {
+            let _ = with.set(Aspect::NAME, a);
+            with
+        }
+        Err(_) => chain.clone(),
+    }
 }
 
 /// A measured point and, for amplitude input through gains, `∂m/∂g`.
@@ -198,6 +220,25 @@ impl CalibratedSensor {
             gains: None,
             covariance: ParameterCovariance::none(),
             psd_map: None,
+            aspect: None,
+        }
+    }
+
+    /// The same sensor with the aspect stage (`fy = f (1 + a)`); the valid
+    /// region is recomputed for the whole chain.
+    pub fn with_aspect(mut self, a: f64) -> Self {
+        self.aspect = Some(a);
+        self.valid_region = ValidRegion::of_model(&self.chain(), &self.geometry);
+        self
+    }
+
+    /// The standard chain with the aspect stage when the sensor has one
+    /// (no gains, no PSD map): the map of a corrected measured point.
+    pub fn lens_chain(&self) -> Model {
+        let chain = Model::standard(&self.model);
+        match self.aspect {
+            None => chain,
+            Some(a) => with_aspect_stage(&chain, a),
         }
     }
 
@@ -241,9 +282,9 @@ impl CalibratedSensor {
 
     /// Recomputes the valid region from `model` and `geometry`.
     pub fn refresh_valid_region(&mut self) {
-        self.valid_region = match self.psd_map {
-            None => ValidRegion::of_sensor_model(&self.model, &self.geometry),
-            Some(_) => ValidRegion::of_model(&self.chain(), &self.geometry),
+        self.valid_region = match (&self.psd_map, self.aspect) {
+            (None, None) => ValidRegion::of_sensor_model(&self.model, &self.geometry),
+            _ => ValidRegion::of_model(&self.chain(), &self.geometry),
         };
     }
 
@@ -275,6 +316,10 @@ impl CalibratedSensor {
             self.geometry,
             &self.gains.unwrap_or(ChannelGains::UNIT),
         );
+        let chain = match self.aspect {
+            None => chain,
+            Some(a) => with_aspect_stage(&chain, a),
+        };
         let Some(map) = &self.psd_map else {
             return chain;
         };
@@ -334,8 +379,9 @@ impl CalibratedSensor {
         let measured = self.measured_point(measurement)?;
         self.check_valid_region(&measured.point)?;
         let corrected = self.map_corrected(&measured.point)?;
+        let lens_chain = self.lens_chain();
         let (mut aoa, mut jacobians) =
-            angle_of_arrival_with_jacobians(&Model::standard(&self.model), &corrected.point)?;
+            angle_of_arrival_with_jacobians(&lens_chain, &corrected.point)?;
         // ∂(a, b)/∂m' before the map's chain rule, for the map's columns.
         let ray_wrt_corrected = jacobians.ray_wrt_measured;
         aoa.measured = measured.point;
@@ -352,6 +398,12 @@ impl CalibratedSensor {
                 if let Some(c) = chain.index(p.name()) {
                     wrt_params.set_column(c, &jacobians.ray_wrt_model.column(k));
                 }
+            }
+            if let (Some(_), Some(c)) = (self.aspect, chain.index(Aspect::NAME)) {
+                let mut jac = lens_chain.jacobian_buffer();
+                lens_chain.ray_with_jacobians(&corrected.point, &mut jac);
+                let k = lens_chain.index(Aspect::NAME).unwrap_or(0);
+                wrt_params.set_column(c, &jac.column(k));
             }
             if let (Some(g), Some(columns)) = (wrt_gains, chain.gain_columns()) {
                 for (k, c) in columns.into_iter().enumerate() {

@@ -113,7 +113,9 @@ pub use psd_map::from_scan::{
     parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, PSD_MAP_PAGE,
     RESIDUAL_MAP_CELLS, SCAN_SUMMARY_CELLS,
 };
-pub use psdcal_calib::{BootstrapOptions, NoiseModel, Preliminary, RobustLoss, Uncertainty};
+pub use psdcal_calib::{
+    BootstrapOptions, ModelChoice, NoiseModel, Preliminary, RobustLoss, Uncertainty,
+};
 pub use psdcal_io::RawFormat;
 pub use psdcal_model::CostKind;
 pub use psdcal_psdmap::ModelChoice as PsdMapModel;

@@ -10,6 +10,7 @@ use psdcal_model::{Model, Param, ParameterCovariance, SensorModel};
 use crate::diagnose::residual_structure::DiagnosticOptions;
 use crate::refine::global::GlobalOptions;
 use crate::refine::options::RefineOptions;
+use crate::select::choose::ModelChoice;
 use crate::start::initialize::InitOptions;
 use crate::uncertainty::bootstrap::BootstrapOptions;
 use crate::CalibError;
@@ -29,6 +30,9 @@ pub struct CalibrateOptions {
     pub base: Model,
     /// How the covariance is estimated (linear by default).
     pub uncertainty: Uncertainty,
+    /// Whether the freed parameters are fitted as given (the library's
+    /// default) or grown by held-out error ([`crate::select::choose`]).
+    pub choice: ModelChoice,
     /// What the diagnostics may use beyond the fit (a known point noise).
     pub diagnostics: DiagnosticOptions,
     /// A Gaussian prior on parameters of `base` (a PSD map's coefficients
@@ -46,7 +50,8 @@ pub struct CalibrateOptions {
 
 /// How [`calibrate`](fn@crate::calibrate) estimates the covariance
 /// (calibration.json's provenance: `{"method": "linear"}` or
-/// `{"method": "bootstrap", "resamples": N, "seed": S}`).
+/// `{"method": "bootstrap", "resamples": N, "seed": S}` or
+/// `{"method": "jackknife"}`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 #[serde(tag = "method", rename_all = "kebab-case")]
 pub enum Uncertainty {
@@ -56,6 +61,11 @@ pub enum Uncertainty {
     Linear,
     /// Case bootstrap by image ([`crate::bootstrap`]).
     Bootstrap(BootstrapOptions),
+    /// The analytic σ, raised parameter by parameter to the jackknife over
+    /// images from the linearisation when that is larger (residuals
+    /// correlated within an image: the model misses something;
+    /// [`crate::select::influence`], docs/model.md §4.6).
+    Jackknife,
 }
 
 impl Default for CalibrateOptions {
@@ -69,6 +79,7 @@ impl Default for CalibrateOptions {
             global: GlobalOptions::default(),
             base: Model::standard(&SensorModel::pinhole(8.0, 0.0, 0.0)),
             uncertainty: Uncertainty::Linear,
+            choice: ModelChoice::Given,
             diagnostics: DiagnosticOptions::default(),
             prior: None,
             fixed_covariance: None,

@@ -21,10 +21,14 @@ use crate::refine::linearization::AtSolution;
 use crate::refine::options::RefineOptions;
 use crate::refine::refined::Refined;
 use crate::refine::solve::refine;
+use crate::select::choose::{choose, ModelChoice, ModelChoiceReport};
+use crate::select::influence::jackknife_raised;
 use crate::start::initialize::{initialize, Initialization};
 use crate::start::misplaced::misplaced_led;
 use crate::uncertainty::bootstrap::{bootstrap_covariance, BootstrapReport};
-use crate::uncertainty::covariance::{analytic_method, covariance_at, Covariance};
+use crate::uncertainty::covariance::{
+    analytic_method, covariance_at, Covariance, CovarianceMethod,
+};
 use crate::uncertainty::linearity::{check_linearity_at, LinearityCheck, UncertaintyVerdict};
 use crate::uncertainty::profile::profile_at_three_sigma;
 use crate::warning::FitWarning;
@@ -77,6 +81,9 @@ fn calibrate_as_given(
     let init = initialize(data, &options.init)?;
     let (refined, global, gain_start) = refine_from_start(data, options, &init)?;
     check_converged(&refined)?;
+    let (refined, global, chosen_options, model_choice) =
+        choose_model(data, options, refined, global)?;
+    let options = &chosen_options;
     let (refined, refine_options) = match &options.prior {
         None => (refined, options.refine.clone()),
         Some(prior) => refine_with_prior(data, refined, options, prior)?,
@@ -127,7 +134,51 @@ fn calibrate_as_given(
         warnings,
         diagnostics,
         block: None,
+        model_choice,
     })
+}
+
+/// With [`ModelChoice::HeldOut`] (and an unweighted, non-robust fit
+/// without gains or prior), the freed parameters grown by held-out error
+/// from the base fit ([`crate::select::choose`]); otherwise the base fit.
+/// Returns the fit, its global search's report, the options with the
+/// chosen freed parameters and the choice's report.
+type ChosenFit = (
+    Refined,
+    Option<GlobalReport>,
+    CalibrateOptions,
+    Option<ModelChoiceReport>,
+);
+
+fn choose_model(
+    data: &CalibrationData,
+    options: &CalibrateOptions,
+    refined: Refined,
+    global: Option<GlobalReport>,
+) -> Result<ChosenFit, CalibError> {
+    let r = &options.refine;
+    let eligible = options.choice == ModelChoice::HeldOut
+        && !r.fit_gains
+        && r.robust.is_none()
+        && options.prior.is_none()
+        && refined.weights.is_none()
+        && data.images.len() >= 3;
+    if !eligible {
+        return Ok((refined, global, options.clone(), None));
+    }
+    let global_options = GlobalOptions {
+        init: options.init,
+        ..options.global.clone()
+    };
+    let chosen = choose(data, refined, global, r, &global_options)?;
+    let mut chosen_options = options.clone();
+    chosen_options.refine = chosen.options;
+    Ok((
+        chosen.refined,
+        chosen.global,
+        chosen_options,
+        Some(chosen.report),
+    ))
 }
 
 /// The refinement from the initialisation: with the gains freed, from the
@@ -247,6 +298,26 @@ fn final_covariance(
 ) -> Result<(Covariance, Option<BootstrapReport>), CalibError> {
     match options.uncertainty {
         Uncertainty::Linear => Ok((analytic, None)),
+        Uncertainty::Jackknife if refined.weights.is_none() && refine_options.robust.is_none() => {
+            let at = AtSolution::new(data, refined, refine_options)?;
+            let raised = jackknife_raised(&at, analytic.parameters.matrix())?;
+            let parameters =
+                ParameterCovariance::new(analytic.names().to_vec(), raised).map_err(|e| {
+                    CalibError::Numerical {
+                        stage: "covariance",
+                        reason: e.to_string(),
+                    }
+                })?;
+            Ok((
+                Covariance {
+                    parameters,
+                    method: CovarianceMethod::Jackknife,
+                    ..analytic
+                },
+                None,
+            ))
+        }
+        Uncertainty::Jackknife => Ok((analytic, None)),
         Uncertainty::Bootstrap(boot) => {
             let (c, report) =
                 bootstrap_covariance(data, refined, refine_options, &analytic, &boot)?;

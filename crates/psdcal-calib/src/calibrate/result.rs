@@ -12,6 +12,7 @@ use crate::diagnose::fit_statistics::FitStatistics;
 use crate::problem::weighting::NoiseModel;
 use crate::refine::global::GlobalReport;
 use crate::refine::refined::Refined;
+use crate::select::choose::ModelChoiceReport;
 use crate::start::initialize::InitReport;
 use crate::uncertainty::bootstrap::BootstrapReport;
 use crate::uncertainty::covariance::Covariance;
@@ -69,6 +70,10 @@ pub struct CalibrationResult {
     /// What the fit noticed about itself, with stable codes
     /// ([`crate::diagnostics`]; calibration.json's `diagnostics`).
     pub diagnostics: Vec<Diagnostic>,
+    /// How the freed parameters were chosen by held-out error, when they
+    /// were ([`crate::select::choose`]); `None` for a fit of given
+    /// parameters.
+    pub model_choice: Option<ModelChoiceReport>,
 }
 
 impl CalibrationResult {

@@ -57,6 +57,11 @@ pub enum CovarianceMethod {
     /// into the template plane through each point's back-projection
     /// (docs/model.md §4.6).
     Sandwich,
+    /// The analytic covariance (linear or sandwich) with each parameter's σ
+    /// raised to the jackknife over images when that is larger
+    /// ([`crate::select::influence`]): `D C D` with
+    /// `D = diag(max(1, σ_jackknife/σ_analytic))`.
+    Jackknife,
     /// The sample covariance of refits on images resampled with
     /// replacement ([`crate::bootstrap`]).
     Bootstrap {
@@ -73,6 +78,7 @@ impl CovarianceMethod {
         match self {
             Self::Linear => "linear",
             Self::Sandwich => "sandwich",
+            Self::Jackknife => "jackknife",
             Self::Bootstrap { .. } => "bootstrap",
         }
     }
@@ -231,7 +237,7 @@ pub(crate) fn covariance_at(
             (matrix, blocks, sigma2)
         }
         CovarianceMethod::Sandwich => sandwich(problem, state, ne, &s_inv, dof_real)?,
-        CovarianceMethod::Bootstrap { .. } => {
+        CovarianceMethod::Bootstrap { .. } | CovarianceMethod::Jackknife => {
             return Err(CalibError::InvalidInput {
                 reason: "a bootstrap covariance comes from psdcal_calib::bootstrap".into(),
             })

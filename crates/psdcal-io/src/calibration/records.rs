@@ -321,13 +321,21 @@ pub struct FitSummary {
     pub termination: String,
     /// How the covariance was estimated (docs/model.md §4.6): `linear`
     /// (`σ² (JᵀJ)⁻¹`), `sandwich` (the unweighted template-plane fit's,
-    /// point noise propagated) or `bootstrap`. Files written before it
+    /// point noise propagated), `jackknife` (the analytic σ raised to the
+    /// jackknife over images where that is larger) or `bootstrap`. Files written before it
     /// existed read as `linear`.
     #[serde(default = "linear_uncertainty")]
     pub uncertainty: String,
     /// The bootstrap's resamples and base seed, when `uncertainty` is `bootstrap`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bootstrap: Option<BootstrapRecord>,
+    /// How the estimated parameters were chosen, when `calibrate` chose
+    /// them by held-out error (docs/model.md §4.8): `{"rule", "candidates":
+    /// [{"free", "held_out_rms_deg", "difference_deg2",
+    /// "standard_error_deg2", "accepted"}], "chosen"}`; absent for a fit of
+    /// given parameters.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_choice: Option<serde_json::Value>,
 }
 
 /// The bootstrap behind a covariance (calibration.json's `fit.bootstrap`).
@@ -359,6 +367,7 @@ impl Default for FitSummary {
             termination: "not fitted".to_string(),
             uncertainty: linear_uncertainty(),
             bootstrap: None,
+            model_choice: None,
         }
     }
 }

@@ -64,6 +64,7 @@ fn sample() -> Calibration {
             failed: 1,
             seed: 9,
         }),
+        model_choice: None,
     };
     cal.images = vec![
         ImageFit::new(

@@ -5,7 +5,8 @@
 //! version it reads.
 //!
 //! Stages, in order: `gains` (`g_x2`, `g_y1`, `g_y2`; only when gains are
-//! part of the model), `psd_radial` (`l1`, `l2`), `lens` (`cx`, `cy`, `k1`,
+//! part of the model), `psd_radial` (`l1`, `l2`), `aspect` (`a`, only when
+//! the model has the y axis's own scale), `lens` (`cx`, `cy`, `k1`,
 //! `k2`, `k3`, `p1`, `p2`: lens radial and tangential about the optical
 //! centre), `pinhole` (`f`, `skew`). Each is `{"kind", "parameters",
 //! "estimated"}`; `parameters` repeats every value by name and must agree.
@@ -24,7 +25,7 @@ use super::records::{
 };
 use super::region::ValidRegionRecord;
 use super::rules::{de_format, de_version};
-use super::{Calibration, GAIN_NAMES};
+use super::{AspectRecord, Calibration, GAIN_NAMES};
 
 /// The kinds of stage version 2 knows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -33,15 +34,17 @@ enum StageKind {
     Gains,
     PsdMap,
     PsdRadial,
+    Aspect,
     Lens,
     Pinhole,
 }
 
 impl StageKind {
-    const ORDER: [StageKind; 5] = [
+    const ORDER: [StageKind; 6] = [
         StageKind::Gains,
         StageKind::PsdMap,
         StageKind::PsdRadial,
+        StageKind::Aspect,
         StageKind::Lens,
         StageKind::Pinhole,
     ];
@@ -51,6 +54,7 @@ impl StageKind {
             StageKind::Gains => "gains",
             StageKind::PsdMap => "psd_map",
             StageKind::PsdRadial => "psd_radial",
+            StageKind::Aspect => "aspect",
             StageKind::Lens => "lens",
             StageKind::Pinhole => "pinhole",
         }
@@ -63,6 +67,7 @@ impl StageKind {
             // Runtime-sized: checked against the stage's configuration.
             StageKind::PsdMap => &[],
             StageKind::PsdRadial => &["l1", "l2"],
+            StageKind::Aspect => &["a"],
             StageKind::Lens => &["cx", "cy", "k1", "k2", "k3", "p1", "p2"],
             StageKind::Pinhole => &["f", "skew"],
         }
@@ -172,6 +177,12 @@ impl FileV2 {
                 estimated.extend(GAIN_NAMES);
             }
         }
+        if let Some(aspect) = &c.aspect {
+            values.push(("a".to_string(), aspect.a));
+            if aspect.estimated {
+                estimated.push("a");
+            }
+        }
         let value = |name: &str| {
             values
                 .iter()
@@ -181,6 +192,7 @@ impl FileV2 {
         let stages = StageKind::ORDER
             .into_iter()
             .filter(|k| *k != StageKind::Gains || c.gains.is_some())
+            .filter(|k| *k != StageKind::Aspect || c.aspect.is_some())
             .filter_map(|kind| match (&c.psd_map, kind) {
                 (None, StageKind::PsdMap) => None,
                 (Some(map), StageKind::PsdMap) => Some(Stage {
@@ -376,6 +388,18 @@ impl FileV2 {
         record.provenance = self.provenance;
         record.valid_region = self.valid_region;
         record.psd_map = psd_map;
+        record.aspect = by_kind
+            .iter()
+            .find(|(k, _)| *k == StageKind::Aspect)
+            .map(|(_, s)| AspectRecord {
+                a: stage_value("a"),
+                estimated: !s.estimated.is_empty(),
+            });
+        if record.aspect.is_some_and(|a| a.a <= -1.0) {
+            return Err(
+                "the aspect stage's a must be above -1 (the y scale 1 + a is positive)".into(),
+            );
+        }
         Ok(record)
     }
 }

@@ -54,7 +54,8 @@ pub fn parse_robust(text: &str) -> Result<RobustLoss, String> {
 }
 
 /// `--uncertainty linear`, `bootstrap:N` or `bootstrap:N:SEED`.
-/// `--uncertainty linear|bootstrap:N[:SEED]` (N ≥ 10, seed 1 by default).
+/// `--uncertainty jackknife|linear|bootstrap:N[:SEED]` (N ≥ 10, seed 1 by
+/// default).
 pub fn parse_uncertainty(text: &str) -> Result<Uncertainty, String> {
     let mut parts = text.split(':');
     match parts
@@ -63,6 +64,7 @@ pub fn parse_uncertainty(text: &str) -> Result<Uncertainty, String> {
         .as_deref()
     {
         Some("linear") if parts.next().is_none() => Ok(Uncertainty::Linear),
+        Some("jackknife") if parts.next().is_none() => Ok(Uncertainty::Jackknife),
         Some("bootstrap") => {
             let number = |part: Option<&str>, what: &str| -> Result<Option<u64>, String> {
                 part.map(|p| {
@@ -89,7 +91,7 @@ pub fn parse_uncertainty(text: &str) -> Result<Uncertainty, String> {
             }))
         }
         _ => Err(format!(
-            "expected linear or bootstrap:N[:SEED], found '{text}'"
+            "expected jackknife, linear or bootstrap:N[:SEED], found '{text}'"
         )),
     }
 }

@@ -1,15 +1,19 @@
 //! The options of a calibration, as values and the option enums of the
 //! crates that own them (never strings).
 
-use psdcal_calib::{NoiseModel, Preliminary, RobustLoss, Uncertainty};
+use psdcal_calib::{ModelChoice, NoiseModel, Preliminary, RobustLoss, Uncertainty};
 use psdcal_model::{CostKind, Param};
 use serde::Serialize;
 
 /// Everything a calibration can be told.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CalibrationOptions {
-    /// Parameters to estimate (the others stay fixed).
+    /// Parameters to estimate (the others stay fixed); with
+    /// [`ModelChoice::HeldOut`] the base that groups are added to.
     pub free: Vec<Param>,
+    /// Fit `free` as given, or grow it by held-out error (the default:
+    /// `calibrate` without `--fit`; docs/model.md §4.8).
+    pub choice: ModelChoice,
     /// Also estimate the amplifier gains (needs amplitudes).
     pub fit_gains: bool,
     /// Values of fixed parameters.
@@ -41,6 +45,7 @@ impl Default for CalibrationOptions {
     fn default() -> Self {
         Self {
             free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2],
+            choice: ModelChoice::HeldOut,
             fit_gains: false,
             fixed: Vec::new(),
             focal_guess: None,
@@ -49,7 +54,7 @@ impl Default for CalibrationOptions {
             preliminary: Preliminary::Auto,
             normalize: true,
             robust: None,
-            uncertainty: Uncertainty::Linear,
+            uncertainty: Uncertainty::Jackknife,
             psd_map: None,
             refine_psd_map: false,
         }

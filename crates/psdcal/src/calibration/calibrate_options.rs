@@ -73,6 +73,7 @@ pub fn calibrate_settings(pairs: &[(String, Vec<String>)]) -> Result<CalibrateSe
                 let FitList(free, gains) = parse_fit(one()?).map_err(named)?;
                 o.free = free;
                 o.fit_gains = gains;
+                o.choice = psdcal_calib::ModelChoice::Given;
             }
             "focal_guess" => o.focal_guess = Some(positive_mm(one()?).map_err(named)?),
             "cost" => o.cost = one()?.parse().map_err(named)?,

@@ -16,6 +16,7 @@ use psdcal_io::{
 };
 use psdcal_locate::CalibratedSensor;
 use psdcal_model::stages::gains::GAIN_NAMES;
+use psdcal_model::stages::Aspect;
 use psdcal_model::{Amplitudes, Param, SensorModel};
 
 use crate::base::options::CalibrationOptions;
@@ -130,6 +131,7 @@ pub fn calibrate_options(options: &CalibrationOptions) -> CalibrateOptions {
         },
         base: base.into(),
         uncertainty: options.uncertainty,
+        choice: options.choice,
         ..CalibrateOptions::default()
     }
 }
@@ -148,6 +150,13 @@ pub fn record(
 ) -> Calibration {
     let mut file = Calibration::from_model(&result.sensor_model(), &set.options.geometry);
     let free: Vec<Param> = result.free.iter().filter_map(|n| n.parse().ok()).collect();
+    file.aspect = result
+        .model
+        .get(Aspect::NAME)
+        .map(|a| psdcal_io::AspectRecord {
+            a,
+            estimated: result.free.iter().any(|n| n == Aspect::NAME),
+        });
     file.set_estimated(&free);
     if let Some(g) = &result.gains {
         file.gains = Some(GainsRecord::new(g, true));
@@ -185,6 +194,10 @@ pub fn record(
             }
             _ => None,
         },
+        model_choice: result
+            .model_choice
+            .as_ref()
+            .and_then(|c| serde_json::to_value(c).ok()),
     };
     file.images = data
         .images
@@ -284,7 +297,10 @@ pub fn sensor(calibration: &Calibration, file: &Path) -> Result<CalibratedSensor
             at: Location::file(&file.display().to_string()),
             message,
         })?;
-    let sensor = CalibratedSensor::new(calibration.to_model(), calibration.geometry());
+    let mut sensor = CalibratedSensor::new(calibration.to_model(), calibration.geometry());
+    if let Some(aspect) = calibration.aspect {
+        sensor = sensor.with_aspect(aspect.a);
+    }
     if let Some(map) = &calibration.psd_map {
         let mut sensor = crate::calibration::calibrate_map::sensor_with_map(
             calibration,

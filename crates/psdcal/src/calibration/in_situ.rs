@@ -138,6 +138,7 @@ pub fn calibrate_in_situ(set: &DataSet, survey_sigma_mm: f64) -> Result<InSitu> 
         termination: format!("{:?}", result.report.termination),
         uncertainty: "linear+survey".into(),
         bootstrap: None,
+        model_choice: None,
     };
     record.images = data
         .images

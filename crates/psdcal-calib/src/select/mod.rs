@@ -1,0 +1,7 @@
+//! The model the data choose (docs/model.md §4.8): each image's influence on
+//! a fit from its linearisation ([`influence`]: leave-one-image-out
+//! estimates and held-out angle errors without refitting), and the choice
+//! among nested parameter sets by their held-out error ([`choose`]).
+
+pub mod choose;
+pub mod influence;
