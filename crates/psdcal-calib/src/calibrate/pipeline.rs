@@ -23,7 +23,7 @@ use crate::refine::refined::Refined;
 use crate::refine::solve::refine;
 use crate::select::choose::{choose, ModelChoice, ModelChoiceReport};
 use crate::select::influence::jackknife_raised;
-use crate::start::initialize::{initialize, Initialization};
+use crate::start::initialize::{initialize, InitRoute, Initialization};
 use crate::start::misplaced::misplaced_led;
 use crate::uncertainty::bootstrap::{bootstrap_covariance, BootstrapReport};
 use crate::uncertainty::covariance::{
@@ -82,7 +82,7 @@ fn calibrate_as_given(
     let (refined, global, gain_start) = refine_from_start(data, options, &init)?;
     check_converged(&refined)?;
     let (refined, global, chosen_options, model_choice) =
-        choose_model(data, options, refined, global)?;
+        choose_model(data, options, &init, refined, global)?;
     let options = &chosen_options;
     let (refined, refine_options) = match &options.prior {
         None => (refined, options.refine.clone()),
@@ -153,6 +153,7 @@ type ChosenFit = (
 fn choose_model(
     data: &CalibrationData,
     options: &CalibrateOptions,
+    init: &Initialization,
     refined: Refined,
     global: Option<GlobalReport>,
 ) -> Result<ChosenFit, CalibError> {
@@ -170,7 +171,8 @@ fn choose_model(
         init: options.init,
         ..options.global.clone()
     };
-    let chosen = choose(data, refined, global, r, &global_options)?;
+    let cold_aspect = init.report.route != InitRoute::ClosedForm;
+    let chosen = choose(data, refined, global, r, cold_aspect, &global_options)?;
     let mut chosen_options = options.clone();
     chosen_options.refine = chosen.options;
     Ok((

@@ -165,13 +165,15 @@ fn score(
 
 /// A candidate's fit from the current one, scored; `None` when it fails.
 /// `l1` is refined locally here (the global search runs once it is chosen,
-/// [`settled`]); the aspect also from [`ASPECT_STARTS`], the lowest cost
-/// kept.
+/// [`settled`]); the aspect also from [`ASPECT_STARTS`] when
+/// `cold_aspect` (the closed-form start was rejected, as it is for
+/// strongly non-square data), the lowest cost kept.
 fn fit_candidate(
     data: &CalibrationData,
     current: &Scored,
     group: Group,
     next: &RefineOptions,
+    cold_aspect: bool,
     global: &GlobalOptions,
 ) -> Option<Scored> {
     let mut model = current.refined.model.clone();
@@ -184,7 +186,7 @@ fn fit_candidate(
         model = model.with_stage(at, Box::new(Aspect::new())).ok()?;
     }
     let mut fits = vec![refine(data, model.clone(), &current.refined.poses, next)];
-    if group == Group::Aspect && data.amplitudes.is_none() {
+    if group == Group::Aspect && cold_aspect && data.amplitudes.is_none() {
         for a0 in ASPECT_STARTS {
             fits.push(
                 aspect_start(data, &model, a0, global)
@@ -260,12 +262,14 @@ fn difference(a: &[f64], b: &[f64]) -> (f64, f64) {
 }
 
 /// Chooses the freed parameters from the base fit `base` (its options
-/// `options`) by forward selection ([module documentation](self)).
+/// `options`) by forward selection ([module documentation](self));
+/// `cold_aspect`: also try the aspect from [`ASPECT_STARTS`].
 pub(crate) fn choose(
     data: &CalibrationData,
     base: Refined,
     base_global: Option<GlobalReport>,
     options: &RefineOptions,
+    cold_aspect: bool,
     global: &GlobalOptions,
 ) -> Result<Chosen, CalibError> {
     let mut current = score(data, base, options.clone(), base_global)?;
@@ -285,7 +289,8 @@ pub(crate) fn choose(
         let mut best: Option<(usize, Scored, Group)> = None;
         for &group in &remaining {
             let next = group.added_to(&current.options);
-            let Some(scored) = fit_candidate(data, &current, group, &next, global) else {
+            let Some(scored) = fit_candidate(data, &current, group, &next, cold_aspect, global)
+            else {
                 continue;
             };
             let (mean, se) = difference(&scored.sums, &current.sums);

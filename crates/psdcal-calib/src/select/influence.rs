@@ -90,13 +90,15 @@ pub(crate) fn image_influence(at: &AtSolution<'_>) -> Result<ImageInfluence, Cal
     // Per image: S_i, g_i and its points' (r, Ã, ∂ray/∂r, ray).
     struct PointRows {
         r: Vector2<f64>,
-        a_tilde: DMatrix<f64>,
         to_ray: Matrix2<f64>,
         ray: Vector2<f64>,
     }
     let mut s_i = Vec::with_capacity(data.images.len());
     let mut g_i = Vec::with_capacity(data.images.len());
     let mut rows: Vec<Vec<PointRows>> = Vec::with_capacity(data.images.len());
+    // Every point's Ã (2 × p, column-major), one after the other.
+    let mut a_tildes: Vec<f64> = Vec::with_capacity(2 * p * data.point_count());
+    let mut at = vec![0.0; 2 * p];
     for (i, image) in data.images.iter().enumerate() {
         let rotation = state.poses[i].rotation_jacobian();
         let vi = ne.v[i].cholesky().ok_or_else(singular)?.inverse();
@@ -108,11 +110,23 @@ pub(crate) fn image_influence(at: &AtSolution<'_>) -> Result<ImageInfluence, Cal
             let (r, pj, b) = problem
                 .linearize(state, i, k, &rotation, &mut jac, &mut a)
                 .map_err(|e| point_error(data, i, image.points[k].led, e))?;
-            let a_full = DMatrix::from_column_slice(2, p, &a);
-            let pj = DMatrix::from_fn(2, 6, |row, q| pj[(row, q)]);
-            let a_tilde = a_full - pj * &wvt;
-            s += a_tilde.transpose() * &a_tilde;
-            g += a_tilde.transpose() * DVector::from_column_slice(r.as_slice());
+            // Ã = A − P V⁻¹ Wᵀ.
+            for col in 0..p {
+                for row in 0..2 {
+                    let mut v = a[2 * col + row];
+                    for q in 0..6 {
+                        v -= pj[(row, q)] * wvt[(q, col)];
+                    }
+                    at[2 * col + row] = v;
+                }
+            }
+            for j in 0..p {
+                g[j] += at[2 * j] * r.x + at[2 * j + 1] * r.y;
+                for l in j..p {
+                    s[(j, l)] += at[2 * j] * at[2 * l] + at[2 * j + 1] * at[2 * l + 1];
+                }
+            }
+            a_tildes.extend_from_slice(&at);
             let (m, _) = problem
                 .measured(&state.model, i, k)
                 .map_err(|e| point_error(data, i, image.points[k].led, e))?;
@@ -126,11 +140,11 @@ pub(crate) fn image_influence(at: &AtSolution<'_>) -> Result<ImageInfluence, Cal
             })?;
             points.push(PointRows {
                 r,
-                a_tilde,
                 to_ray: ray_jac.wrt_point * b_inv,
                 ray,
             });
         }
+        s.fill_lower_triangle_with_upper_triangle();
         s_i.push(s);
         g_i.push(g);
         rows.push(points);
@@ -138,6 +152,7 @@ pub(crate) fn image_influence(at: &AtSolution<'_>) -> Result<ImageInfluence, Cal
     let s_total = s_i.iter().fold(DMatrix::zeros(p, p), |acc, s| acc + s);
     let mut delta = Vec::with_capacity(rows.len());
     let mut held_out_rad = Vec::with_capacity(rows.len());
+    let mut a_tilde = a_tildes.chunks_exact(2 * p);
     for (i, points) in rows.iter().enumerate() {
         let d =
             solve_scaled(&(&s_total - &s_i[i]), &g_i[i]).ok_or_else(|| CalibError::Degenerate {
@@ -149,7 +164,12 @@ pub(crate) fn image_influence(at: &AtSolution<'_>) -> Result<ImageInfluence, Cal
         let angles = points
             .iter()
             .map(|pt| {
-                let e = pt.r + Vector2::from_iterator((&pt.a_tilde * &d).iter().copied());
+                let at = a_tilde.next().unwrap_or(&[]);
+                let mut e = pt.r;
+                for (col, dc) in d.iter().enumerate() {
+                    e.x += at[2 * col] * dc;
+                    e.y += at[2 * col + 1] * dc;
+                }
                 ray_angle(&pt.ray, &(pt.to_ray * e))
             })
             .collect();
