@@ -10,8 +10,10 @@
 //! points' squared held-out angles. A candidate replaces the current set
 //! when its mean `s_i` is lower by more than one standard error of the
 //! per-image differences (`d_i = s_i(candidate) − s_i(current)`,
-//! `SE = sd(d)/√n`): the simplest set within the noise of the best. The
-//! best group of a round is taken, and rounds go on until none passes.
+//! `SE = sd(d)/√n`). Of the groups that pass in a round, the one with the
+//! fewest parameters among those within one standard error of the round's
+//! best is taken (the simplest within the noise of the best), and rounds
+//! go on until none passes.
 
 use psdcal_model::stages::Aspect;
 use psdcal_model::{Model, Param};
@@ -67,6 +69,15 @@ pub const GROUPS: [Group; 5] = [
     Group::Params(&[Param::L1]),
     Group::Params(&[Param::Skew]),
 ];
+
+/// The `l1` group.
+const L1: Group = Group::Params(&[Param::L1]);
+
+/// Starting values of `l1` (mm⁻²) tried besides the current fit's (with
+/// `k1` lowered by as much): a local refinement from `l1 = 0` can end in
+/// another minimum than the global search's (docs/model.md §4.5), which
+/// runs once `l1` is chosen.
+pub const L1_STARTS: [f64; 3] = [-2e-3, -1e-3, 1e-3];
 
 /// Starting aspects tried besides the current fit's (`1 + a` = 1/2 and 2:
 /// an interlaced field's pixels, either way), each from the start on the
@@ -164,8 +175,9 @@ fn score(
 }
 
 /// A candidate's fit from the current one, scored; `None` when it fails.
-/// `l1` is refined locally here (the global search runs once it is chosen,
-/// [`settled`]); the aspect also from [`ASPECT_STARTS`] when
+/// `l1` is refined locally, also from [`L1_STARTS`], and by the global
+/// search over `l1` when `search_l1` (another group passed in this round;
+/// otherwise the global search runs once `l1` is chosen, [`settled`]); the aspect also from [`ASPECT_STARTS`] when
 /// `cold_aspect` (the closed-form start was rejected, as it is for
 /// strongly non-square data), the lowest cost kept.
 fn fit_candidate(
@@ -173,7 +185,7 @@ fn fit_candidate(
     current: &Scored,
     group: Group,
     next: &RefineOptions,
-    cold_aspect: bool,
+    (cold_aspect, search_l1): (bool, bool),
     global: &GlobalOptions,
 ) -> Option<Scored> {
     let mut model = current.refined.model.clone();
@@ -185,7 +197,22 @@ fn fit_candidate(
             .unwrap_or(0);
         model = model.with_stage(at, Box::new(Aspect::new())).ok()?;
     }
-    let mut fits = vec![refine(data, model.clone(), &current.refined.poses, next)];
+    let poses = &current.refined.poses;
+    let mut fits = vec![refine(data, model.clone(), poses, next)];
+    if group == L1 {
+        // k1 takes up the PSD's l1 when it is held (docs/model.md §2.1).
+        let k1 = model.get("k1").unwrap_or(0.0);
+        for l0 in L1_STARTS {
+            let mut start = model.clone();
+            if start
+                .set("l1", l0)
+                .and_then(|_| start.set("k1", k1 - l0))
+                .is_ok()
+            {
+                fits.push(refine(data, start, poses, next));
+            }
+        }
+    }
     if group == Group::Aspect && cold_aspect && data.amplitudes.is_none() {
         for a0 in ASPECT_STARTS {
             fits.push(
@@ -193,6 +220,9 @@ fn fit_candidate(
                     .and_then(|(m, poses)| refine(data, m, &poses, next)),
             );
         }
+    }
+    if group == L1 && search_l1 {
+        fits.push(refine_global(data, model.clone(), poses, next, global).map(|(r, _)| r));
     }
     let best = fits
         .into_iter()
@@ -239,7 +269,7 @@ fn settled(
     group: Group,
     global: &GlobalOptions,
 ) -> Result<Scored, CalibError> {
-    if group != Group::Params(&[Param::L1]) {
+    if group != L1 {
         return Ok(scored);
     }
     let (refined, report) = refine_global(
@@ -250,6 +280,25 @@ fn settled(
         global,
     )?;
     score(data, refined, scored.options, report)
+}
+
+/// Among the candidates that passed, the one with the fewest parameters
+/// (the first in [`GROUPS`] order among equals) whose per-image sums are
+/// within one standard error of the best's.
+fn simplest_near_best(passing: Vec<(usize, Scored, Group)>) -> Option<(usize, Scored, Group)> {
+    let best = passing
+        .iter()
+        .min_by(|a, b| a.1.rms_deg.total_cmp(&b.1.rms_deg))?
+        .1
+        .sums
+        .clone();
+    passing
+        .into_iter()
+        .filter(|(_, s, _)| {
+            let (mean, se) = difference(&s.sums, &best);
+            mean <= se
+        })
+        .min_by_key(|(_, s, _)| s.options.free_names().len())
 }
 
 /// Mean and standard error of the per-image differences `a − b`.
@@ -286,11 +335,17 @@ pub(crate) fn choose(
         .filter(|g| !g.in_options(options))
         .collect();
     loop {
-        let mut best: Option<(usize, Scored, Group)> = None;
-        for &group in &remaining {
+        let mut passing: Vec<(usize, Scored, Group)> = Vec::new();
+        // l1 last in a round: its global search runs when another group
+        // passed (the model misses something), local refinements otherwise.
+        let order = remaining
+            .iter()
+            .filter(|g| **g != L1)
+            .chain(remaining.iter().filter(|g| **g == L1));
+        for &group in order {
             let next = group.added_to(&current.options);
-            let Some(scored) = fit_candidate(data, &current, group, &next, cold_aspect, global)
-            else {
+            let starts = (cold_aspect, !passing.is_empty());
+            let Some(scored) = fit_candidate(data, &current, group, &next, starts, global) else {
                 continue;
             };
             let (mean, se) = difference(&scored.sums, &current.sums);
@@ -301,15 +356,11 @@ pub(crate) fn choose(
                 standard_error_deg2: se,
                 accepted: false,
             });
-            let passes = mean < -se && mean.is_finite();
-            if passes
-                && best
-                    .as_ref()
-                    .is_none_or(|(_, b, _)| scored.rms_deg < b.rms_deg)
-            {
-                best = Some((candidates.len() - 1, scored, group));
+            if mean < -se && mean.is_finite() {
+                passing.push((candidates.len() - 1, scored, group));
             }
         }
+        let best = simplest_near_best(passing);
         match best {
             Some((k, scored, group)) => {
                 candidates[k].accepted = true;
