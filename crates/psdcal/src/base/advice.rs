@@ -85,6 +85,13 @@ fn calib_advice(calib: &CalibError) -> &'static str {
             "vary the template's tilt and position between images, or fix the parameters the data \
              cannot determine"
         }
+        CalibError::FocalOutsideSearch { guess: Some(_), .. } => {
+            "give a --focal-guess nearer the lens's focal length in mm (or none: the search then \
+             covers 1–1000 mm)"
+        }
+        CalibError::FocalOutsideSearch { guess: None, .. } => {
+            "give --focal-guess with the lens's focal length in mm"
+        }
         CalibError::InvalidInput { .. } => "change the options or the data as the message says",
         CalibError::Model(_) => "check the data and the fixed values (--set)",
         CalibError::NotConverged { .. } => {
