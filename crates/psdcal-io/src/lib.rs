@@ -78,7 +78,7 @@ mod truth;
 mod validate;
 mod warning;
 
-pub use atomic::{write_atomic, write_atomic_at, write_atomic_bytes};
+pub use atomic::{write_atomic, write_atomic_at, write_atomic_bytes, PendingFile, STALE_AGE};
 pub use calibration::{
     read_calibration, read_calibration_with, write_calibration, BootstrapRecord, Calibration,
     CostKind, Covariance, Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile,
