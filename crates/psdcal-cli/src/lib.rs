@@ -3,7 +3,9 @@
 //! `psdcal` binary.
 //!
 //! Exit codes: 0 success, 1 failure (one `error: ...` line on stderr),
-//! 2 usage error (clap, or an output that is one of the inputs).
+//! 2 usage error (clap, or an output that is one of the inputs), 141
+//! (128 + SIGPIPE, as a shell shows a process a closed pipe ended) with
+//! nothing printed when standard output was closed by its reader.
 
 pub mod args;
 pub mod choice;
@@ -88,6 +90,7 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(error) if psdcal::is_closed_output(&*error) => ExitCode::from(141),
         Err(error) => {
             messages::print_error(&messages::lower(error));
             ExitCode::FAILURE

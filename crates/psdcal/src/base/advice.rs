@@ -100,6 +100,9 @@ fn io_advice(io: &IoError) -> &'static str {
             "correct that field of the rig file (format: docs/formats.md, 'rig.json')"
         }
         IoError::Read { .. } => "check the path and that the file is readable",
+        IoError::Write { file, .. } if file == crate::base::stdout::STANDARD_OUTPUT => {
+            "check where standard output goes (a full disk, or a closed pipe)"
+        }
         IoError::Write { .. } => "check that the destination folder exists and is writable",
         IoError::Encoding { .. } => "save the file as UTF-8 text (CSV or JSON)",
         IoError::Structure { .. } => "fix the file's header or rows (formats: docs/formats.md)",

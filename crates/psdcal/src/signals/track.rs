@@ -141,15 +141,15 @@ pub fn track(
         .validate()
         .map_err(|e| Error::Options(e.to_string()))?;
     let mut summary = TrackSummary::default();
-    // A reader that went away (`| head`) ends the stream quietly.
+    // A reader that went away (`| head`) is an error too: the caller tells
+    // it apart (`is_closed_output`) to end quietly with its own status.
     macro_rules! emit {
         ($result:expr) => {
             match $result {
                 Ok(()) => {}
-                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => return Ok(summary),
                 Err(source) => {
                     return Err(Error::Io(psdcal_io::IoError::Write {
-                        file: "standard output".to_string(),
+                        file: crate::base::stdout::STANDARD_OUTPUT.to_string(),
                         source,
                     }))
                 }
