@@ -39,7 +39,6 @@ fn every_command_ends_quietly_with_141_when_its_output_is_closed() {
         v("calibration.json"),
         v("points.csv"),
     );
-    let sig = v("signals.csv");
     let run = |args: &[&str]| {
         let out = common::psdcal(args.iter().map(|a| a.to_string()).collect::<Vec<_>>());
         assert!(out.status.success(), "{args:?}: {}", common::stderr(&out));
@@ -61,6 +60,8 @@ fn every_command_ends_quietly_with_141_when_its_output_is_closed() {
             "raw/raw.csv",
             "--schedule",
             "raw/schedule.csv",
+            "--tones",
+            "raw/tones.csv",
             "--out",
             "s.csv",
         ],
@@ -78,7 +79,6 @@ fn every_command_ends_quietly_with_141_when_its_output_is_closed() {
             "--out",
             "p.csv",
         ],
-        vec!["gains", "--signals", &sig],
         vec!["aoa", "-c", &c, "-p", &p],
         vec!["correct", "-c", &c, "-p", &p],
         vec!["locate", "-c", &c, "-p", &p, "--distance", "1000"],
@@ -120,4 +120,64 @@ fn a_full_standard_output_is_one_error_line_not_a_panic() {
     assert!(err.starts_with("error: standard output: "), "{err}");
     assert!(err.contains("check where standard output goes"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn track_skips_an_over_long_line_and_reports_a_last_partial_window() {
+    use std::io::Write;
+    let c = valid("calibration.json").display().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let tones = dir.path().join("tones.csv");
+    std::fs::write(&tones, "led,frequency_hz\n1,1000\n").unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_psdcal"))
+        .args([
+            "track",
+            "--calibration",
+            &c,
+            "--tones",
+            tones.to_str().unwrap(),
+        ])
+        .args(["--rate", "20000", "--window", "0.005"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut input = child.stdin.take().unwrap();
+    let sample = |n: usize| -> String {
+        (0..n)
+            .map(|i| {
+                let s = (i as f64 * 0.1 * std::f64::consts::PI).sin();
+                format!("{},{},{},{}\n", 1.0 + s, 1.1 + s, 0.9 + s, 1.0 + s)
+            })
+            .collect()
+    };
+    // 100 samples (one window), a 3 MiB line, 150 samples: a second window
+    // and 50 samples of a third.
+    input.write_all(sample(100).as_bytes()).unwrap();
+    input.write_all(&vec![b'1'; 3 << 20]).unwrap();
+    input.write_all(b"\n").unwrap();
+    input.write_all(sample(150).as_bytes()).unwrap();
+    drop(input);
+    let out = child.wait_with_output().unwrap();
+    let (rows, err) = (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    );
+    assert!(out.status.success(), "{err}");
+    assert_eq!(
+        rows.lines()
+            .filter(|l| l.ends_with(",line_too_long"))
+            .count(),
+        1,
+        "{rows}"
+    );
+    assert!(
+        err.contains("track: 250 samples, 2 windows, 1 malformed lines"),
+        "{err}"
+    );
+    assert!(
+        err.contains("warning: the input ended 50 samples into a window of 100"),
+        "{err}"
+    );
 }

@@ -54,6 +54,7 @@ mod limits;
 mod location;
 mod number_text;
 mod observations;
+mod output_folder;
 mod points;
 mod poses;
 mod positioning;
@@ -102,6 +103,7 @@ pub use limits::{
 pub use location::Location;
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
+pub use output_folder::{OutputFolder, MANIFEST};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
 pub use poses::{write_poses, PoseRow, Poses};
 pub use positioning::{EstimateRow, MatchedEstimate, PositionEstimates, PositionTruth, TruthRow};
