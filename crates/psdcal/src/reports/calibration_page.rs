@@ -93,7 +93,14 @@ pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
         .plots
         .iter()
         .map(Plot::svg)
-        .collect::<Result<_, _>>()?;
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            Error::Input(format!(
+                "{}: the report cannot be drawn from this calibration: its parameters give \
+                 values that are not finite numbers; check its values or calibrate again",
+                request.calibration.display()
+            ))
+        })?;
     let names: Vec<String> = std::iter::once(PathBuf::from(REPORT_PAGE))
         .chain(plot_files(Path::new(""), &content.plots))
         .map(|p| p.display().to_string())
