@@ -158,7 +158,7 @@ mod tests {
         assert!(matches!(e, IoError::NotOurs { .. }));
         let text = e.to_string();
         assert!(
-            text.contains("study.csv") && text.contains("--force"),
+            text.contains("study.csv") && text.contains("kept"),
             "{text}"
         );
         // A file psdcal wrote but the user edited since: refused too.
