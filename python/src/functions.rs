@@ -202,6 +202,7 @@ pub fn simulate<'py>(
         })?,
         seed,
         out: std::path::PathBuf::new(),
+        force: false,
     };
     let data = py
         .detach(|| psdcal::simulate_data(&request))
