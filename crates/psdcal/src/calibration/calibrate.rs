@@ -202,6 +202,17 @@ impl Calibrated {
     /// Writes calibration.json and, if asked for, residuals.csv
     /// (atomically).
     pub fn write(&self, set: &DataSet, out: &Path, residuals: Option<&Path>) -> Result<()> {
+        // The folder of the calibration is created as `simulate` and
+        // `report` create theirs (`--out out/calibration.json` in a fresh
+        // clone).
+        for file in std::iter::once(out).chain(residuals) {
+            if let Some(folder) = file.parent().filter(|p| !p.as_os_str().is_empty()) {
+                std::fs::create_dir_all(folder).map_err(|e| Error::OutputFolder {
+                    path: folder.to_path_buf(),
+                    message: format!("cannot create the output folder {}: {e}", folder.display()),
+                })?;
+            }
+        }
         write_calibration(out, &self.record)?;
         if let Some(path) = residuals {
             self.residuals(set).write_csv(path, &set.template)?;
