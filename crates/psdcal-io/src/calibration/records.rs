@@ -291,13 +291,13 @@ impl Covariance {
             return Ok(());
         }
         let scale: Vec<f64> = (0..n).map(|i| self.matrix[i][i].sqrt()).collect();
-        for i in 0..n {
-            for j in 0..n {
-                if scale[i] == 0.0 && self.matrix[i][j] != 0.0 {
+        for (i, row) in self.matrix.iter().enumerate() {
+            if let Some((j, v)) = row.iter().enumerate().find(|(_, v)| **v != 0.0) {
+                if scale[i] == 0.0 {
                     return Err(format!(
                         "covariance.matrix[{i}][{j}] is {} but '{}' has variance 0; expected a \
                          positive semi-definite matrix",
-                        shown(self.matrix[i][j]),
+                        shown(*v),
                         self.parameters[i]
                     ));
                 }
@@ -311,7 +311,7 @@ impl Covariance {
             .iter()
             .copied()
             .fold(f64::INFINITY, f64::min);
-        if !(smallest >= -PSD_TOLERANCE) {
+        if smallest.is_nan() || smallest < -PSD_TOLERANCE {
             return Err(format!(
                 "covariance.matrix is not positive semi-definite (its correlation matrix has the \
                  eigenvalue {}); expected a covariance as psdcal writes it (was it edited?)",

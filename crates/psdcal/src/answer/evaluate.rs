@@ -344,7 +344,7 @@ impl Evaluation {
                 "truths inside the 95 % ellipsoid".into(),
                 p.stats
                     .within_95
-                    .map_or("no covariance given".into(), |w| within_text(w)),
+                    .map_or("no covariance given".into(), within_text),
             ]);
             out.push(("Position error".to_string(), rows));
         }
@@ -355,7 +355,7 @@ impl Evaluation {
                 "truths inside the 95 % ellipse".into(),
                 a.stats
                     .within_95
-                    .map_or("no covariance given".into(), |w| within_text(w)),
+                    .map_or("no covariance given".into(), within_text),
             ]);
             out.push(("Angle-of-arrival error".to_string(), rows));
         }

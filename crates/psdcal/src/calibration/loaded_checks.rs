@@ -131,7 +131,7 @@ fn check_angle_sigma(sensor: &CalibratedSensor) -> Result<(), String> {
         } else {
             f64::INFINITY
         };
-        if !(worst <= MAX_ANGLE_SIGMA_DEG) {
+        if worst.is_nan() || worst > MAX_ANGLE_SIGMA_DEG {
             return Err(format!(
                 "covariance: the angle sigma it gives at ({}, {}) mm is {} degrees; expected at \
                  most {MAX_ANGLE_SIGMA_DEG} (std and covariance as a calibration gives them: \
