@@ -462,10 +462,10 @@ fn covariance_must_be_positive_semidefinite() {
     let mut cal = sample();
     let c = &mut cal.covariance.matrix;
     let r = (c[0][0] * c[1][1]).sqrt();
-    for i in 0..c.len() {
-        for j in 0..c.len() {
+    for (i, row) in c.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
             if i != j {
-                c[i][j] = 0.0;
+                *v = 0.0;
             }
         }
     }
