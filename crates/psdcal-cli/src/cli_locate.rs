@@ -52,7 +52,7 @@ pub struct LocateArgs {
     /// Plane n.P = d in the sensor frame: NX,NY,NZ,D (D in mm, not 0)
     #[arg(long, value_name = "NX,NY,NZ,D", value_parser = parse_plane, allow_hyphen_values = true)]
     pub plane: Option<Plane>,
-    /// Rig file: sensors with calibrations and poses in a world frame (README 'Rig files')
+    /// Rig file: sensors with calibrations and poses in a world frame (docs/positioning.md, 'Rig files')
     #[arg(long, value_name = "FILE")]
     pub rig: Option<PathBuf>,
     /// Output CSV (written atomically); standard output when absent

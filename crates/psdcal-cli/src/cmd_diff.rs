@@ -28,7 +28,12 @@ pub struct DiffArgs {
 }
 
 /// Runs `diff`.
-pub fn run(args: &DiffArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(
+    args: &DiffArgs,
+    output: Output,
+    limits: psdcal::ReadLimits,
+    force: bool,
+) -> anyhow::Result<()> {
     let done = psdcal::diff(&psdcal::DiffRequest {
         a: args.a.clone(),
         b: args.b.clone(),
@@ -36,6 +41,7 @@ pub fn run(args: &DiffArgs, output: Output, limits: psdcal::ReadLimits) -> anyho
         out: args.out.clone(),
         report: args.report.clone(),
         limits,
+        force,
     })?;
     let summary = psdcal::Summary::new(done.summary(), done.to_json());
     crate::messages::emit(output, &summary.warn(&done.warnings))

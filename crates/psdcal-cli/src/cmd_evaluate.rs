@@ -25,7 +25,12 @@ pub struct EvaluateArgs {
 }
 
 /// Runs `evaluate`.
-pub fn run(args: &EvaluateArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(
+    args: &EvaluateArgs,
+    output: Output,
+    limits: psdcal::ReadLimits,
+    force: bool,
+) -> anyhow::Result<()> {
     let evaluation = psdcal::evaluate(&psdcal::EvaluateRequest {
         truth: args.truth.clone(),
         estimates: args.estimates.clone(),
@@ -33,7 +38,7 @@ pub fn run(args: &EvaluateArgs, output: Output, limits: psdcal::ReadLimits) -> a
         limits,
     })?;
     let files = match &args.report {
-        Some(dir) => evaluation.write_report(dir)?,
+        Some(dir) => evaluation.write_report(dir, force)?,
         None => Vec::new(),
     };
     crate::messages::emit(output, &evaluation.summary(&files))

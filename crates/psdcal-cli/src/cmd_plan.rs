@@ -69,7 +69,12 @@ pub struct PlanArgs {
 }
 
 /// Runs `plan`.
-pub fn run(a: &PlanArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(
+    a: &PlanArgs,
+    output: Output,
+    limits: psdcal::ReadLimits,
+    force: bool,
+) -> anyhow::Result<()> {
     let planned = psdcal::plan_poses(&psdcal::PlanRequest {
         f_mm: a.f,
         template: a.template.clone(),
@@ -90,6 +95,7 @@ pub fn run(a: &PlanArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::
         out: a.out.clone(),
         report: a.report.clone(),
         limits,
+        force,
     })?;
     let summary = psdcal::Summary::new(planned.text.clone(), planned.json.clone());
     crate::messages::emit(output, &summary)

@@ -36,7 +36,12 @@ pub struct PsdMapArgs {
 }
 
 /// Runs `psd-map`.
-pub fn run(args: &PsdMapArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(
+    args: &PsdMapArgs,
+    output: Output,
+    limits: psdcal::ReadLimits,
+    force: bool,
+) -> anyhow::Result<()> {
     let request = PsdMapRequest {
         scan: args.scan.clone(),
         model: args.model,
@@ -48,6 +53,7 @@ pub fn run(args: &PsdMapArgs, output: Output, limits: psdcal::ReadLimits) -> any
         command: std::env::args().collect::<Vec<_>>().join(" "),
         report: args.report.clone(),
         limits,
+        force,
     };
     let outcome = psdcal::psd_map_from_scan(&request)?;
     outcome.write(&args.out)?;

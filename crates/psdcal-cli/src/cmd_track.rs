@@ -58,7 +58,7 @@ pub fn run(args: &TrackArgs, output: Output, limits: psdcal::ReadLimits) -> anyh
     let summary = psdcal::track(&request, std::io::stdin().lock(), std::io::stdout().lock())?;
     crate::messages::print_warnings(&summary.warnings());
     if output != Output::Quiet {
-        eprintln!("{}", summary.text());
+        crate::messages::say(&format!("{}\n", summary.text()));
     }
     Ok(())
 }

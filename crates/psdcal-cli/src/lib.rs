@@ -59,7 +59,7 @@ pub fn main() -> ExitCode {
             Err(usage) => usage.format(&mut Cli::command()).exit(),
         };
         if let Err(clash) = guard::check(&command, &matches, limits) {
-            eprintln!("error: {clash}");
+            messages::say(&format!("error: {clash}\n"));
             return ExitCode::from(2);
         }
         (output, job, limits, force)
@@ -68,14 +68,14 @@ pub fn main() -> ExitCode {
         Job::Check(files, load) => cmd_check::run(files, load, output),
         Job::Calibrate(config) => cmd_calibrate::run(config, output),
         Job::Gains(args) => cmd_gains::run(args, output, limits),
-        Job::PsdMap(args) => cmd_psd_map::run(args, output, limits),
+        Job::PsdMap(args) => cmd_psd_map::run(args, output, limits, force),
         Job::SimulateScan(args) => cmd_simulate_scan::run(args, output),
         Job::Simulate(args) => cmd_simulate::run(args, output, limits, force),
         Job::Study(config) => cmd_study::run(config, output),
         Job::Demo(args) => cmd_demo::run(args, output),
         Job::Demodulate(args) => cmd_demodulate::run(args, output, limits),
         Job::Track(args) => cmd_track::run(args, output, limits),
-        Job::Plan(args) => cmd_plan::run(args, output, limits),
+        Job::Plan(args) => cmd_plan::run(args, output, limits, force),
         Job::FocalCheck(args) => cmd_focal_check::run(args, output, limits),
         Job::CalibrateInSitu(args) => cmd_calibrate_in_situ::run(args, output, limits),
         Job::Correct(config) => cmd_correct::run(config, output, limits),
@@ -83,10 +83,10 @@ pub fn main() -> ExitCode {
         Job::Locate(config) => cmd_locate::run(config, output, limits),
         Job::Map(request, out) => cmd_map::run(request, out.as_deref(), output),
         Job::Report(config) => cmd_report::run(config, output, limits, force),
-        Job::Evaluate(args) => cmd_evaluate::run(args, output, limits),
+        Job::Evaluate(args) => cmd_evaluate::run(args, output, limits, force),
         Job::SimulatePositioning(args) => cmd_simulate_positioning::run(args, output, force),
         Job::Export(args) => cmd_export::run(args, output, limits),
-        Job::Diff(args) => cmd_diff::run(args, output, limits),
+        Job::Diff(args) => cmd_diff::run(args, output, limits, force),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -122,6 +122,65 @@ fn a_full_standard_output_is_one_error_line_not_a_panic() {
     assert!(!err.contains("panicked"), "{err}");
 }
 
+/// Standard error closed by its reader or full: warnings and errors are
+/// lost, never a panic (status 101); the exit status is the command's own.
+#[test]
+fn a_closed_or_full_standard_error_is_never_a_panic() {
+    let t = valid("template.csv").display().to_string();
+    let o = valid("observations.csv").display().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let off = dir.path().join("off.csv");
+    // One point off the sensor: a warning on standard error.
+    let text = std::fs::read_to_string(&o).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    let first = lines.iter().position(|l| l.starts_with("image")).unwrap() + 1;
+    let image = lines[first].split(',').next().unwrap().to_string();
+    let led = lines[first].split(',').nth(1).unwrap().to_string();
+    let moved = format!("{image},{led},30,30");
+    lines[first] = &moved;
+    std::fs::write(&off, lines.join("\n") + "\n").unwrap();
+    let off = off.display().to_string();
+    let runs: [(&[&str], i32); 3] = [
+        (&["check", "-t", &t, "-o", &off], 0),
+        (&["check", "-t", &t, "-o", "missing.csv"], 1),
+        (&["check", "--no-such-option"], 2),
+    ];
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .ok()
+    };
+    for (args, code) in runs {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let closed = Command::new(env!("CARGO_BIN_EXE_psdcal"))
+            .args(args)
+            .stdout(Stdio::null())
+            .stderr(writer)
+            .status()
+            .unwrap();
+        assert_eq!(
+            closed.code(),
+            Some(code),
+            "{args:?} with standard error closed"
+        );
+        if let Some(full) = full() {
+            let status = Command::new(env!("CARGO_BIN_EXE_psdcal"))
+                .args(args)
+                .stdout(Stdio::null())
+                .stderr(full)
+                .status()
+                .unwrap();
+            assert_eq!(
+                status.code(),
+                Some(code),
+                "{args:?} with standard error full"
+            );
+        }
+    }
+}
+
 #[test]
 fn track_skips_an_over_long_line_and_reports_a_last_partial_window() {
     use std::io::Write;

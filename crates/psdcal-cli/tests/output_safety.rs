@@ -161,3 +161,60 @@ fn a_full_disk_while_writing_the_residuals_leaves_the_calibration_as_it_was() {
     left.sort();
     assert_eq!(left, ["c.json", "r.csv"]);
 }
+
+/// The report folders of `diff`, `plan`, `evaluate` (tests/evaluate.rs)
+/// and `psd-map` (tests/psd_map.rs) are guarded like the others: a page
+/// psdcal did not write is kept, `--force` replaces it, psdcal's own page
+/// is replaced freely.
+#[test]
+fn report_pages_of_diff_and_plan_keep_others_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (t, o) = (valid("template.csv"), valid("observations.csv"));
+    let c = d.join("c.json");
+    let calibrate = psdcal(["calibrate", "-q", "-t", s(&t), "-o", s(&o), "--out", s(&c)]);
+    assert!(calibrate.status.success(), "{}", stderr(&calibrate));
+    let diff_dir = d.join("diff");
+    fs::create_dir(&diff_dir).unwrap();
+    fs::write(diff_dir.join("diff.html"), b"my page").unwrap();
+    let diff = |force: bool| {
+        let mut args = vec!["-q", "diff", s(&c), s(&c), "--report", s(&diff_dir)];
+        args.extend(force.then_some("--force"));
+        psdcal(args)
+    };
+    assert_refused(&diff(false), &diff_dir.join("diff.html"), b"my page");
+    assert!(diff(true).status.success());
+    assert!(diff(false).status.success(), "{}", stderr(&diff(false)));
+
+    let plan_dir = d.join("plan");
+    fs::create_dir(&plan_dir).unwrap();
+    fs::write(plan_dir.join("plan_sigma.png"), b"my picture").unwrap();
+    let poses = d.join("poses.csv");
+    let plan = |force: bool| {
+        let mut args = vec![
+            "-q",
+            "plan",
+            "--template",
+            s(&t),
+            "--snr",
+            "40",
+            "--f",
+            "8",
+            "--images",
+            "4",
+            "--out",
+            s(&poses),
+            "--report",
+            s(&plan_dir),
+        ];
+        args.extend(force.then_some("--force"));
+        psdcal(args)
+    };
+    assert_refused(
+        &plan(false),
+        &plan_dir.join("plan_sigma.png"),
+        b"my picture",
+    );
+    assert!(plan(true).status.success());
+    assert!(plan(false).status.success());
+}

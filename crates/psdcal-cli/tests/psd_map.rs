@@ -61,6 +61,29 @@ fn scan_map_calibrate_and_answer() {
     );
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(!dir.path().join("map2.json").exists());
+    // That figure is no longer the one psdcal wrote: kept (issue 33) until
+    // --force.
+    let report_again = |force: &[&str]| {
+        let mut args = vec![
+            "psd-map".to_string(),
+            "--scan".into(),
+            p("scan.csv"),
+            "--out".into(),
+            p("map2.json"),
+            "--report".into(),
+            p("map_report"),
+        ];
+        args.extend(force.iter().map(|a| a.to_string()));
+        psdcal(args)
+    };
+    let kept = report_again(&[]);
+    assert_eq!(kept.status.code(), Some(1), "{}", stderr(&kept));
+    assert!(
+        stderr(&kept).contains("psd_map_field.svg"),
+        "{}",
+        stderr(&kept)
+    );
+    assert!(report_again(&["--force"]).status.success());
     let json: serde_json::Value = serde_json::from_str(&stdout(&run)).unwrap();
     assert_eq!(json["format"], "psdcal-psd-map");
     // 361 points: the map's error is a fraction of the ~0.37 µm noise.

@@ -297,6 +297,16 @@ impl CsvTable {
 
     /// A non-empty identifier (LED, image) from a field; `what` names it.
     pub fn identifier(&self, row: &CsvRow, col: &Col, what: &str) -> Result<String, IoError> {
+        self.identifier_text(row, col, what).map(str::to_string)
+    }
+
+    /// [`Self::identifier`] without copying it.
+    pub fn identifier_text<'r>(
+        &self,
+        row: &'r CsvRow,
+        col: &Col,
+        what: &str,
+    ) -> Result<&'r str, IoError> {
         let text = self.text(row, col);
         if text.is_empty() {
             return Err(IoError::Value {
@@ -305,7 +315,7 @@ impl CsvTable {
                 message: format!("expected {what}, found an empty field"),
             });
         }
-        Ok(text.to_string())
+        Ok(text)
     }
 }
 

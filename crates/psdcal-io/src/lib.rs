@@ -102,7 +102,7 @@ pub use limits::{
 };
 pub use location::Location;
 pub use number_text::{number_text, shown_number};
-pub use observations::{Observation, Observations};
+pub use observations::{Observation, ObservationText, Observations};
 pub use output_folder::{OutputFolder, MANIFEST};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
 pub use poses::{write_poses, PoseRow, Poses};
@@ -134,6 +134,7 @@ pub use truth::{
     TRUTH_FORMAT, TRUTH_VERSION,
 };
 pub use validate::{
-    validate_data_set, Image, ValidatedDataSet, ValidationOptions, MIN_IMAGES, MIN_POINTS_PER_IMAGE,
+    validate_data_set, DataSetValidator, Image, ValidatedDataSet, ValidationOptions, MIN_IMAGES,
+    MIN_POINTS_PER_IMAGE,
 };
 pub use warning::Warning;

@@ -1,5 +1,5 @@
 //! rig_points.csv: what the sensors of a rig measured, one row per sensor
-//! per emitter (README, "Rig files").
+//! per emitter (docs/positioning.md, "Rig files").
 //!
 //! | column | meaning |
 //! | --- | --- |

@@ -19,6 +19,14 @@ pub enum LocateError {
         /// Which input.
         what: &'static str,
     },
+    /// An answer came out NaN or infinite (a calibration whose numbers
+    /// overflow there): the row gets no answer rather than a blank or
+    /// infinite cell under the status `ok`.
+    #[error("the answer is not finite: {what}")]
+    NonFiniteAnswer {
+        /// Which answer.
+        what: &'static str,
+    },
     /// An argument is outside its domain (a non-positive distance, a grid of
     /// fewer than two points, a negative σ, …).
     #[error("invalid {what}: {reason}")]
@@ -152,6 +160,7 @@ impl LocateError {
     pub fn status(&self) -> &'static str {
         match self {
             LocateError::NonFinite { .. } => "non_finite_input",
+            LocateError::NonFiniteAnswer { .. } => "non_finite_answer",
             LocateError::InvalidInput { .. } => "invalid_input",
             LocateError::Model(ModelError::NonPositiveTotal { .. }) => "no_light",
             LocateError::Model(_) => "model_error",

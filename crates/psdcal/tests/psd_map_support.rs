@@ -62,6 +62,7 @@ pub fn write_seed_files(dir: &Path, seed: u64) {
         command: String::new(),
         report: None,
         limits: Default::default(),
+        force: false,
     })
     .unwrap()
     .write(&dir.join(format!("psd_map{seed}.json")))

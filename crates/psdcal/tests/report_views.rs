@@ -35,6 +35,7 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
         command: String::new(),
         report: None,
         limits: Default::default(),
+        force: false,
     })
     .unwrap();
     let map_path = dir.path().join("psd_map.json");

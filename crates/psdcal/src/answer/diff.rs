@@ -32,6 +32,8 @@ pub struct DiffRequest {
     pub report: Option<PathBuf>,
     /// Bounds on the files read whole (docs/formats.md, "Limits").
     pub limits: psdcal_io::ReadLimits,
+    /// Replace files in the report folder that psdcal did not write there.
+    pub force: bool,
 }
 
 /// The comparison.
@@ -201,6 +203,10 @@ impl Diffed {
     /// Writes diff.html with the heat maps of `|Δ|` and `|Δ|/σ` (also as
     /// SVG files) into `dir` (created if missing).
     fn write_report(&mut self, dir: &std::path::Path) -> Result<()> {
+        let names: Vec<String> = ["delta_map.svg", "z_map.svg", "diff.html"]
+            .map(String::from)
+            .to_vec();
+        let folder = psdcal_io::OutputFolder::claim(dir, &names, self.request.force)?;
         std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
             path: dir.to_path_buf(),
             message: format!("cannot create the output folder {}: {e}", dir.display()),
@@ -254,6 +260,6 @@ impl Diffed {
         let html = dir.join("diff.html");
         write_atomic_bytes(&html, page.render().as_bytes())?;
         self.files.push(html);
-        Ok(())
+        Ok(folder.finish()?)
     }
 }

@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use psdcal_io::{
-    validate_data_set, DataSetSummary, GainsFile, Observations, Signals, Template,
-    ValidatedDataSet, ValidationOptions, Warning,
+    validate_data_set, DataSetSummary, DataSetValidator, GainsFile, Observations, Signals,
+    Template, ValidatedDataSet, ValidationOptions, Warning,
 };
 use psdcal_model::{ChannelGains, PsdGeometry};
 
@@ -104,6 +104,37 @@ impl DataSet {
         Ok(set)
     }
 
+    /// What [`Self::from_files`] then [`Self::summary`] report, with the
+    /// observations checked as they are read (none kept as text): memory
+    /// follows the usable points, not the file (`psdcal check` on files of
+    /// any size within the read limits).
+    pub fn check_files(files: &DataSetFiles, options: &LoadOptions) -> Result<DataSetSummary> {
+        let (PointSource::Observations(path), None) = (&files.points, &files.gains) else {
+            return Ok(Self::from_files(files, options)?.summary());
+        };
+        let limits = options.limits;
+        let template = Template::read_with(&files.template, limits)?;
+        let validation = ValidationOptions {
+            geometry: options.geometry,
+            strict: options.strict,
+        };
+        let source = path.display().to_string();
+        let mut validator = DataSetValidator::new(&template, &source, &validation);
+        let file = std::fs::File::open(path).map_err(|e| psdcal_io::IoError::Read {
+            file: source.clone(),
+            source: e,
+        })?;
+        let rows = Observations::for_each_row(&source, file, limits, |row| validator.push(row))?;
+        let validated = validator.finish()?;
+        Ok(DataSetSummary::new(
+            &template,
+            &source,
+            rows,
+            &validated,
+            &options.geometry,
+        ))
+    }
+
     /// Validates a data set given in memory.
     pub fn from_memory(
         template: Template,
@@ -146,7 +177,8 @@ impl DataSet {
     pub fn summary(&self) -> DataSetSummary {
         DataSetSummary::new(
             &self.template,
-            &self.observations,
+            &self.observations.source,
+            self.observations.rows.len(),
             &self.validated,
             &self.options.geometry,
         )

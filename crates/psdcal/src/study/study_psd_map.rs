@@ -95,6 +95,7 @@ pub(crate) fn fit_map(scan: &Scan, seed: u64) -> Result<(PsdMapOutcome, MapInput
             command: String::new(),
             report: None,
             limits: Default::default(),
+            force: false,
         },
     )?;
     let map = MapInput::in_memory(fitted.file.clone(), &map_name(seed), &geometry)?;
