@@ -17,12 +17,22 @@
 //!
 //! After the writes, [`OutputFolder::finish`] records the files in the
 //! manifest (written atomically; other names' lines are kept).
+//!
+//! Runs into one folder take turns: [`OutputFolder::claim`] creates the
+//! folder and holds an exclusive lock on it (`flock` on the folder itself,
+//! no lock file) until the [`OutputFolder`] is dropped, so a second run
+//! checks its names only once the first has written and recorded its
+//! files, and finds them psdcal's. Claims of one folder by one thread share
+//! its lock (a run writing two sets of outputs into the same folder); other
+//! threads and processes wait, up to [`LOCK_WAIT`], then get an error.
 
 use std::collections::BTreeMap;
-use std::fs;
+use std::fs::{self, File};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
-use std::time::UNIX_EPOCH;
+use std::sync::{Arc, Mutex, Weak};
+use std::thread::ThreadId;
+use std::time::{Duration, Instant, UNIX_EPOCH};
 
 use crate::atomic::write_atomic;
 use crate::error::IoError;
@@ -32,6 +42,13 @@ pub const MANIFEST: &str = ".psdcal-outputs";
 
 /// A manifest larger than this is not psdcal's (it is read as empty).
 const MANIFEST_MAX_BYTES: u64 = 4 << 20;
+
+/// How long a run waits for another run writing into the same folder.
+pub const LOCK_WAIT: Duration = Duration::from_secs(120);
+
+/// The folder locks this process holds: (folder, thread, lock).
+type HeldLocks = Vec<(PathBuf, ThreadId, Weak<File>)>;
+static HELD: Mutex<HeldLocks> = Mutex::new(Vec::new());
 
 /// What a manifest line records of a file: its length and modification
 /// time (ns since 1970).
@@ -43,18 +60,25 @@ type Stamp = (u64, u128);
 pub struct OutputFolder {
     dir: PathBuf,
     names: Vec<String>,
+    /// The folder's lock, released when the last claim of it is dropped.
+    _lock: Arc<File>,
 }
 
 impl OutputFolder {
     /// Checks that each of `names` (relative to `dir`, `/`-separated) can be
     /// written into `dir`: it is absent, or psdcal wrote it and it has not
-    /// changed since; with `force`, every name can. `dir` need not exist.
+    /// changed since; with `force`, every name can. `dir` is created if
+    /// missing and locked (see the module's docs) until the result is
+    /// dropped.
     ///
-    /// Errors: [`IoError::NotOurs`] naming the first file that would be lost.
+    /// Errors: [`IoError::NotOurs`] naming the first file that would be lost;
+    /// [`IoError::Write`] when the folder cannot be created or stays locked
+    /// by another run for [`LOCK_WAIT`].
     pub fn claim(dir: &Path, names: &[String], force: bool) -> Result<OutputFolder, IoError> {
         let folder = OutputFolder {
             dir: dir.to_path_buf(),
             names: names.to_vec(),
+            _lock: lock_folder(dir)?,
         };
         if force {
             return Ok(folder);
@@ -102,6 +126,48 @@ impl OutputFolder {
             Ok(())
         })
     }
+}
+
+/// The exclusive lock of `dir` (created if missing): this thread's own if
+/// it holds one already, else a new one once no other run holds it.
+fn lock_folder(dir: &Path) -> Result<Arc<File>, IoError> {
+    let failed = |source: std::io::Error| IoError::Write {
+        file: dir.display().to_string(),
+        source,
+    };
+    fs::create_dir_all(dir).map_err(failed)?;
+    let key = dir.canonicalize().map_err(failed)?;
+    let me = std::thread::current().id();
+    let mut held = HELD.lock().unwrap_or_else(|e| e.into_inner());
+    held.retain(|(_, _, lock)| lock.strong_count() > 0);
+    let mine = held
+        .iter()
+        .find(|(path, thread, _)| *path == key && *thread == me);
+    if let Some(lock) = mine.and_then(|(_, _, lock)| lock.upgrade()) {
+        return Ok(lock);
+    }
+    drop(held);
+    let file = File::open(&key).map_err(failed)?;
+    let start = Instant::now();
+    loop {
+        match file.try_lock() {
+            Ok(()) => break,
+            Err(fs::TryLockError::WouldBlock) if start.elapsed() < LOCK_WAIT => {
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            Err(fs::TryLockError::WouldBlock) => {
+                return Err(failed(std::io::Error::other(format!(
+                    "another psdcal run has been writing into this folder for {} s",
+                    LOCK_WAIT.as_secs()
+                ))))
+            }
+            Err(fs::TryLockError::Error(e)) => return Err(failed(e)),
+        }
+    }
+    let lock = Arc::new(file);
+    let mut held = HELD.lock().unwrap_or_else(|e| e.into_inner());
+    held.push((key, me, Arc::downgrade(&lock)));
+    Ok(lock)
 }
 
 /// A file's length and modification time, if it is a file.

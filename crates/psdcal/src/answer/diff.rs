@@ -203,14 +203,14 @@ impl Diffed {
     /// Writes diff.html with the heat maps of `|Δ|` and `|Δ|/σ` (also as
     /// SVG files) into `dir` (created if missing).
     fn write_report(&mut self, dir: &std::path::Path) -> Result<()> {
-        let names: Vec<String> = ["delta_map.svg", "z_map.svg", "diff.html"]
-            .map(String::from)
-            .to_vec();
-        let folder = psdcal_io::OutputFolder::claim(dir, &names, self.request.force)?;
         std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
             path: dir.to_path_buf(),
             message: format!("cannot create the output folder {}: {e}", dir.display()),
         })?;
+        let names: Vec<String> = ["delta_map.svg", "z_map.svg", "diff.html"]
+            .map(String::from)
+            .to_vec();
+        let folder = psdcal_io::OutputFolder::claim(dir, &names, self.request.force)?;
         let d = &self.diff;
         let (lx, ly) = (self.geometry.lx, self.geometry.ly);
         let step = (

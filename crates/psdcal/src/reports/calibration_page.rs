@@ -105,7 +105,6 @@ pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
         .chain(plot_files(Path::new(""), &content.plots))
         .map(|p| p.display().to_string())
         .collect();
-    let folder = psdcal_io::OutputFolder::claim(&request.out, &names, request.force)?;
     // The folder is created only once the page can be drawn: a failure
     // leaves nothing behind.
     std::fs::create_dir_all(&request.out).map_err(|e| Error::OutputFolder {
@@ -115,6 +114,7 @@ pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
             request.out.display()
         ),
     })?;
+    let folder = psdcal_io::OutputFolder::claim(&request.out, &names, request.force)?;
     let page = calibration_page(&content, &svgs);
     let html = request.out.join(REPORT_PAGE);
     write_atomic_bytes(&html, page.render().as_bytes())?;

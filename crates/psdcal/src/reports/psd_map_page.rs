@@ -91,11 +91,6 @@ pub(crate) fn prepare(outcome: &PsdMapOutcome, dir: &Path, out: &Path) -> Result
     let mut outputs: Vec<(&str, &Path)> = vec![("--out", out)];
     outputs.extend(files.iter().map(|f| ("--report", f.as_path())));
     psdcal_io::refuse_overwrite(&[("--scan", outcome.scan.as_path())], &outputs)?;
-    let names: Vec<String> = std::iter::once(PathBuf::from(PSD_MAP_PAGE))
-        .chain(plot_files(Path::new(""), &content.plots))
-        .map(|p| p.display().to_string())
-        .collect();
-    let folder = psdcal_io::OutputFolder::claim(dir, &names, outcome.force)?;
     let svgs: Vec<String> = content
         .plots
         .iter()
@@ -108,6 +103,11 @@ pub(crate) fn prepare(outcome: &PsdMapOutcome, dir: &Path, out: &Path) -> Result
         path: dir.to_path_buf(),
         message: format!("cannot create the report folder {}: {e}", dir.display()),
     })?;
+    let names: Vec<String> = std::iter::once(PathBuf::from(PSD_MAP_PAGE))
+        .chain(plot_files(Path::new(""), &content.plots))
+        .map(|p| p.display().to_string())
+        .collect();
+    let folder = psdcal_io::OutputFolder::claim(dir, &names, outcome.force)?;
     Ok(PreparedReport {
         folder,
         dir: dir.to_path_buf(),

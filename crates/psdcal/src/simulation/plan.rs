@@ -209,12 +209,12 @@ pub fn plan_poses(request: &PlanRequest) -> Result<Planned> {
 }
 
 fn write_heat_map(dir: &Path, setup: &PlanSetup, plan: &Plan, force: bool) -> Result<()> {
-    let names = ["plan_sigma.svg".to_string(), "plan_sigma.png".to_string()];
-    let folder = psdcal_io::OutputFolder::claim(dir, &names, force)?;
     std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
         path: dir.to_path_buf(),
         message: format!("cannot create the report folder {}: {e}", dir.display()),
     })?;
+    let names = ["plan_sigma.svg".to_string(), "plan_sigma.png".to_string()];
+    let folder = psdcal_io::OutputFolder::claim(dir, &names, force)?;
     let p = &plan.prediction;
     let cells: Vec<HeatCell> = p
         .grid

@@ -273,11 +273,11 @@ fn simulate_and_write_at(
         .chain(more)
         .map(|n| n.to_string())
         .collect();
-    let folder = OutputFolder::claim(out, &names, request.force)?;
     std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
         path: out.clone(),
         message: format!("cannot create the output folder {}: {e}", out.display()),
     })?;
+    let folder = OutputFolder::claim(out, &names, request.force)?;
     let (data, sim) = simulate_in_memory(request, poses)?;
     let what = &data.description;
     write_template(
