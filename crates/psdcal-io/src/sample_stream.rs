@@ -10,8 +10,10 @@
 //! numbers (or longer than 1 MiB, or not UTF-8) is [`Sample::Malformed`].
 //!
 //! Recording file: one sensor, raw.csv, raw.npy or raw.tdms
-//! ([`RawReader`]); a rig, raw.tdms with the channels `SENSOR/vx1` … (a group
-//! per sensor, named by its id) or the channels named, four per sensor in
+//! ([`RawReader`]); a rig, raw.csv with the columns `SENSOR/vx1` … and
+//! optionally `t_s`, raw.npy of `4 S` columns in rig.json's order
+//! (`raw_rig.rs`), or raw.tdms with the channels `SENSOR/vx1` … (a group per
+//! sensor, named by its id) or the channels named, four per sensor in
 //! rig.json's order.
 
 use std::io::{BufRead, Read};
@@ -19,7 +21,8 @@ use std::path::Path;
 
 use crate::error::{IoError, StreamFault};
 use crate::limits::MAX_LINE_BYTES;
-use crate::raw::RawReader;
+use crate::raw::{RawFormat, RawReader};
+use crate::raw_rig::RigFrames;
 use crate::tdms::{TdmsReader, TDMS_DEFAULT_CHANNELS};
 
 type Result<T> = std::result::Result<T, IoError>;
@@ -55,6 +58,13 @@ enum Source<R> {
     Raw {
         reader: Box<RawReader>,
         buffer: std::collections::VecDeque<[f64; 4]>,
+    },
+    /// A rig's raw.csv or raw.npy.
+    Rig {
+        reader: Box<RigFrames>,
+        width: usize,
+        buffer: Vec<f64>,
+        next: usize,
     },
     /// A rig's TDMS recording.
     Tdms {
@@ -104,21 +114,28 @@ impl<R: BufRead> Source<R> {
         } else {
             channels.to_vec()
         };
-        let is_tdms = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("tdms"));
-        if !is_tdms || specs.len() != 4 * sensors.len() {
+        let format = RawFormat::of_path(path);
+        if matches!(format, Some(RawFormat::Csv | RawFormat::Npy)) && channels.is_empty() {
+            let (reader, rate) = RigFrames::open(path, sensors, rate_hz)?;
+            let source = Source::Rig {
+                reader: Box::new(reader),
+                width: 4 * sensors.len(),
+                buffer: Vec::new(),
+                next: 0,
+            };
+            return Ok((source, rate));
+        }
+        if format != Some(RawFormat::Tdms) || specs.len() != 4 * sensors.len() {
             return Err(fault(
                 StreamFault::Options,
                 format!(
-                "{}: a rig's recording is a .tdms file with four channels per sensor ({} named, \
-                 {} sensors); expected raw.tdms with groups named by the sensors, or the rows \
-                 on standard input",
-                path.display(),
-                specs.len(),
-                sensors.len()
-            ),
+                    "{}: a rig's recording is raw.csv (SENSOR/vx1 … columns), raw.npy or raw.tdms \
+                 (four channels per sensor; {} named, {} sensors, channels named only for \
+                 .tdms); expected one of these, or the rows on standard input",
+                    path.display(),
+                    specs.len(),
+                    sensors.len()
+                ),
             ));
         }
         let reader = TdmsReader::open(path, &specs, specs.len())?;
@@ -157,6 +174,23 @@ impl<R: BufRead> Source<R> {
                     buffer.extend(block);
                 }
                 Ok(buffer.pop_front().map(|f| Sample::Values(f.to_vec())))
+            }
+            Source::Rig {
+                reader,
+                width,
+                buffer,
+                next,
+            } => {
+                if *next >= buffer.len() {
+                    buffer.clear();
+                    *next = 0;
+                    if reader.read_rows(buffer, BLOCK)? == 0 {
+                        return Ok(None);
+                    }
+                }
+                let row = buffer[*next..*next + *width].to_vec();
+                *next += *width;
+                Ok(Some(Sample::Values(row)))
             }
             Source::Tdms {
                 reader,
