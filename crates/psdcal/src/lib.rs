@@ -150,6 +150,7 @@ pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, ReadLimits, Warning};
 pub use psdcal_locate::LocateError;
 pub use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, Plane, MAX_GRID};
+pub use psdcal_locate::{CvOptions, TrackFilter};
 pub use psdcal_model::{Diagnostic, DiagnosticCode, Severity};
 pub use psdcal_model::{Param, PsdGeometry};
 pub use psdcal_sim::room::RoomOptions;
