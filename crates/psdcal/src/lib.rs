@@ -131,6 +131,9 @@ pub use simulation::simulate::{
     simulate_files_at_poses, transient_cycles, SimulateRequest, SimulatedData, SimulatedFiles,
     DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
 };
+pub use simulation::simulate_moving::{
+    simulate_moving, MovingRequest, SimulatedMoving, DEFAULT_MOVING_NOISE_V, MOVING_SAMPLE_RATE_HZ,
+};
 pub use simulation::simulate_positioning::{
     simulate_positioning, PositioningRequest, SimulatedRig,
 };

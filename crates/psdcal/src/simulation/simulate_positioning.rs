@@ -96,6 +96,51 @@ impl SimulatedRig {
     }
 }
 
+/// Simulates a sensor's calibration data set into `dir` (the paper's
+/// `lens`, template poses and signal chain at `snr_db`, seed `seed`) and
+/// calibrates it into `dir/calibration.json`.
+pub(crate) fn calibrated_sensor_files(
+    lens: Lens,
+    snr_db: Option<f64>,
+    images: usize,
+    record_cycles: usize,
+    seed: u64,
+    dir: &std::path::Path,
+) -> Result<()> {
+    simulate_files(&SimulateRequest {
+        lens,
+        snr_db,
+        imbalance: false,
+        psd_distortion: false,
+        psd_nonlinearity: false,
+        images,
+        template: TemplateKind::Scatter14,
+        record_cycles,
+        seed,
+        out: dir.to_path_buf(),
+    })?;
+    let set = DataSet::from_files(
+        &DataSetFiles {
+            template: dir.join("template.csv"),
+            points: PointSource::Observations(dir.join("observations.csv")),
+            gains: None,
+        },
+        &LoadOptions::default(),
+    )?;
+    let calibrated = crate::calibration::calibrate::calibrate(&set, &CalibrationOptions::default())?;
+    calibrated.write(&set, &dir.join("calibration.json"), None)?;
+    Ok(())
+}
+
+/// The files [`calibrated_sensor_files`] writes.
+pub(crate) const SENSOR_FILES: [&str; 5] = [
+    "template.csv",
+    "observations.csv",
+    "signals.csv",
+    "truth.json",
+    "calibration.json",
+];
+
 /// Simulates, calibrates and writes the rig (module documentation).
 pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig> {
     let out = &request.out;
@@ -113,36 +158,15 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
     for (k, pose) in room.sensors.iter().enumerate() {
         let id = format!("s{}", k + 1);
         let dir = out.join(&id);
-        simulate_files(&SimulateRequest {
-            lens: request.lens,
-            snr_db: request.snr_db,
-            imbalance: false,
-            psd_distortion: false,
-            psd_nonlinearity: false,
-            images: request.images,
-            template: TemplateKind::Scatter14,
-            record_cycles: request.record_cycles,
-            seed: request.seed.wrapping_mul(1000).wrapping_add(k as u64 + 1),
-            out: dir.clone(),
-        })?;
-        let set = DataSet::from_files(
-            &DataSetFiles {
-                template: dir.join("template.csv"),
-                points: PointSource::Observations(dir.join("observations.csv")),
-                gains: None,
-            },
-            &LoadOptions::default(),
+        calibrated_sensor_files(
+            request.lens,
+            request.snr_db,
+            request.images,
+            request.record_cycles,
+            request.seed.wrapping_mul(1000).wrapping_add(k as u64 + 1),
+            &dir,
         )?;
-        let calibrated =
-            crate::calibration::calibrate::calibrate(&set, &CalibrationOptions::default())?;
-        calibrated.write(&set, &dir.join("calibration.json"), None)?;
-        for f in [
-            "template.csv",
-            "observations.csv",
-            "signals.csv",
-            "truth.json",
-            "calibration.json",
-        ] {
+        for f in SENSOR_FILES {
             files.push(format!("{id}/{f}"));
         }
         sensors_json.push(serde_json::json!({
