@@ -87,6 +87,8 @@ pub enum Command {
     /// Angles of arrival per window and LED from raw samples on standard input (live)
     #[command(after_help = include_str!("../help/track.txt"))]
     Track(crate::cmd_track::TrackArgs),
+    /// A rig's positions live in the browser: a 3-D page, /stream (Server-Sent Events) and /rig
+    Serve(crate::cmd_serve::ServeArgs),
     /// A calibration as an OpenCV, mrcal or ROS camera model (fitted, with its error)
     #[command(after_help = include_str!("../help/export.txt"))]
     Export(crate::cmd_export::ExportArgs),
@@ -121,6 +123,7 @@ pub enum Job {
     SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
     Demodulate(crate::cmd_demodulate::DemodulateArgs),
     Track(crate::cmd_track::TrackArgs),
+    Serve(crate::cmd_serve::ServeArgs),
     Export(crate::cmd_export::ExportArgs),
     Diff(crate::cmd_diff::DiffArgs),
     Plan(crate::cmd_plan::PlanArgs),
@@ -171,6 +174,7 @@ impl Cli {
             Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
             Command::Demodulate(args) => Job::Demodulate(args),
             Command::Track(args) => Job::Track(args),
+            Command::Serve(args) => Job::Serve(args),
             Command::Export(args) => Job::Export(args),
             Command::Diff(args) => Job::Diff(args),
             Command::Plan(args) => Job::Plan(args),

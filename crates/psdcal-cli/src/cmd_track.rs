@@ -39,7 +39,7 @@ pub struct TrackArgs {
     /// A rig's tracking filter: none, or cv (constant-velocity Kalman filter per LED)
     #[arg(long, value_name = "none|cv", default_value = "none")]
     pub filter: String,
-    /// The cv filter's white acceleration σ, mm/s² (default 1000: walking at up to 1 m/s)
+    /// The cv filter's white acceleration σ, mm/s² (default 400: walking at up to 1 m/s)
     #[arg(long, value_name = "MM_S2")]
     pub accel_sigma: Option<f64>,
 }

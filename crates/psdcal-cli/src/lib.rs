@@ -27,6 +27,7 @@ mod cmd_map;
 pub mod cmd_plan;
 pub mod cmd_psd_map;
 pub mod cmd_report;
+pub mod cmd_serve;
 mod cmd_simulate;
 pub mod cmd_simulate_positioning;
 pub mod cmd_simulate_scan;
@@ -73,6 +74,7 @@ pub fn main() -> ExitCode {
         Job::Demo(args) => cmd_demo::run(args, output),
         Job::Demodulate(args) => cmd_demodulate::run(args, output, limits),
         Job::Track(args) => cmd_track::run(args, output, limits),
+        Job::Serve(args) => cmd_serve::run(args, output, limits),
         Job::Plan(args) => cmd_plan::run(args, output, limits),
         Job::FocalCheck(args) => cmd_focal_check::run(args, output, limits),
         Job::CalibrateInSitu(args) => cmd_calibrate_in_situ::run(args, output, limits),

@@ -69,6 +69,7 @@ mod base;
 mod calibration;
 mod dataset;
 mod frontend;
+mod live;
 mod psd_map;
 mod reports;
 mod signals;
@@ -109,6 +110,7 @@ pub use calibration::residuals::{ImageResiduals, Residual, ResidualTable};
 pub use dataset::data_set::{
     source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource,
 };
+pub use live::serve::{serve, ServeRequest, ServeSummary};
 pub use psd_map::from_scan::{
     parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, PSD_MAP_PAGE,
     RESIDUAL_MAP_CELLS, SCAN_SUMMARY_CELLS,
@@ -124,6 +126,7 @@ pub use signals::demodulate::{
     demodulate, DemodulateRequest, Demodulated, RecordOutcome, RecordStatus, MAX_RECORD_SAMPLES,
 };
 pub use signals::track::{track, TrackRequest, TrackSummary, TrackTarget};
+pub use signals::track_rig::LedFix;
 pub use simulation::demo::{demo, Demo, DemoParameter};
 pub use simulation::plan::{plan_poses, PlanRequest, Planned};
 pub use simulation::simulate::{

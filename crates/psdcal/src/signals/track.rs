@@ -279,7 +279,7 @@ fn sensor_rows(
 
 /// A stream's refusal as the facade's error: the options' fault or the
 /// header's in the words the stream gave.
-fn stream_error(e: IoError) -> Error {
+pub(crate) fn stream_error(e: IoError) -> Error {
     match e {
         IoError::Stream {
             fault: StreamFault::Options,

@@ -173,7 +173,9 @@ pub fn simulate_moving(request: &MovingRequest) -> Result<SimulatedMoving> {
         None => Error::Io(e),
     })?;
     let mut truth_rows = Table {
-        header: ["t_s", "led", "x_mm", "y_mm", "z_mm"].map(String::from).to_vec(),
+        header: ["t_s", "led", "x_mm", "y_mm", "z_mm"]
+            .map(String::from)
+            .to_vec(),
         rows: Vec::new(),
     };
     let steps = (request.duration_s * 100.0).round() as usize;

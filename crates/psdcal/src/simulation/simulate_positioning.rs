@@ -127,7 +127,8 @@ pub(crate) fn calibrated_sensor_files(
         },
         &LoadOptions::default(),
     )?;
-    let calibrated = crate::calibration::calibrate::calibrate(&set, &CalibrationOptions::default())?;
+    let calibrated =
+        crate::calibration::calibrate::calibrate(&set, &CalibrationOptions::default())?;
     calibrated.write(&set, &dir.join("calibration.json"), None)?;
     Ok(())
 }
