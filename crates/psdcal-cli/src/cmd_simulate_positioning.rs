@@ -47,7 +47,7 @@ pub struct PositioningArgs {
 }
 
 /// Runs `simulate-positioning`.
-pub fn run(a: &PositioningArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(a: &PositioningArgs, output: Output, force: bool) -> anyhow::Result<()> {
     if let Some(duration_s) = a.moving {
         let moving = psdcal::simulate_moving(&psdcal::MovingRequest {
             lens: a.lens,
@@ -57,6 +57,7 @@ pub fn run(a: &PositioningArgs, output: Output) -> anyhow::Result<()> {
             noise_v: psdcal::DEFAULT_MOVING_NOISE_V,
             seed: a.seed,
             out: a.out.clone(),
+            force,
         })?;
         let summary = psdcal::Summary::new(moving.text(&a.out), moving.to_json(&a.out));
         return crate::messages::emit(output, &summary);
@@ -75,6 +76,7 @@ pub fn run(a: &PositioningArgs, output: Output) -> anyhow::Result<()> {
         },
         seed: a.seed,
         out: a.out.clone(),
+        force,
     })?;
     let summary = psdcal::Summary::new(rig.text(&a.out), rig.to_json(&a.out));
     crate::messages::emit(output, &summary)

@@ -84,6 +84,7 @@ fn the_filter_beats_the_windows_and_its_covariance_covers() {
         noise_v: DEFAULT_MOVING_NOISE_V,
         seed: 3,
         out: d.to_path_buf(),
+        force: false,
     })
     .unwrap();
     let raw = track(d, TrackFilter::None);

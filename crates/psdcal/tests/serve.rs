@@ -37,6 +37,7 @@ fn the_stream_carries_the_rows_of_track() {
         noise_v: DEFAULT_MOVING_NOISE_V,
         seed: 4,
         out: d.to_path_buf(),
+        force: false,
     })
     .unwrap();
     let track = TrackRequest {

@@ -28,6 +28,9 @@ use crate::simulation::simulate_positioning::{calibrated_sensor_files, SENSOR_FI
 /// The recording's sample rate, Hz.
 pub const MOVING_SAMPLE_RATE_HZ: f64 = 20_000.0;
 
+/// The rig's files.
+const RIG_FILES: [&str; 4] = ["rig.json", "tones.csv", "raw.tdms", "truth_track.csv"];
+
 /// What to simulate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MovingRequest {
@@ -45,6 +48,9 @@ pub struct MovingRequest {
     pub seed: u64,
     /// Output folder (created if missing).
     pub out: PathBuf,
+    /// Replace files in `out` that psdcal did not write there
+    /// (docs/formats.md, "Output folders").
+    pub force: bool,
 }
 
 /// The default noise per channel, V: each window's (50 ms) intersection is
@@ -101,6 +107,11 @@ pub fn simulate_moving(request: &MovingRequest) -> Result<SimulatedMoving> {
         message: format!("cannot create the output folder {}: {e}", out.display()),
     })?;
     let scene = MovingScene::ceiling_corners();
+    let names: Vec<String> = (1..=scene.sensors.len())
+        .flat_map(|k| SENSOR_FILES.map(|f| format!("s{k}/{f}")))
+        .chain(RIG_FILES.map(String::from))
+        .collect();
+    let folder = psdcal_io::OutputFolder::claim(out, &names, request.force)?;
     let mut files = Vec::new();
     let mut sensors_json = Vec::new();
     let mut ids = Vec::new();
@@ -189,7 +200,8 @@ pub fn simulate_moving(request: &MovingRequest) -> Result<SimulatedMoving> {
         }
     }
     truth_rows.write_to(Some(&out.join("truth_track.csv")))?;
-    files.extend(["rig.json", "tones.csv", "raw.tdms", "truth_track.csv"].map(String::from));
+    files.extend(RIG_FILES.map(String::from));
+    folder.finish()?;
     Ok(SimulatedMoving {
         description: format!(
             "Simulated by psdcal {}: 4 sensors (lens {}) at the ceiling corners watching 2 LEDs \

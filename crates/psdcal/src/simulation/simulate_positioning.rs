@@ -45,6 +45,9 @@ pub struct PositioningRequest {
     pub seed: u64,
     /// Output folder (created if missing).
     pub out: PathBuf,
+    /// Replace files in `out` that psdcal did not write there
+    /// (docs/formats.md, "Output folders").
+    pub force: bool,
 }
 
 /// What was written.
@@ -118,6 +121,8 @@ pub(crate) fn calibrated_sensor_files(
         record_cycles,
         seed,
         out: dir.to_path_buf(),
+        // The caller claims the folder's files (`OutputFolder::claim`).
+        force: true,
     })?;
     let set = DataSet::from_files(
         &DataSetFiles {
@@ -142,6 +147,9 @@ pub(crate) const SENSOR_FILES: [&str; 5] = [
     "calibration.json",
 ];
 
+/// The rig's files.
+const RIG_FILES: [&str; 3] = ["rig.json", "rig_points.csv", "truth.csv"];
+
 /// Simulates, calibrates and writes the rig (module documentation).
 pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig> {
     let out = &request.out;
@@ -154,6 +162,11 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
     let mut rng = ChaCha8Rng::seed_from_u64(request.seed);
     rng.set_stream(1);
     let room = Room::draw(&request.room, &truth, &geometry, &mut rng)?;
+    let names: Vec<String> = (1..=room.sensors.len())
+        .flat_map(|k| SENSOR_FILES.map(|f| format!("s{k}/{f}")))
+        .chain(RIG_FILES.map(String::from))
+        .collect();
+    let folder = psdcal_io::OutputFolder::claim(out, &names, request.force)?;
     let mut files = Vec::new();
     let mut sensors_json = Vec::new();
     for (k, pose) in room.sensors.iter().enumerate() {
@@ -224,7 +237,8 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
     }
     points.write_to(Some(&out.join("rig_points.csv")))?;
     truth_rows.write_to(Some(&out.join("truth.csv")))?;
-    files.extend(["rig.json", "rig_points.csv", "truth.csv"].map(String::from));
+    files.extend(RIG_FILES.map(String::from));
+    folder.finish()?;
     let r = &request.room;
     Ok(SimulatedRig {
         description: format!(
