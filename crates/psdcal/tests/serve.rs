@@ -24,8 +24,29 @@ fn get(address: &str, path: &str) -> String {
     text
 }
 
+/// The lines of `/stream` up to the `end` event's data line. The viewer
+/// stops there, as the page does: an HTTP/1.1 connection asked without
+/// `Connection: close` stays open for a next request after the stream's
+/// response (tiny_http keeps it), so reading to the end of the connection
+/// would wait for the process to exit.
+fn stream_lines(address: &str) -> Vec<String> {
+    let mut s = TcpStream::connect(address).unwrap();
+    write!(s, "GET /stream HTTP/1.1\r\nHost: {address}\r\n\r\n").unwrap();
+    let mut lines = Vec::new();
+    let mut ended = false;
+    for line in BufReader::new(s).lines() {
+        let line = line.unwrap();
+        let done = ended && line.starts_with("data:");
+        ended |= line == "event: end";
+        lines.push(line);
+        if done {
+            break;
+        }
+    }
+    lines
+}
+
 #[test]
-#[ignore = "hangs: unfinished (see the h32 report); the CLI path works by hand"]
 fn the_stream_carries_the_rows_of_track() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -71,9 +92,7 @@ fn the_stream_carries_the_rows_of_track() {
         viewer = Some(std::thread::spawn(move || {
             let rig = get(&address, "/rig");
             let page = get(&address, "/");
-            let mut s = TcpStream::connect(&address).unwrap();
-            write!(s, "GET /stream HTTP/1.1\r\nHost: {address}\r\n\r\n").unwrap();
-            let lines: Vec<String> = BufReader::new(s).lines().map(Result::unwrap).collect();
+            let lines = stream_lines(&address);
             (rig, page, lines)
         }));
     })
