@@ -12,7 +12,9 @@
 //!   yy, yz, zz], `sensors`, `snr_db`, `status`, `per_sensor` [{`id`,
 //!   `snr_db`, `status`}], and `vx_mm_s`, `vy_mm_s`, `vz_mm_s` with a
 //!   filter; absent numbers are `null`), and `event: end` when the input is
-//!   done. The same rows as `track`'s: the same windows, filter and numbers.
+//!   done: a viewer stops there (tiny_http keeps an HTTP/1.1 connection
+//!   asked without `Connection: close` open for a next request). The same
+//!   rows as `track`'s: the same windows, filter and numbers.
 //!
 //! A viewer connecting late receives the last [`HISTORY`] events first.
 //! With `--realtime` a recording is replayed at its sample rate, from the
@@ -145,7 +147,10 @@ pub fn serve(
             continue;
         };
         summary.samples += 1;
-        if realtime && summary.samples % 64 == 0 {
+        // Paced every 64 samples and at each window's last sample, which is
+        // then read no earlier than due.
+        let last_of_window = windows.pending() + 1 == windows.window_len();
+        if realtime && (summary.samples % 64 == 0 || last_of_window) {
             let due = Duration::from_secs_f64(summary.samples as f64 / fs);
             if let Some(wait) = due.checked_sub(started.elapsed()) {
                 std::thread::sleep(wait);
