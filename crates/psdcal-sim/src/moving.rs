@@ -222,7 +222,7 @@ impl MovingPlan {
     ) -> Result<(), E> {
         let fs = self.sample_rate_hz;
         let bad = |m: String| E::from(SimError::Options(m));
-        if !(fs.is_finite() && fs > 0.0) || !(self.amplitude_at_1m_v > 0.0) {
+        if !(fs.is_finite() && fs > 0.0 && self.amplitude_at_1m_v > 0.0) {
             return Err(bad(format!(
                 "rate {fs} Hz, amplitude {} V",
                 self.amplitude_at_1m_v
