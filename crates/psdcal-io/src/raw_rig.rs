@@ -22,6 +22,7 @@ use crate::csv_table::{Col, CsvStream};
 use crate::error::IoError;
 use crate::location::Location;
 use crate::raw::{read_npy_preamble, NpyType, RawFormat};
+use crate::raw_csv::{rate_from_first_step, NO_RATE};
 use crate::raw_frame::{CHANNELS, RATE_TOLERANCE};
 
 /// The read buffer, bytes.
@@ -132,46 +133,30 @@ impl RigFrames {
         let header_line = head.header_line;
         let mut pending = Vec::new();
         let mut last_time = None;
-        let rate =
-            match (rate_hz, &time) {
-                (Some(rate), _) => rate,
-                (None, None) => return Err(structure(
+        let rate = match (rate_hz, &time) {
+            (Some(rate), _) => rate,
+            (None, None) => {
+                return Err(structure(
                     Location::line(source, header_line),
-                    "no t_s column and no --rate: expected a t_s column (seconds) or the sample \
-                     rate as --rate HZ"
-                        .to_string(),
-                )),
-                (None, Some(col)) => {
-                    let mut times = Vec::new();
-                    while times.len() < 2 {
-                        let Some(row) = stream.next_row()? else { break };
-                        times.push((stream.head.number(&row, col)?, row.line));
-                        for c in &cols {
-                            pending.push(stream.head.number(&row, c)?);
-                        }
+                    NO_RATE.to_string(),
+                ))
+            }
+            (None, Some(col)) => {
+                let mut times = Vec::new();
+                while times.len() < 2 {
+                    let Some(row) = stream.next_row()? else { break };
+                    times.push((stream.head.number(&row, col)?, row.line));
+                    for c in &cols {
+                        pending.push(stream.head.number(&row, c)?);
                     }
-                    let [(t0, _), (t1, line1)] = times.as_slice() else {
-                        return Err(structure(
-                            Location::line(source, header_line),
-                            "fewer than two rows: the sample rate cannot come from t_s; expected \
-                         more rows or --rate HZ"
-                                .to_string(),
-                        ));
-                    };
-                    let step = t1 - t0;
-                    if !(step > 0.0 && (1.0 / step).is_finite()) {
-                        return Err(structure(
-                            Location::line(source, *line1),
-                            format!(
-                                "t_s does not increase ({t0} then {t1}); expected uniformly \
-                             increasing times"
-                            ),
-                        ));
-                    }
-                    last_time = Some((*t1, *line1));
-                    1.0 / step
                 }
-            };
+                let (rate, last) = rate_from_first_step(&times).map_err(|(line, m)| {
+                    structure(Location::line(source, line.unwrap_or(header_line)), m)
+                })?;
+                last_time = Some(last);
+                rate
+            }
+        };
         let frames = RigFrames::Csv {
             stream: Box::new(stream),
             cols,

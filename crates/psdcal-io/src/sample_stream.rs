@@ -84,20 +84,31 @@ enum Source<R> {
         reader: Box<RawReader>,
         buffer: std::collections::VecDeque<[f64; 4]>,
     },
-    /// A rig's raw.csv or raw.npy.
+    /// A rig's raw.csv, raw.npy or raw.tdms.
     Rig {
-        reader: Box<RigFrames>,
+        reader: Box<dyn RigRows>,
         width: usize,
         buffer: Vec<f64>,
         next: usize,
     },
-    /// A rig's TDMS recording.
-    Tdms {
-        reader: Box<TdmsReader>,
-        width: usize,
-        buffer: Vec<f64>,
-        next: usize,
-    },
+}
+
+/// A rig's recording read in blocks of rows (`4 S` values each).
+trait RigRows {
+    /// Appends up to `max` rows to `out`; returns how many (0 at the end).
+    fn read_rows(&mut self, out: &mut Vec<f64>, max: usize) -> Result<usize>;
+}
+
+impl RigRows for RigFrames {
+    fn read_rows(&mut self, out: &mut Vec<f64>, max: usize) -> Result<usize> {
+        RigFrames::read_rows(self, out, max)
+    }
+}
+
+impl RigRows for TdmsReader {
+    fn read_rows(&mut self, out: &mut Vec<f64>, max: usize) -> Result<usize> {
+        TdmsReader::read_rows(self, out, max)
+    }
 }
 
 impl<R: BufRead> Source<R> {
@@ -178,11 +189,9 @@ impl<R: BufRead> Source<R> {
                 ))
             }
         };
-        let width = specs.len();
-        let reader = Box::new(reader);
-        let source = Source::Tdms {
-            reader,
-            width,
+        let source = Source::Rig {
+            reader: Box::new(reader),
+            width: specs.len(),
             buffer: Vec::new(),
             next: 0,
         };
@@ -201,23 +210,6 @@ impl<R: BufRead> Source<R> {
                 Ok(buffer.pop_front().map(|f| Sample::Values(f.to_vec())))
             }
             Source::Rig {
-                reader,
-                width,
-                buffer,
-                next,
-            } => {
-                if *next >= buffer.len() {
-                    buffer.clear();
-                    *next = 0;
-                    if reader.read_rows(buffer, BLOCK)? == 0 {
-                        return Ok(None);
-                    }
-                }
-                let row = buffer[*next..*next + *width].to_vec();
-                *next += *width;
-                Ok(Some(Sample::Values(row)))
-            }
-            Source::Tdms {
                 reader,
                 width,
                 buffer,

@@ -38,7 +38,7 @@ use psdcal_model::psd::impact_point_amplitude_jacobian;
 use psdcal_model::Amplitudes;
 use psdcal_signal::{RecordEstimate, SignalError};
 
-use crate::answer::locate::load_rig;
+use crate::answer::locate::{covariance_fields, load_rig};
 use crate::base::error::Result;
 use crate::base::table::num;
 
@@ -131,24 +131,15 @@ pub(crate) fn row_text(t0: f64, fix: &LedFix, velocity: bool) -> String {
     let sensors = sensors.join(";");
     let snr = fix.snr_db.map_or(String::new(), num);
     let mut row = match &fix.position {
-        Some((p, c)) => {
-            let sd = |v: f64| num(v.max(0.0).sqrt());
-            format!(
-                "{},{led},{sensors},{},{},{},{},{},{},{},{},{},{},{snr},{}",
-                num(t0),
-                num(p.x),
-                num(p.y),
-                num(p.z),
-                sd(c[(0, 0)]),
-                sd(c[(1, 1)]),
-                sd(c[(2, 2)]),
-                num(c[(0, 1)]),
-                num(c[(0, 2)]),
-                num(c[(1, 2)]),
-                sd(c.trace()),
-                fix.status
-            )
-        }
+        Some((p, c)) => format!(
+            "{},{led},{sensors},{},{},{},{},{snr},{}",
+            num(t0),
+            num(p.x),
+            num(p.y),
+            num(p.z),
+            covariance_fields(c).join(","),
+            fix.status
+        ),
         None => format!("{},{led},{sensors},,,,,,,,,,,{snr},{}", num(t0), fix.status),
     };
     if velocity {

@@ -23,7 +23,9 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::base::error::{Error, Result};
 use crate::base::table::{num, Table};
-use crate::simulation::simulate_positioning::{calibrated_sensor_files, SENSOR_FILES};
+use crate::simulation::simulate_positioning::{
+    calibrated_sensor_files, claim_rig_folder, SENSOR_FILES,
+};
 
 /// The recording's sample rate, Hz.
 pub const MOVING_SAMPLE_RATE_HZ: f64 = 20_000.0;
@@ -102,16 +104,8 @@ pub fn simulate_moving(request: &MovingRequest) -> Result<SimulatedMoving> {
             request.duration_s
         )));
     }
-    std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
-        path: out.clone(),
-        message: format!("cannot create the output folder {}: {e}", out.display()),
-    })?;
     let scene = MovingScene::ceiling_corners();
-    let names: Vec<String> = (1..=scene.sensors.len())
-        .flat_map(|k| SENSOR_FILES.map(|f| format!("s{k}/{f}")))
-        .chain(RIG_FILES.map(String::from))
-        .collect();
-    let folder = psdcal_io::OutputFolder::claim(out, &names, request.force)?;
+    let folder = claim_rig_folder(out, scene.sensors.len(), &RIG_FILES, request.force)?;
     let mut files = Vec::new();
     let mut sensors_json = Vec::new();
     let mut ids = Vec::new();

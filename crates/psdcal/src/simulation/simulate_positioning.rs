@@ -147,26 +147,39 @@ pub(crate) const SENSOR_FILES: [&str; 5] = [
     "calibration.json",
 ];
 
+/// Claims the files of a rig of `sensors` sensors in `out` (each sensor's
+/// [`SENSOR_FILES`] in `s<k>/`, and `rig_files`; `force`: any file) and
+/// creates the folder.
+pub(crate) fn claim_rig_folder(
+    out: &std::path::Path,
+    sensors: usize,
+    rig_files: &[&str],
+    force: bool,
+) -> Result<psdcal_io::OutputFolder> {
+    let names: Vec<String> = (1..=sensors)
+        .flat_map(|k| SENSOR_FILES.map(|f| format!("s{k}/{f}")))
+        .chain(rig_files.iter().map(|f| f.to_string()))
+        .collect();
+    let folder = psdcal_io::OutputFolder::claim(out, &names, force)?;
+    std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
+        path: out.to_path_buf(),
+        message: format!("cannot create the output folder {}: {e}", out.display()),
+    })?;
+    Ok(folder)
+}
+
 /// The rig's files.
 const RIG_FILES: [&str; 3] = ["rig.json", "rig_points.csv", "truth.csv"];
 
 /// Simulates, calibrates and writes the rig (module documentation).
 pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig> {
     let out = &request.out;
-    std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
-        path: out.clone(),
-        message: format!("cannot create the output folder {}: {e}", out.display()),
-    })?;
     let truth = request.lens.model();
     let geometry = PsdGeometry::default();
     let mut rng = ChaCha8Rng::seed_from_u64(request.seed);
     rng.set_stream(1);
     let room = Room::draw(&request.room, &truth, &geometry, &mut rng)?;
-    let names: Vec<String> = (1..=room.sensors.len())
-        .flat_map(|k| SENSOR_FILES.map(|f| format!("s{k}/{f}")))
-        .chain(RIG_FILES.map(String::from))
-        .collect();
-    let folder = psdcal_io::OutputFolder::claim(out, &names, request.force)?;
+    let folder = claim_rig_folder(out, room.sensors.len(), &RIG_FILES, request.force)?;
     let mut files = Vec::new();
     let mut sensors_json = Vec::new();
     for (k, pose) in room.sensors.iter().enumerate() {
