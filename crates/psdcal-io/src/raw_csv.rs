@@ -210,12 +210,15 @@ impl<R: BufRead> CsvFrames<R> {
 pub(crate) const NO_RATE: &str = "no t_s column and no --rate: expected a t_s column (seconds) \
                                   or the sample rate as --rate HZ";
 
-/// The sample rate from a recording's first two times `(t_s, line)`, and
-/// the second. Errors: `(line, message)`, without a line (the header's)
-/// when there are fewer than two rows.
-pub(crate) fn rate_from_first_step(
-    times: &[(f64, usize)],
-) -> Result<(f64, (f64, usize)), (Option<usize>, String)> {
+/// A time `t_s` and its line.
+pub(crate) type TimedLine = (f64, usize);
+
+/// Why the sample rate cannot come from `t_s`: the line at fault (none:
+/// the header's) and the message.
+pub(crate) type RateFault = (Option<usize>, String);
+
+/// The sample rate from a recording's first two times, and the second.
+pub(crate) fn rate_from_first_step(times: &[TimedLine]) -> Result<(f64, TimedLine), RateFault> {
     let [(t0, _), (t1, line1)] = times else {
         return Err((
             None,
