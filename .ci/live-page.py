@@ -14,6 +14,7 @@ import fcntl
 import json
 import os
 import queue
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -142,6 +143,7 @@ finally:
     except subprocess.TimeoutExpired:
         chrome.kill()
         chrome.wait()
+    shutil.rmtree(profile, ignore_errors=True)
 
 for k, png in enumerate(shots, 1):
     with open(f"{prefix}-{k}.png", "wb") as f:
