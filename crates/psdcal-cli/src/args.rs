@@ -35,7 +35,7 @@ pub struct DataSetArgs {
 }
 
 /// Calibrate a sensor from images of an LED template (adapted Zhang method + Levenberg-Marquardt)
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 pub struct CalibrateArgs {
     #[command(flatten)]
     pub data: DataSetArgs,

@@ -33,7 +33,7 @@ pub struct Cli {
 }
 
 /// The subcommands (each one's arguments built only when it is invoked).
-#[derive(Debug, Subcommand)]
+#[derive(Debug, Clone, PartialEq, Subcommand)]
 #[command(defer = true)]
 pub enum Command {
     /// Validate a calibration data set and summarise images, points and sensor coverage
@@ -90,6 +90,8 @@ pub enum Command {
     /// Angles of arrival per window and LED from raw samples on standard input (live)
     #[command(after_help = include_str!("../help/track.txt"))]
     Track(crate::cmd_track::TrackArgs),
+    /// A rig's positions live in the browser: a 3-D page, /stream (Server-Sent Events) and /rig
+    Serve(crate::cmd_serve::ServeArgs),
     /// A calibration as an OpenCV, mrcal or ROS camera model (fitted, with its error)
     #[command(after_help = include_str!("../help/export.txt"))]
     Export(crate::cmd_export::ExportArgs),
@@ -107,28 +109,15 @@ pub enum Command {
 /// What to run.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Job {
-    Gains(crate::cmd_gains::GainsArgs),
-    PsdMap(crate::cmd_psd_map::PsdMapArgs),
-    SimulateScan(crate::cmd_simulate_scan::SimulateScanArgs),
-    Simulate(crate::cli_sim::SimulateArgs),
+    /// A command run as parsed.
+    Plain(Command),
     Study(psdcal::StudyRequest),
-    Demo(crate::cli_sim::DemoArgs),
     Check(DataSetFiles, LoadOptions),
     Calibrate(CalibrateConfig),
     Correct(CorrectArgs),
     Aoa(crate::cli_locate::AoaArgs),
     Locate(crate::cli_locate::LocateConfig),
     Map(psdcal::MapRequest, Option<PathBuf>),
-    Report(crate::cmd_report::ReportArgs),
-    Evaluate(crate::cmd_evaluate::EvaluateArgs),
-    SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
-    Demodulate(crate::cmd_demodulate::DemodulateArgs),
-    Track(crate::cmd_track::TrackArgs),
-    Export(crate::cmd_export::ExportArgs),
-    Diff(crate::cmd_diff::DiffArgs),
-    Plan(crate::cmd_plan::PlanArgs),
-    FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
-    CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
 }
 
 impl Cli {
@@ -154,12 +143,7 @@ impl Cli {
                 let (files, load) = args.into_files(None, limits)?;
                 Job::Check(files, load)
             }
-            Command::Gains(args) => Job::Gains(args),
-            Command::PsdMap(args) => Job::PsdMap(args),
-            Command::SimulateScan(args) => Job::SimulateScan(args),
-            Command::Simulate(args) => Job::Simulate(args),
             Command::Study(args) => Job::Study(args.into_config(self.force)),
-            Command::Demo(args) => Job::Demo(args),
             Command::Aoa(args) => {
                 crate::cli_locate::json_needs_out("aoa", &args.out, output)?;
                 Job::Aoa(args)
@@ -169,16 +153,6 @@ impl Cli {
                 let (request, out) = args.into_config(output, limits)?;
                 Job::Map(request, out)
             }
-            Command::Report(args) => Job::Report(args),
-            Command::Evaluate(args) => Job::Evaluate(args),
-            Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
-            Command::Demodulate(args) => Job::Demodulate(args),
-            Command::Track(args) => Job::Track(args),
-            Command::Export(args) => Job::Export(args),
-            Command::Diff(args) => Job::Diff(args),
-            Command::Plan(args) => Job::Plan(args),
-            Command::FocalCheck(args) => Job::FocalCheck(args),
-            Command::CalibrateInSitu(args) => Job::CalibrateInSitu(args),
             Command::Calibrate(args) => {
                 let (files, load) = args.data.into_files(args.gains, limits)?;
                 let FitList(free, fit_gains) = args.fit;
@@ -216,6 +190,7 @@ impl Cli {
                 crate::cli_locate::json_needs_out("correct", &args.out, output)?;
                 Job::Correct(args)
             }
+            command => Job::Plain(command),
         };
         Ok((output, job))
     }

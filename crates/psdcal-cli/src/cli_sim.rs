@@ -62,7 +62,7 @@ pub struct SimulateArgs {
 }
 
 /// Run the paper's Monte Carlo evaluation (Tables 1-10, Figure 9) next to the paper's numbers
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 pub struct StudyArgs {
     /// Tables to run: table1 ... table10, fig9, psdmap (the PSD map's condition), or all
     #[arg(value_name = "TABLE", default_value = "all", value_parser = psdcal::parse_study_id)]

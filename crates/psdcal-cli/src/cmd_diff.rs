@@ -6,6 +6,8 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::messages::Output;
+use anyhow::Result;
+use psdcal::ReadLimits;
 
 /// Two calibrations of one sensor compared in angles over the active area (did it drift?)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -28,12 +30,7 @@ pub struct DiffArgs {
 }
 
 /// Runs `diff`.
-pub fn run(
-    args: &DiffArgs,
-    output: Output,
-    limits: psdcal::ReadLimits,
-    force: bool,
-) -> anyhow::Result<()> {
+pub fn run(args: &DiffArgs, output: Output, limits: ReadLimits, force: bool) -> Result<()> {
     let done = psdcal::diff(&psdcal::DiffRequest {
         a: args.a.clone(),
         b: args.b.clone(),

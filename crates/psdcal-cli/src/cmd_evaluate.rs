@@ -6,6 +6,8 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::messages::Output;
+use anyhow::Result;
+use psdcal::ReadLimits;
 
 /// Judge estimated positions against a surveyed truth (mean, RMS, 75th/95th percentiles, CE95, SE95, honest error bars)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -25,12 +27,7 @@ pub struct EvaluateArgs {
 }
 
 /// Runs `evaluate`.
-pub fn run(
-    args: &EvaluateArgs,
-    output: Output,
-    limits: psdcal::ReadLimits,
-    force: bool,
-) -> anyhow::Result<()> {
+pub fn run(args: &EvaluateArgs, output: Output, limits: ReadLimits, force: bool) -> Result<()> {
     let evaluation = psdcal::evaluate(&psdcal::EvaluateRequest {
         truth: args.truth.clone(),
         estimates: args.estimates.clone(),

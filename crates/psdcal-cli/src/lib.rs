@@ -29,6 +29,7 @@ mod cmd_map;
 pub mod cmd_plan;
 pub mod cmd_psd_map;
 pub mod cmd_report;
+pub mod cmd_serve;
 mod cmd_simulate;
 pub mod cmd_simulate_positioning;
 pub mod cmd_simulate_scan;
@@ -41,6 +42,7 @@ use std::process::ExitCode;
 
 use clap::{CommandFactory, FromArgMatches};
 
+use crate::cli::Command::*;
 use crate::cli::{Cli, Job};
 
 /// Parses the arguments, runs the job and prints; the process's exit code.
@@ -67,26 +69,29 @@ pub fn main() -> ExitCode {
     let result = match &job {
         Job::Check(files, load) => cmd_check::run(files, load, output),
         Job::Calibrate(config) => cmd_calibrate::run(config, output),
-        Job::Gains(args) => cmd_gains::run(args, output, limits),
-        Job::PsdMap(args) => cmd_psd_map::run(args, output, limits, force),
-        Job::SimulateScan(args) => cmd_simulate_scan::run(args, output),
-        Job::Simulate(args) => cmd_simulate::run(args, output, limits, force),
+        Job::Plain(Gains(args)) => cmd_gains::run(args, output, limits),
+        Job::Plain(PsdMap(args)) => cmd_psd_map::run(args, output, limits, force),
+        Job::Plain(SimulateScan(args)) => cmd_simulate_scan::run(args, output),
+        Job::Plain(Simulate(args)) => cmd_simulate::run(args, output, limits, force),
         Job::Study(config) => cmd_study::run(config, output),
-        Job::Demo(args) => cmd_demo::run(args, output),
-        Job::Demodulate(args) => cmd_demodulate::run(args, output, limits),
-        Job::Track(args) => cmd_track::run(args, output, limits),
-        Job::Plan(args) => cmd_plan::run(args, output, limits, force),
-        Job::FocalCheck(args) => cmd_focal_check::run(args, output, limits),
-        Job::CalibrateInSitu(args) => cmd_calibrate_in_situ::run(args, output, limits),
+        Job::Plain(Demo(args)) => cmd_demo::run(args, output),
+        Job::Plain(Demodulate(args)) => cmd_demodulate::run(args, output, limits),
+        Job::Plain(Track(args)) => cmd_track::run(args, output, limits),
+        Job::Plain(Serve(args)) => cmd_serve::run(args, output, limits),
+        Job::Plain(Plan(args)) => cmd_plan::run(args, output, limits, force),
+        Job::Plain(FocalCheck(args)) => cmd_focal_check::run(args, output, limits),
+        Job::Plain(CalibrateInSitu(args)) => cmd_calibrate_in_situ::run(args, output, limits),
         Job::Correct(config) => cmd_correct::run(config, output, limits),
         Job::Aoa(config) => cmd_aoa::run(config, output, limits),
         Job::Locate(config) => cmd_locate::run(config, output, limits),
         Job::Map(request, out) => cmd_map::run(request, out.as_deref(), output),
-        Job::Report(config) => cmd_report::run(config, output, limits, force),
-        Job::Evaluate(args) => cmd_evaluate::run(args, output, limits, force),
-        Job::SimulatePositioning(args) => cmd_simulate_positioning::run(args, output, force),
-        Job::Export(args) => cmd_export::run(args, output, limits),
-        Job::Diff(args) => cmd_diff::run(args, output, limits, force),
+        Job::Plain(Report(config)) => cmd_report::run(config, output, limits, force),
+        Job::Plain(Evaluate(args)) => cmd_evaluate::run(args, output, limits, force),
+        Job::Plain(SimulatePositioning(args)) => cmd_simulate_positioning::run(args, output, force),
+        Job::Plain(Export(args)) => cmd_export::run(args, output, limits),
+        Job::Plain(Diff(args)) => cmd_diff::run(args, output, limits, force),
+        // Commands with their own job were turned into it by `into_job`.
+        Job::Plain(_) => unreachable!("every command's job is dispatched above"),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -66,6 +66,21 @@ fn folder_outputs_replace_only_psdcal_s_own_files() {
     assert!(out.status.success(), "{}", stderr(&out));
     let out = psdcal(["report", "-q", "-c", s(&c), "--out", s(&report)]);
     assert!(out.status.success(), "{}", stderr(&out));
+
+    // simulate-positioning --moving: its recording is refused before any file.
+    let moving = dir.path().join("moving");
+    fs::create_dir(&moving).unwrap();
+    fs::write(moving.join("raw.tdms"), b"mine").unwrap();
+    let out = psdcal([
+        "simulate-positioning",
+        "-q",
+        "--moving",
+        "0.2",
+        "--out",
+        s(&moving),
+    ]);
+    assert_refused(&out, &moving.join("raw.tdms"), b"mine");
+    assert!(!moving.join("rig.json").exists());
 }
 
 #[test]

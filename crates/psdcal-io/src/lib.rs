@@ -62,6 +62,7 @@ mod psd_map_file;
 mod raw;
 mod raw_csv;
 mod raw_frame;
+mod raw_rig;
 mod rig;
 mod rig_observations;
 mod same_file;
@@ -113,7 +114,8 @@ pub use psd_map_file::{
     MapResidualsRecord, PsdMapFile, PSD_MAP_FORMAT, PSD_MAP_VERSION,
 };
 pub use raw::{
-    npy_header, write_csv_frames, write_npy_frames, RawFormat, RawReader, RAW_CSV_HEADER,
+    npy_header, npy_header_columns, write_csv_frames, write_npy_frames, RawFormat, RawReader,
+    RAW_CSV_HEADER,
 };
 pub use raw_frame::{Frame, RATE_TOLERANCE};
 pub use rig::{

@@ -69,6 +69,7 @@ mod base;
 mod calibration;
 mod dataset;
 mod frontend;
+mod live;
 mod psd_map;
 mod reports;
 mod signals;
@@ -110,6 +111,7 @@ pub use calibration::residuals::{ImageResiduals, Residual, ResidualTable};
 pub use dataset::data_set::{
     source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource,
 };
+pub use live::serve::{serve, ServeRequest, ServeSummary};
 pub use psd_map::from_scan::{
     parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, PSD_MAP_PAGE,
     RESIDUAL_MAP_CELLS, SCAN_SUMMARY_CELLS,
@@ -125,12 +127,16 @@ pub use signals::demodulate::{
     demodulate, DemodulateRequest, Demodulated, RecordOutcome, RecordStatus, MAX_RECORD_SAMPLES,
 };
 pub use signals::track::{track, TrackRequest, TrackSummary, TrackTarget};
+pub use signals::track_rig::LedFix;
 pub use simulation::demo::{demo, Demo, DemoParameter};
 pub use simulation::plan::{plan_poses, PlanRequest, Planned};
 pub use simulation::simulate::{
     chain_with_record, parse_record_cycles, record_cycles_flag, simulate_data, simulate_files,
     simulate_files_at_poses, transient_cycles, SimulateRequest, SimulatedData, SimulatedFiles,
     DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
+};
+pub use simulation::simulate_moving::{
+    simulate_moving, MovingRequest, SimulatedMoving, DEFAULT_MOVING_NOISE_V, MOVING_SAMPLE_RATE_HZ,
 };
 pub use simulation::simulate_positioning::{
     simulate_positioning, PositioningRequest, SimulatedRig,
@@ -151,6 +157,7 @@ pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, ReadLimits, Warning};
 pub use psdcal_locate::LocateError;
 pub use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, Plane, MAX_GRID};
+pub use psdcal_locate::{CvOptions, TrackFilter};
 pub use psdcal_model::{Diagnostic, DiagnosticCode, Severity};
 pub use psdcal_model::{Param, PsdGeometry};
 pub use psdcal_sim::room::RoomOptions;
