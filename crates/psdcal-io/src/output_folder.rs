@@ -24,7 +24,7 @@
 //! checks its names only once the first has written and recorded its
 //! files, and finds them psdcal's. Claims of one folder by one thread share
 //! its lock (a run writing two sets of outputs into the same folder); other
-//! threads and processes wait, up to [`LOCK_WAIT`], then get an error.
+//! threads and processes wait, up to 120 s, then get an error.
 
 use std::collections::BTreeMap;
 use std::fs::{self, File};
@@ -73,7 +73,7 @@ impl OutputFolder {
     ///
     /// Errors: [`IoError::NotOurs`] naming the first file that would be lost;
     /// [`IoError::Write`] when the folder cannot be created or stays locked
-    /// by another run for [`LOCK_WAIT`].
+    /// by another run for 120 s.
     pub fn claim(dir: &Path, names: &[String], force: bool) -> Result<OutputFolder, IoError> {
         let folder = OutputFolder {
             dir: dir.to_path_buf(),
