@@ -17,6 +17,7 @@ mod error;
 pub mod insitu;
 pub mod nonlinearity;
 pub mod raw;
+pub mod network_room;
 pub mod room;
 pub mod scan;
 pub mod scenario;
