@@ -42,6 +42,10 @@ pub enum Command {
     /// Calibrate a mounted sensor in situ from emitters at surveyed 3-D positions (its pose in the room too)
     #[command(after_help = include_str!("../help/calibrate_in_situ.txt"))]
     CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
+    /// Calibrate a room of sensors from a waved wand: every pose and lens, no surveyed emitters (rig.json)
+    CalibrateNetwork(psdcal::NetworkRequest),
+    /// Simulate a room of sensors, a waved wand, a static frame and test emitters
+    SimulateNetwork(psdcal::NetworkSimRequest),
     /// Simulate a calibration data set through the whole signal chain
     #[command(after_help = include_str!("../help/simulate.txt"))]
     Simulate(crate::cli_sim::SimulateArgs),
@@ -126,6 +130,8 @@ pub enum Job {
     Plan(crate::cmd_plan::PlanArgs),
     FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
     CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
+    CalibrateNetwork(psdcal::NetworkRequest),
+    SimulateNetwork(psdcal::NetworkSimRequest),
 }
 
 impl Cli {
@@ -176,6 +182,8 @@ impl Cli {
             Command::Plan(args) => Job::Plan(args),
             Command::FocalCheck(args) => Job::FocalCheck(args),
             Command::CalibrateInSitu(args) => Job::CalibrateInSitu(args),
+            Command::CalibrateNetwork(args) => Job::CalibrateNetwork(args),
+            Command::SimulateNetwork(args) => Job::SimulateNetwork(args),
             Command::Calibrate(args) => {
                 let (files, load) = args.data.into_files(args.gains, limits)?;
                 let FitList(free, fit_gains) = args.fit;

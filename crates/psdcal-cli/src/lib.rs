@@ -13,6 +13,7 @@ pub mod cli_sim;
 mod cmd_aoa;
 mod cmd_calibrate;
 pub mod cmd_calibrate_in_situ;
+pub mod cmd_network;
 mod cmd_check;
 mod cmd_correct;
 mod cmd_demo;
@@ -76,6 +77,8 @@ pub fn main() -> ExitCode {
         Job::Plan(args) => cmd_plan::run(args, output, limits),
         Job::FocalCheck(args) => cmd_focal_check::run(args, output, limits),
         Job::CalibrateInSitu(args) => cmd_calibrate_in_situ::run(args, output, limits),
+        Job::CalibrateNetwork(args) => cmd_network::run(args, output, limits),
+        Job::SimulateNetwork(args) => cmd_network::simulate(args, output),
         Job::Correct(config) => cmd_correct::run(config, output, limits),
         Job::Aoa(config) => cmd_aoa::run(config, output, limits),
         Job::Locate(config) => cmd_locate::run(config, output, limits),

@@ -62,6 +62,7 @@ mod raw;
 mod raw_csv;
 mod raw_frame;
 mod rig;
+mod network_files;
 mod rig_observations;
 mod same_file;
 mod sample_stream;
@@ -117,6 +118,7 @@ pub use raw_frame::{Frame, RATE_TOLERANCE};
 pub use rig::{
     read_rig, read_rig_with, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION,
 };
+pub use network_files::{LedPositions, NetworkPointRow, NetworkPoints, NetworkSensorRow, NetworkSensors};
 pub use rig_observations::{RigObservation, RigObservations};
 pub use same_file::refuse_overwrite;
 pub use sample_stream::{Sample, SampleSource};

@@ -79,6 +79,15 @@ pub struct SensorEstimate {
     pub lens_covariance: DMatrix<f64>,
     /// Sightings used.
     pub points: usize,
+    /// Σ‖r‖² of its sightings' image-plane errors, mm².
+    pub residual_mm2: f64,
+}
+
+impl SensorEstimate {
+    /// RMS image-plane error of its sightings, mm (per point, both axes).
+    pub fn rms_image_mm(&self) -> f64 {
+        (self.residual_mm2 / self.points.max(1) as f64).sqrt()
+    }
 }
 
 /// The calibrated network.
@@ -133,10 +142,27 @@ pub fn calibrate_network(
     }
     let a = adjust(data, &s.sensors, &s.wands, &options.adjust)?;
     let mut points = vec![0usize; data.sensors.len()];
-    for obs in a.by_block.iter().chain(std::iter::once(&a.statics)) {
+    let mut residual = vec![0.0; data.sensors.len()];
+    let problem = crate::problem::NetworkProblem::new(
+        data,
+        &a.layout,
+        a.by_block.clone(),
+        a.statics.clone(),
+        a.sigma_mm,
+        &a.state.wands,
+        &a.state.models,
+    )?;
+    for (b, obs) in a.by_block.iter().enumerate() {
         for &k in obs {
-            points[data.observations[k].sensor] += 1;
+            let s = data.observations[k].sensor;
+            points[s] += 1;
+            residual[s] += problem.residual_mm(&a.state, Some(b), k).map_or(0.0, |r| r.norm_squared());
         }
+    }
+    for &k in &a.statics {
+        let s = data.observations[k].sensor;
+        points[s] += 1;
+        residual[s] += problem.residual_mm(&a.state, None, k).map_or(0.0, |r| r.norm_squared());
     }
     let sensors = (0..data.sensors.len())
         .map(|k| {
@@ -165,6 +191,7 @@ pub fn calibrate_network(
                 lens_names: data.sensors[k].prior_names.clone(),
                 lens_covariance,
                 points: points[k],
+                residual_mm2: residual[k],
             }
         })
         .collect::<Vec<_>>();

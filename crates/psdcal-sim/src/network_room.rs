@@ -24,7 +24,7 @@
 //! docs/model.md §6) and the balanced formula (§1). A fraction of frames is
 //! corrupted: one sighting is replaced by a point anywhere on the area (a
 //! reflection or a wrong LED). The static frame's LEDs lie on the floor,
-//! each seen once by every sensor that sees it. Test emitters are drawn in
+//! measured by every sensor that sees them every [`STATIC_EVERY`] frames. Test emitters are drawn in
 //! the same volume as the wand and kept when seen by two sensors or more.
 //!
 //! Draw order (ChaCha8 from the caller): sensors (place, aim, roll, lens,
@@ -42,6 +42,9 @@ use rand_distr::{Distribution, StandardNormal};
 use crate::room::true_impact;
 use crate::signal::SignalChain;
 use crate::SimError;
+
+/// The static frame is measured once every this many frames.
+pub const STATIC_EVERY: usize = 25;
 
 /// What to simulate.
 #[derive(Debug, Clone, PartialEq)]
@@ -338,10 +341,12 @@ impl NetworkRoom {
                 bad_frames.push(f);
             }
         }
-        for (l, p) in frame_leds.iter().enumerate() {
-            for s in 0..o.sensors {
-                if let Some((_, measured)) = see(s, p, rng)? {
-                    sightings.push(RoomSighting { frame: 0, sensor: s, led: RoomLed::Frame(l), measured });
+        for f in (0..frames).step_by(STATIC_EVERY) {
+            for (l, p) in frame_leds.iter().enumerate() {
+                for s in 0..o.sensors {
+                    if let Some((_, measured)) = see(s, p, rng)? {
+                        sightings.push(RoomSighting { frame: f, sensor: s, led: RoomLed::Frame(l), measured });
+                    }
                 }
             }
         }

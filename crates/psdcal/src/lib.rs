@@ -69,6 +69,7 @@ mod base;
 mod calibration;
 mod dataset;
 mod frontend;
+mod network;
 mod psd_map;
 mod reports;
 mod signals;
@@ -76,6 +77,10 @@ mod simulation;
 mod study;
 
 pub use base::option_text;
+pub use network::calibrate_network::{calibrate_network_files, NetworkCalibrated, NetworkRequest};
+pub use network::network_input::{read_network, NetworkFiles, NetworkInput};
+pub use network::network_page::network_page;
+pub use network::simulate_network::{simulate_network, NetworkSimRequest};
 pub use frontend::arrays;
 
 pub use answer::aoa::{aoa_table, measurement, AoaTable};

@@ -8,7 +8,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 /// The folders, lowest first: each may import from those before it.
-const LAYERS: [&str; 10] = [
+const LAYERS: [&str; 11] = [
     "base",
     "dataset",
     "psd_map",
@@ -17,6 +17,7 @@ const LAYERS: [&str; 10] = [
     "signals",
     "simulation",
     "reports",
+    "network",
     "study",
     "frontend",
 ];
