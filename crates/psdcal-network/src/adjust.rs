@@ -191,8 +191,8 @@ pub fn adjust(
     let mut iterations = 0;
     let robust = SolverOptions {
         max_iterations: options.max_iterations,
-        cost_tolerance: 1e-6,
-        step_tolerance: 1e-8,
+        cost_tolerance: 1e-4,
+        step_tolerance: 1e-6,
         robust: Some(RobustLoss::Cauchy {
             scale: options.robust_sigma,
         }),

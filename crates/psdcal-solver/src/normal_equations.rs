@@ -42,6 +42,9 @@ pub struct NormalEquations {
     pub w: Vec<DMatrix<f64>>,
     /// Per image: `g_i = Σ Bᵀ r`.
     pub g_b: Vec<Vector6<f64>>,
+    /// Whether terms came through [`Self::add_columns`]: each `W_i` then
+    /// has few non-zero rows, and [`Self::solve`] skips the others.
+    pub sparse_rows: bool,
 }
 
 /// One residual's contribution: `d` rows (`r.len()`), its Jacobian with
@@ -227,6 +230,7 @@ impl NormalEquations {
     /// global columns `columns` only (the others are zero): the same sums
     /// over the non-zero entries, `O(d k²)` instead of `O(d p²)`.
     pub fn add_columns(&mut self, weight: f64, term: &ResidualTerm<'_>, columns: &[usize]) {
+        self.sparse_rows = true;
         let d = term.r.len();
         if d == 2 && columns.len() <= SPLIT_COLUMNS {
             return self.add_columns_pair(weight, term, columns);
@@ -330,6 +334,7 @@ impl NormalEquations {
             v: vec![Matrix6::zeros(); n],
             w: vec![DMatrix::zeros(p, 6); n],
             g_b: vec![Vector6::zeros(); n],
+            sparse_rows: false,
         }
     }
 
@@ -350,7 +355,9 @@ impl NormalEquations {
                 vi[(k, k)] += 1e-12 * lambda.max(1e-12) * (1.0 + vi[(k, k)]);
             }
             let inv = vi.cholesky()?.inverse();
-            if p > 0 {
+            if p > 0 && self.sparse_rows {
+                subtract_sparse(&mut s, &mut rhs, &self.w[i], &inv, &self.g_b[i]);
+            } else if p > 0 {
                 let wv = &self.w[i] * inv;
                 s -= &wv * self.w[i].transpose();
                 rhs += &wv * self.g_b[i];
@@ -442,6 +449,43 @@ impl NormalEquations {
             }
         }
         Some(s)
+    }
+}
+
+/// `S −= W V⁻¹ Wᵀ`, `rhs += W V⁻¹ g` over the non-zero rows of `W` only
+/// (upper triangle computed, mirrored: `S` stays exactly symmetric).
+fn subtract_sparse(
+    s: &mut DMatrix<f64>,
+    rhs: &mut DVector<f64>,
+    w: &DMatrix<f64>,
+    inv: &Matrix6<f64>,
+    g: &Vector6<f64>,
+) {
+    let p = w.nrows();
+    let ws = w.as_slice();
+    let mut rows: Vec<(usize, [f64; 6], [f64; 6])> = Vec::with_capacity(p);
+    for j in 0..p {
+        let wj: [f64; 6] = std::array::from_fn(|c| ws[c * p + j]);
+        if wj.iter().any(|v| *v != 0.0) {
+            let xj: [f64; 6] = std::array::from_fn(|c| {
+                let col = inv.column(c);
+                wj[0] * col[0] + wj[1] * col[1] + wj[2] * col[2] + wj[3] * col[3] + wj[4] * col[4] + wj[5] * col[5]
+            });
+            rows.push((j, wj, xj));
+        }
+    }
+    let dot = |a: &[f64; 6], b: &[f64; 6]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5];
+    let ss = s.as_mut_slice();
+    let gs: [f64; 6] = std::array::from_fn(|c| g[c]);
+    for (a, (j, _, xj)) in rows.iter().enumerate() {
+        rhs[*j] += dot(xj, &gs);
+        for (k, wk, _) in &rows[a..] {
+            let v = dot(xj, wk);
+            ss[k * p + j] -= v;
+            if j != k {
+                ss[j * p + k] -= v;
+            }
+        }
     }
 }
 
