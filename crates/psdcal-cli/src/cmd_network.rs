@@ -4,7 +4,11 @@
 use crate::messages::Output;
 
 /// Runs `calibrate-network`.
-pub fn run(request: &psdcal::NetworkRequest, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(
+    request: &psdcal::NetworkRequest,
+    output: Output,
+    limits: psdcal::ReadLimits,
+) -> anyhow::Result<()> {
     let calibrated = psdcal::calibrate_network_files(request, limits)?;
     let argv: Vec<String> = std::env::args().collect();
     calibrated.write(&argv.join(" "))?;

@@ -52,6 +52,7 @@ mod export;
 mod gains_file;
 mod limits;
 mod location;
+mod network_files;
 mod number_text;
 mod observations;
 mod points;
@@ -62,7 +63,6 @@ mod raw;
 mod raw_csv;
 mod raw_frame;
 mod rig;
-mod network_files;
 mod rig_observations;
 mod same_file;
 mod sample_stream;
@@ -101,6 +101,9 @@ pub use limits::{
     MAX_LINE_BYTES,
 };
 pub use location::Location;
+pub use network_files::{
+    LedPositions, NetworkPointRow, NetworkPoints, NetworkSensorRow, NetworkSensors,
+};
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
@@ -118,7 +121,6 @@ pub use raw_frame::{Frame, RATE_TOLERANCE};
 pub use rig::{
     read_rig, read_rig_with, PoseFrame, RigFile, RigSensorRecord, RIG_FORMAT, RIG_VERSION,
 };
-pub use network_files::{LedPositions, NetworkPointRow, NetworkPoints, NetworkSensorRow, NetworkSensors};
 pub use rig_observations::{RigObservation, RigObservations};
 pub use same_file::refuse_overwrite;
 pub use sample_stream::{Sample, SampleSource};

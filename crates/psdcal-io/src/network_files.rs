@@ -93,7 +93,11 @@ impl LedPositions {
     pub fn read_with(path: &Path, limits: ReadLimits) -> Result<Self, IoError> {
         let table = CsvTable::read_path(path, "led, X_mm, Y_mm, Z_mm", limits)?;
         let led = table.column("led")?;
-        let cols = [table.column("X_mm")?, table.column("Y_mm")?, table.column("Z_mm")?];
+        let cols = [
+            table.column("X_mm")?,
+            table.column("Y_mm")?,
+            table.column("Z_mm")?,
+        ];
         table.require_rows()?;
         let (mut names, mut positions) = (Vec::new(), Vec::new());
         let mut first: HashMap<String, usize> = HashMap::new();

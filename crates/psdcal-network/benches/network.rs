@@ -5,7 +5,9 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use psdcal_model::Model;
-use psdcal_network::{calibrate_network, Led, NetworkData, NetworkObservation, NetworkOptions, NetworkSensor};
+use psdcal_network::{
+    calibrate_network, Led, NetworkData, NetworkObservation, NetworkOptions, NetworkSensor,
+};
 use psdcal_sim::network_room::{NetworkRoom, NetworkRoomOptions, RoomLed};
 use psdcal_sim::{ChainConfig, SignalChain};
 use rand::SeedableRng;
@@ -14,7 +16,10 @@ use rand_chacha::ChaCha8Rng;
 fn data(seconds: f64) -> NetworkData {
     let chain = SignalChain::new(ChainConfig::default()).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(1);
-    let options = NetworkRoomOptions { duration_s: seconds, ..NetworkRoomOptions::default() };
+    let options = NetworkRoomOptions {
+        duration_s: seconds,
+        ..NetworkRoomOptions::default()
+    };
     let room = NetworkRoom::simulate(&options, &chain, &mut rng).unwrap();
     NetworkData {
         sensors: room
@@ -32,7 +37,9 @@ fn data(seconds: f64) -> NetworkData {
         wand: room.wand.clone(),
         wand_names: vec!["w1".into(), "w2".into(), "w3".into()],
         frame_leds: room.frame_leds.clone(),
-        frame_names: (1..=room.frame_leds.len()).map(|k| format!("L{k}")).collect(),
+        frame_names: (1..=room.frame_leds.len())
+            .map(|k| format!("L{k}"))
+            .collect(),
         frames: (0..room.wand_poses.len()).map(|f| f.to_string()).collect(),
         observations: room
             .sightings

@@ -15,7 +15,9 @@
 
 use nalgebra::{DMatrix, Vector2};
 use psdcal_model::Pose;
-use psdcal_solver::solver::{normal_equations as linearize, solve, RobustLoss, SolverOptions, SolverReport};
+use psdcal_solver::solver::{
+    normal_equations as linearize, solve, RobustLoss, SolverOptions, SolverReport,
+};
 
 use crate::data::{Led, NetworkData};
 use crate::problem::{Layout, NetworkProblem, NetworkState};
@@ -88,7 +90,12 @@ struct Blocks {
 
 impl Blocks {
     /// Drops the blocks flagged `bad` (and their wand poses in `state`).
-    fn drop_flagged(&mut self, bad: &[bool], state: &mut NetworkState, dropped: &mut Vec<(usize, DropReason)>) {
+    fn drop_flagged(
+        &mut self,
+        bad: &[bool],
+        state: &mut NetworkState,
+        dropped: &mut Vec<(usize, DropReason)>,
+    ) {
         let mut k = 0;
         let mut keep = |_: &_| {
             k += 1;
@@ -142,7 +149,10 @@ pub fn adjust(
     let mut state = NetworkState {
         sensors: sensors.to_vec(),
         models: data.sensors.iter().map(|s| s.model.clone()).collect(),
-        wands: frames.iter().map(|&f| wands[f].unwrap_or_else(Pose::identity)).collect(),
+        wands: frames
+            .iter()
+            .map(|&f| wands[f].unwrap_or_else(Pose::identity))
+            .collect(),
     };
     let mut by_block = vec![Vec::new(); frames.len()];
     let mut statics = Vec::new();
@@ -209,14 +219,19 @@ pub fn adjust(
     let mut bad = vec![false; blocks.frames.len()];
     for (b, obs) in blocks.by_block.iter().enumerate() {
         for &k in obs {
-            if !problem.residual_mm(&state, Some(b), k).is_ok_and(|r| r.norm() <= limit) {
+            if !problem
+                .residual_mm(&state, Some(b), k)
+                .is_ok_and(|r| r.norm() <= limit)
+            {
                 bad[b] = true;
             }
         }
     }
     let mut dropped_statics = Vec::new();
     statics.retain(|&k| {
-        let ok = problem.residual_mm(&state, None, k).is_ok_and(|r| r.norm() <= limit);
+        let ok = problem
+            .residual_mm(&state, None, k)
+            .is_ok_and(|r| r.norm() <= limit);
         if !ok {
             dropped_statics.push(k);
         }
@@ -224,7 +239,10 @@ pub fn adjust(
     });
     blocks.drop_flagged(&bad, &mut state, &mut dropped);
     if blocks.frames.is_empty() {
-        return Err(NetworkError::TooFewFrames { usable: 0, needed: 1 });
+        return Err(NetworkError::TooFewFrames {
+            usable: 0,
+            needed: 1,
+        });
     }
     let ls = SolverOptions {
         max_iterations: options.max_iterations,
@@ -282,14 +300,20 @@ pub fn robust_sigma(r2: &mut [f64]) -> f64 {
     (crate::start::median(r2) / (2.0 * std::f64::consts::LN_2)).sqrt()
 }
 
-fn residuals_r2(problem: &NetworkProblem<'_>, state: &NetworkState) -> Result<Vec<f64>, NetworkError> {
+fn residuals_r2(
+    problem: &NetworkProblem<'_>,
+    state: &NetworkState,
+) -> Result<Vec<f64>, NetworkError> {
     let mut out = Vec::new();
     for (b, obs) in problem.blocks().iter().enumerate() {
         for &k in obs {
-            let r: Vector2<f64> = problem.residual_mm(state, Some(b), k).map_err(|e| NetworkError::Numerical {
-                stage: "bundle adjustment",
-                reason: e.to_string(),
-            })?;
+            let r: Vector2<f64> =
+                problem
+                    .residual_mm(state, Some(b), k)
+                    .map_err(|e| NetworkError::Numerical {
+                        stage: "bundle adjustment",
+                        reason: e.to_string(),
+                    })?;
             out.push(r.norm_squared());
         }
     }
@@ -297,7 +321,10 @@ fn residuals_r2(problem: &NetworkProblem<'_>, state: &NetworkState) -> Result<Ve
 }
 
 /// `Σ ‖r‖²` (mm²) over every sighting and their count.
-fn residual_sum(problem: &NetworkProblem<'_>, state: &NetworkState) -> Result<(f64, usize), NetworkError> {
+fn residual_sum(
+    problem: &NetworkProblem<'_>,
+    state: &NetworkState,
+) -> Result<(f64, usize), NetworkError> {
     let mut r2 = residuals_r2(problem, state)?;
     for &k in problem.statics() {
         if let Ok(r) = problem.residual_mm(state, None, k) {

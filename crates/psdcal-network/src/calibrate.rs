@@ -156,13 +156,17 @@ pub fn calibrate_network(
         for &k in obs {
             let s = data.observations[k].sensor;
             points[s] += 1;
-            residual[s] += problem.residual_mm(&a.state, Some(b), k).map_or(0.0, |r| r.norm_squared());
+            residual[s] += problem
+                .residual_mm(&a.state, Some(b), k)
+                .map_or(0.0, |r| r.norm_squared());
         }
     }
     for &k in &a.statics {
         let s = data.observations[k].sensor;
         points[s] += 1;
-        residual[s] += problem.residual_mm(&a.state, None, k).map_or(0.0, |r| r.norm_squared());
+        residual[s] += problem
+            .residual_mm(&a.state, None, k)
+            .map_or(0.0, |r| r.norm_squared());
     }
     let sensors = (0..data.sensors.len())
         .map(|k| {

@@ -83,7 +83,7 @@ impl NetworkData {
             return NetworkError::no_scale_wand(self.wand.len());
         }
         let longest = self.wand_distances().into_iter().fold(0.0, f64::max);
-        if !(longest > 0.0) {
+        if longest.is_nan() || longest <= 0.0 {
             return Err(NetworkError::NoScale(
                 "the wand's LEDs are all at one place: give their positions in the wand's frame \
                  (wand.csv, mm)"
@@ -107,7 +107,10 @@ impl NetworkData {
                 ));
             }
             if let Some(name) = s.prior_names.iter().find(|n| s.model.index(n).is_none()) {
-                return bad(format!("sensor '{}': the model has no parameter '{name}'", s.id));
+                return bad(format!(
+                    "sensor '{}': the model has no parameter '{name}'",
+                    s.id
+                ));
             }
         }
         for o in &self.observations {

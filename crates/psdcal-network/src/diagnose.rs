@@ -77,7 +77,9 @@ pub fn diagnose(
     let mut worst = frame_residuals.clone();
     worst.sort_by(|x, y| y.1.total_cmp(&x.1));
     worst.truncate(5);
-    let coverage: Vec<Coverage> = (0..data.sensors.len()).map(|s| coverage(data, a, s)).collect();
+    let coverage: Vec<Coverage> = (0..data.sensors.len())
+        .map(|s| coverage(data, a, s))
+        .collect();
     let mut items = Vec::new();
     let id = |s: usize| data.sensors[s].id.as_str();
     items.push(NetworkDiagnostic {
@@ -90,7 +92,11 @@ pub fn diagnose(
         .map(|e| e.position_covariance.trace().max(0.0).sqrt())
         .collect();
     let mut sorted: Vec<f64> = sigmas.iter().copied().filter(|v| *v > 0.0).collect();
-    let median = if sorted.is_empty() { 0.0 } else { crate::start::median(&mut sorted) };
+    let median = if sorted.is_empty() {
+        0.0
+    } else {
+        crate::start::median(&mut sorted)
+    };
     for s in 0..data.sensors.len() {
         let best = shared[s].iter().copied().max().unwrap_or(0);
         if best < 90 || (median > 0.0 && sigmas[s] > 3.0 * median) {
@@ -112,7 +118,11 @@ pub fn diagnose(
         if c.fraction < 0.5 || !c.empty_regions.is_empty() {
             items.push(NetworkDiagnostic {
                 code: "coverage_missing",
-                severity: if c.fraction < 0.3 { Severity::Warning } else { Severity::Info },
+                severity: if c.fraction < 0.3 {
+                    Severity::Warning
+                } else {
+                    Severity::Info
+                },
                 message: format!(
                     "sensor '{}' saw the wand on {:.0} % of its active area{}: wave where its \
                      view reaches there",
@@ -143,7 +153,11 @@ pub fn diagnose(
             .collect();
         items.push(NetworkDiagnostic {
             code: "frames_dropped",
-            severity: if outliers * 10 > total { Severity::Warning } else { Severity::Info },
+            severity: if outliers * 10 > total {
+                Severity::Warning
+            } else {
+                Severity::Info
+            },
             message: format!(
                 "{outliers} frame(s) dropped for a sighting beyond {} σ (a wrong or reflected \
                  LED), e.g. {}",
@@ -195,7 +209,10 @@ fn wand_lengths(data: &NetworkData, a: &Adjusted) -> (f64, Vec<(usize, f64)>) {
                 .map(|o| {
                     let ab = a.state.models[o.sensor].ray(&o.measured);
                     let w = &centres[o.sensor];
-                    (w.t, w.rotation() * Vector3::new(ab.x, ab.y, 1.0).normalize())
+                    (
+                        w.t,
+                        w.rotation() * Vector3::new(ab.x, ab.y, 1.0).normalize(),
+                    )
                 })
                 .collect();
             *slot = meet_rays(&rays);
@@ -229,14 +246,21 @@ fn coverage(data: &NetworkData, a: &Adjusted, s: usize) -> Coverage {
         if o.sensor != s {
             continue;
         }
-        let u = ((o.measured.x / g.lx + 0.5).clamp(0.0, 0.999_999)) as f64;
-        let v = ((o.measured.y / g.ly + 0.5).clamp(0.0, 0.999_999)) as f64;
+        let u = (o.measured.x / g.lx + 0.5).clamp(0.0, 0.999_999);
+        let v = (o.measured.y / g.ly + 0.5).clamp(0.0, 0.999_999);
         cells[(v * n as f64) as usize * n + (u * n as f64) as usize] += 1;
         ninths[(v * 3.0) as usize * 3 + (u * 3.0) as usize] += 1;
     }
     let names = [
-        "lower left", "lower middle", "lower right", "middle left", "centre", "middle right",
-        "upper left", "upper middle", "upper right",
+        "lower left",
+        "lower middle",
+        "lower right",
+        "middle left",
+        "centre",
+        "middle right",
+        "upper left",
+        "upper middle",
+        "upper right",
     ];
     Coverage {
         fraction: cells.iter().filter(|c| **c > 0).count() as f64 / (n * n) as f64,

@@ -72,7 +72,11 @@ pub fn rotation_between(a: &Vector3<f64>, b: &Vector3<f64>) -> Option<Matrix3<f6
             return Some(Matrix3::identity());
         }
         // Half a turn about any axis perpendicular to a.
-        let other = if a.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+        let other = if a.x.abs() < 0.9 {
+            Vector3::x()
+        } else {
+            Vector3::y()
+        };
         let k = a.cross(&other).normalize();
         return Some(2.0 * k * k.transpose() - Matrix3::identity());
     }

@@ -29,7 +29,9 @@ pub mod start;
 pub mod view_graph;
 
 pub use adjust::{AdjustOptions, DropReason};
-pub use calibrate::{calibrate_network, Gauge, MinFrames, NetworkOptions, NetworkResult, SensorEstimate};
+pub use calibrate::{
+    calibrate_network, Gauge, MinFrames, NetworkOptions, NetworkResult, SensorEstimate,
+};
 pub use data::{Led, NetworkData, NetworkObservation, NetworkSensor};
 pub use diagnose::{Coverage, NetworkDiagnostic, NetworkDiagnostics};
 pub use error::NetworkError;

@@ -154,10 +154,9 @@ impl<'a> NetworkProblem<'a> {
                         s.id
                     ))
                 })?;
-                let l_inv = chol
-                    .l()
-                    .try_inverse()
-                    .ok_or_else(|| NetworkError::Input(format!("sensor '{}': singular lab covariance", s.id)))?;
+                let l_inv = chol.l().try_inverse().ok_or_else(|| {
+                    NetworkError::Input(format!("sensor '{}': singular lab covariance", s.id))
+                })?;
                 let mean = s
                     .prior_names
                     .iter()
@@ -228,27 +227,33 @@ impl<'a> NetworkProblem<'a> {
     }
 
     /// Visits one sighting's term (module documentation).
-    #[allow(clippy::too_many_arguments)]
+    /// `at`: the block and observation; `scratch`: each sensor's rotation
+    /// Jacobian and chain buffer.
     fn sighting(
         &self,
         state: &NetworkState,
-        b: Option<usize>,
-        k: usize,
-        rotations: &[psdcal_model::RotationJacobian],
-        wand_rotation: Option<&psdcal_model::RotationJacobian>,
-        jacs: &mut [ChainJacobian],
+        at: (
+            Option<usize>,
+            usize,
+            Option<&psdcal_model::RotationJacobian>,
+        ),
+        scratch: (&[psdcal_model::RotationJacobian], &mut [ChainJacobian]),
         visit: &mut dyn FnMut(&ResidualTerm<'_>, Option<&[usize]>),
     ) -> Result<(), NetworkError> {
+        let (b, k, wand_rotation) = at;
+        let (rotations, jacs) = scratch;
         let o = &self.data.observations[k];
         let s = o.sensor;
         let (p, dp_dwand) = match (o.led, b, wand_rotation) {
             (Led::Wand(l), Some(b), Some(rot)) => {
-                let (p, j, _) = state.wands[b].transform_with_jacobians_using(rot, &self.data.wand[l]);
+                let (p, j, _) =
+                    state.wands[b].transform_with_jacobians_using(rot, &self.data.wand[l]);
                 (p, Some(j))
             }
             _ => (self.point(state, b, k), None),
         };
-        let (pc, dpc_dpose, rot) = state.sensors[s].transform_with_jacobians_using(&rotations[s], &p);
+        let (pc, dpc_dpose, rot) =
+            state.sensors[s].transform_with_jacobians_using(&rotations[s], &p);
         if pc.z.is_nan() || pc.z <= MIN_DEPTH_MM {
             return Err(self.error(k, ModelError::BehindSensor { zc: pc.z }));
         }
@@ -342,15 +347,33 @@ impl Problem for NetworkProblem<'_> {
         if !jacobians {
             for (b, obs) in self.by_block.iter().enumerate() {
                 for &k in obs {
-                    let r = self.residual_mm(state, Some(b), k).map_err(|e| self.error(k, e))?
+                    let r = self
+                        .residual_mm(state, Some(b), k)
+                        .map_err(|e| self.error(k, e))?
                         * self.inv_sigma;
-                    visit(&ResidualTerm { r: r.as_slice(), a: &[], block: None }, None);
+                    visit(
+                        &ResidualTerm {
+                            r: r.as_slice(),
+                            a: &[],
+                            block: None,
+                        },
+                        None,
+                    );
                 }
             }
             for &k in &self.statics {
-                let r = self.residual_mm(state, None, k).map_err(|e| self.error(k, e))?
+                let r = self
+                    .residual_mm(state, None, k)
+                    .map_err(|e| self.error(k, e))?
                     * self.inv_sigma;
-                visit(&ResidualTerm { r: r.as_slice(), a: &[], block: None }, None);
+                visit(
+                    &ResidualTerm {
+                        r: r.as_slice(),
+                        a: &[],
+                        block: None,
+                    },
+                    None,
+                );
             }
             self.visit_priors(state, false, visit);
             self.visit_anchors(state, false, visit);
@@ -370,11 +393,16 @@ impl Problem for NetworkProblem<'_> {
         for (b, obs) in self.by_block.iter().enumerate() {
             let rot = state.wands[b].rotation_jacobian();
             for &k in obs {
-                self.sighting(state, Some(b), k, &rotations, Some(&rot), &mut jacs, visit)?;
+                self.sighting(
+                    state,
+                    (Some(b), k, Some(&rot)),
+                    (&rotations, &mut jacs),
+                    visit,
+                )?;
             }
         }
         for &k in &self.statics {
-            self.sighting(state, None, k, &rotations, None, &mut jacs, visit)?;
+            self.sighting(state, (None, k, None), (&rotations, &mut jacs), visit)?;
         }
         self.visit_priors(state, true, visit);
         self.visit_anchors(state, true, visit);
@@ -431,11 +459,22 @@ impl NetworkProblem<'_> {
                     .map(|(i, j)| l_inv[(i, j)])
                     .collect();
                 visit(
-                    &ResidualTerm { r: &r, a: &a, block: None },
+                    &ResidualTerm {
+                        r: &r,
+                        a: &a,
+                        block: None,
+                    },
                     Some(&self.layout.lens[s]),
                 );
             } else {
-                visit(&ResidualTerm { r: &r, a: &[], block: None }, None);
+                visit(
+                    &ResidualTerm {
+                        r: &r,
+                        a: &[],
+                        block: None,
+                    },
+                    None,
+                );
             }
         }
     }

@@ -251,7 +251,10 @@ fn frame_alignment(
                 let o = &data.observations[k];
                 let ab = data.sensors[s].model.ray(&o.measured);
                 let w = sensors[s].inverse();
-                (w.t, w.rotation() * Vector3::new(ab.x, ab.y, 1.0).normalize())
+                (
+                    w.t,
+                    w.rotation() * Vector3::new(ab.x, ab.y, 1.0).normalize(),
+                )
             })
             .collect();
         let _ = sightings;

@@ -10,12 +10,16 @@ use nalgebra::Vector3;
 
 use crate::data::{Led, NetworkData};
 
+/// One sighting: `(frame, wand LED)` and the `(sensor, observation)`
+/// pairs that saw it.
+pub type Sighting = ((usize, usize), Vec<(usize, usize)>);
+
 /// Observations grouped by sighting: per (frame, wand LED), the sensors that
 /// saw it and their unit rays.
 #[derive(Debug, Clone)]
 pub struct Sightings {
     /// `(frame, wand LED)` → `[(sensor, observation index)]`.
-    pub by_point: Vec<((usize, usize), Vec<(usize, usize)>)>,
+    pub by_point: Vec<Sighting>,
     /// Unit ray (sensor frame) of every observation, by the sensor's lab
     /// model.
     pub rays: Vec<Vector3<f64>>,
@@ -35,7 +39,7 @@ impl Sightings {
             })
             .collect();
         let mut index: HashMap<(usize, usize), usize> = HashMap::new();
-        let mut by_point: Vec<((usize, usize), Vec<(usize, usize)>)> = Vec::new();
+        let mut by_point: Vec<Sighting> = Vec::new();
         for (k, o) in data.observations.iter().enumerate() {
             if let Led::Wand(l) = o.led {
                 let key = (o.frame, l);
@@ -96,7 +100,10 @@ pub struct TreeEdge {
 /// `needed` shared sightings, in placing order; `Err(sensor, best)` names
 /// the first sensor that cannot be reached and its best count to a placed
 /// sensor.
-pub fn spanning_tree(shared: &[Vec<usize>], needed: usize) -> Result<Vec<TreeEdge>, (usize, usize)> {
+pub fn spanning_tree(
+    shared: &[Vec<usize>],
+    needed: usize,
+) -> Result<Vec<TreeEdge>, (usize, usize)> {
     let n = shared.len();
     let mut placed = vec![false; n];
     placed[0] = true;

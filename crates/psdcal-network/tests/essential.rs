@@ -28,7 +28,10 @@ fn scene(j_from_i: &Pose, n: usize, rng: &mut ChaCha8Rng) -> Vec<(Vector3<f64>, 
 fn the_relative_pose_is_recovered_up_to_scale_despite_outliers() {
     let mut rng = ChaCha8Rng::seed_from_u64(4);
     // A wide-angle pair: 70° apart, facing a common volume.
-    let j_from_i = Pose::new(Vector3::new(0.1, -1.2, 0.2), Vector3::new(2500.0, 300.0, 1200.0));
+    let j_from_i = Pose::new(
+        Vector3::new(0.1, -1.2, 0.2),
+        Vector3::new(2500.0, 300.0, 1200.0),
+    );
     let mut pairs = scene(&j_from_i, 400, &mut rng);
     for k in (0..400).step_by(25) {
         pairs[k].1 = Vector3::new(rng.random(), rng.random(), 1.0).normalize();
@@ -38,7 +41,12 @@ fn the_relative_pose_is_recovered_up_to_scale_despite_outliers() {
     let angle = ((r_err.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos();
     assert!(angle < 1e-9, "rotation off by {angle} rad");
     let t_dir = j_from_i.t.normalize();
-    assert!((rel.j_from_i.t - t_dir).norm() < 1e-9, "{:?} vs {:?}", rel.j_from_i.t, t_dir);
+    assert!(
+        (rel.j_from_i.t - t_dir).norm() < 1e-9,
+        "{:?} vs {:?}",
+        rel.j_from_i.t,
+        t_dir
+    );
     let outliers = rel.inliers.iter().filter(|f| !**f).count();
     assert_eq!(outliers, 16);
 }
@@ -46,7 +54,10 @@ fn the_relative_pose_is_recovered_up_to_scale_despite_outliers() {
 #[test]
 fn the_eight_point_matrix_satisfies_every_constraint_of_exact_rays() {
     let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let j_from_i = Pose::new(Vector3::new(0.3, 0.2, -0.1), Vector3::new(-800.0, 100.0, 50.0));
+    let j_from_i = Pose::new(
+        Vector3::new(0.3, 0.2, -0.1),
+        Vector3::new(-800.0, 100.0, 50.0),
+    );
     let pairs = scene(&j_from_i, 8, &mut rng);
     let e = eight_point(&pairs).unwrap();
     // [t]× R up to scale and sign.
@@ -64,12 +75,23 @@ fn the_eight_point_matrix_satisfies_every_constraint_of_exact_rays() {
 #[test]
 fn rays_meet_where_they_were_cast_and_kabsch_undoes_a_pose() {
     let target = Vector3::new(100.0, -200.0, 3000.0);
-    let origins = [Vector3::zeros(), Vector3::new(1000.0, 0.0, 0.0), Vector3::new(0.0, 800.0, 200.0)];
-    let rays: Vec<_> = origins.iter().map(|c| (*c, (target - c).normalize())).collect();
+    let origins = [
+        Vector3::zeros(),
+        Vector3::new(1000.0, 0.0, 0.0),
+        Vector3::new(0.0, 800.0, 200.0),
+    ];
+    let rays: Vec<_> = origins
+        .iter()
+        .map(|c| (*c, (target - c).normalize()))
+        .collect();
     assert!((meet_rays(&rays).unwrap() - target).norm() < 1e-9);
     assert!(meet_rays(&rays[..1]).is_none());
     let pose = Pose::new(Vector3::new(0.4, -0.3, 1.1), Vector3::new(10.0, 20.0, 30.0));
-    let pts = [Vector3::zeros(), Vector3::new(500.0, 0.0, 0.0), Vector3::new(200.0, 150.0, 0.0)];
+    let pts = [
+        Vector3::zeros(),
+        Vector3::new(500.0, 0.0, 0.0),
+        Vector3::new(200.0, 150.0, 0.0),
+    ];
     let pairs: Vec<_> = pts.iter().map(|p| (*p, pose.transform(p))).collect();
     let fit = kabsch(&pairs).unwrap();
     assert!((fit.rotation() - pose.rotation()).norm() < 1e-12);

@@ -38,11 +38,24 @@ fn check(seconds: f64, seed: u64, with_frame: bool) -> (f64, f64, f64) {
         .filter(|d| d.1 == DropReason::Outlier)
         .map(|d| d.0)
         .collect();
-    let missed = room.bad_frames.iter().filter(|f| !outliers.contains(f)).count();
-    assert!(missed <= room.bad_frames.len() / 10, "{missed} of {} bad frames kept", room.bad_frames.len());
+    let missed = room
+        .bad_frames
+        .iter()
+        .filter(|f| !outliers.contains(f))
+        .count();
+    assert!(
+        missed <= room.bad_frames.len() / 10,
+        "{missed} of {} bad frames kept",
+        room.bad_frames.len()
+    );
     assert!(outliers.len() <= room.bad_frames.len() + room.wand_poses.len() / 100 + 2);
     // The point noise is recovered.
-    assert!((result.sigma_mm / room.point_sigma_mm - 1.0).abs() < 0.1, "{} vs {}", result.sigma_mm, room.point_sigma_mm);
+    assert!(
+        (result.sigma_mm / room.point_sigma_mm - 1.0).abs() < 0.1,
+        "{} vs {}",
+        result.sigma_mm,
+        room.point_sigma_mm
+    );
     (worst_mm, worst_deg, (z2 / n as f64).sqrt())
 }
 
@@ -86,8 +99,10 @@ fn a_sensor_sharing_no_sighting_is_named() {
     let room = short_room();
     let mut data = common::data(&room, false);
     // Sensor s3 keeps only sightings of frames no other sensor saw an LED in.
-    data.observations.retain(|o| o.sensor != 2 || o.frame % 2 == 0);
-    data.observations.retain(|o| o.sensor == 2 || o.frame % 2 == 1);
+    data.observations
+        .retain(|o| o.sensor != 2 || o.frame % 2 == 0);
+    data.observations
+        .retain(|o| o.sensor == 2 || o.frame % 2 == 1);
     let e = calibrate_network(&data, &NetworkOptions::default()).unwrap_err();
     match &e {
         NetworkError::Disconnected { sensor, .. } => assert_eq!(sensor, "s3", "{e}"),
@@ -102,7 +117,10 @@ fn too_few_frames_is_an_error() {
     let mut data = common::data(&room, false);
     data.observations.retain(|o| o.frame < 10);
     let e = calibrate_network(&data, &NetworkOptions::default()).unwrap_err();
-    assert!(matches!(e, NetworkError::TooFewFrames { usable: 10, .. }), "{e}");
+    assert!(
+        matches!(e, NetworkError::TooFewFrames { usable: 10, .. }),
+        "{e}"
+    );
 }
 
 #[test]
@@ -110,7 +128,8 @@ fn a_wand_without_a_length_is_no_scale() {
     let room = short_room();
     let mut data = common::data(&room, false);
     data.wand.truncate(1);
-    data.observations.retain(|o| o.led == psdcal_network::Led::Wand(0));
+    data.observations
+        .retain(|o| o.led == psdcal_network::Led::Wand(0));
     let e = calibrate_network(&data, &NetworkOptions::default()).unwrap_err();
     assert!(matches!(e, NetworkError::NoScale(_)), "{e}");
 }

@@ -33,7 +33,8 @@
 
 use nalgebra::{DMatrix, Matrix3, Vector2, Vector3};
 use psdcal_model::{
-    psd::{electrode_currents, impact_point}, Model, Param, Pose, PsdGeometry, SensorModel,
+    psd::{electrode_currents, impact_point},
+    Model, Param, Pose, PsdGeometry, SensorModel,
 };
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -45,6 +46,9 @@ use crate::SimError;
 
 /// The static frame is measured once every this many frames.
 pub const STATIC_EVERY: usize = 25;
+
+/// A true and a measured impact point, when the LED is seen.
+type Sighted = Result<Option<(Vector2<f64>, Vector2<f64>)>, SimError>;
 
 /// What to simulate.
 #[derive(Debug, Clone, PartialEq)]
@@ -156,7 +160,11 @@ pub fn looking_at(at: Vector3<f64>, target: Vector3<f64>, roll: f64) -> Pose {
     let z = (target - at).normalize();
     let up = Vector3::z();
     let x0 = up.cross(&z);
-    let x0 = if x0.norm() < 1e-9 { Vector3::x() } else { x0.normalize() };
+    let x0 = if x0.norm() < 1e-9 {
+        Vector3::x()
+    } else {
+        x0.normalize()
+    };
     let y0 = z.cross(&x0);
     let (s, c) = roll.sin_cos();
     let x = x0 * c + y0 * s;
@@ -176,11 +184,7 @@ const PLACES: [([f64; 3], [f64; 3]); 8] = [
     ([0.98, 0.50, 0.50], [0.38, 0.50, 0.40]),
 ];
 
-fn draw_sensor(
-    k: usize,
-    room: &[f64; 3],
-    rng: &mut ChaCha8Rng,
-) -> NetworkRoomSensor {
+fn draw_sensor(k: usize, room: &[f64; 3], rng: &mut ChaCha8Rng) -> NetworkRoomSensor {
     let (place, aim) = PLACES[k % PLACES.len()];
     let lower = (k / PLACES.len()) as f64 * 1000.0;
     let mut at = Vector3::from_fn(|i, _| place[i] * room[i]);
@@ -233,7 +237,12 @@ fn measure(
         return Ok(*point);
     };
     let mut noisy = clean;
-    for v in [&mut noisy.vx1, &mut noisy.vx2, &mut noisy.vy1, &mut noisy.vy2] {
+    for v in [
+        &mut noisy.vx1,
+        &mut noisy.vx2,
+        &mut noisy.vy1,
+        &mut noisy.vy2,
+    ] {
         let sigma = chain
             .amplitude_std(*v, snr)
             .map_err(|e| SimError::Options(format!("noise at {snr} dB: {e}")))?;
@@ -251,7 +260,8 @@ fn wand_pose(room: &[f64; 3], phases: &[f64; 12], t: f64) -> Pose {
         let half = 0.5 * (hi - lo) * room[i];
         let w1 = std::f64::consts::TAU / periods[2 * i];
         let w2 = std::f64::consts::TAU / periods[2 * i + 1];
-        mid + half * (0.65 * (w1 * t + phases[2 * i]).sin() + 0.35 * (w2 * t + phases[2 * i + 1]).sin())
+        mid + half
+            * (0.65 * (w1 * t + phases[2 * i]).sin() + 0.35 * (w2 * t + phases[2 * i + 1]).sin())
     });
     let yaw = std::f64::consts::TAU * t / 11.0 + phases[6];
     let pitch = 1.0 * (std::f64::consts::TAU * t / 6.1 + phases[7]).sin();
@@ -271,11 +281,11 @@ impl NetworkRoom {
     ) -> Result<Self, SimError> {
         let o = options;
         let frames = (o.duration_s * o.rate_hz).round();
-        if o.sensors < 2
-            || !(frames >= 1.0 && frames <= 1e7)
-            || !o.room_mm.iter().all(|v| v.is_finite() && *v >= 1000.0)
-            || !(0.0..=0.5).contains(&o.bad_fraction)
-        {
+        let valid = o.sensors >= 2
+            && (1.0..=1e7).contains(&frames)
+            && o.room_mm.iter().all(|v| v.is_finite() && *v >= 1000.0)
+            && (0.0..=0.5).contains(&o.bad_fraction);
+        if !valid {
             return Err(SimError::Options(format!(
                 "a network room needs at least 2 sensors ({}), 1 to 10⁷ frames ({frames}), room \
                  sides of at least 1000 mm ({:?}) and a bad fraction in [0, 0.5] ({})",
@@ -284,12 +294,22 @@ impl NetworkRoom {
         }
         let frames = frames as usize;
         let geometry = PsdGeometry::default();
-        let sensors: Vec<_> = (0..o.sensors).map(|k| draw_sensor(k, &o.room_mm, rng)).collect();
+        let sensors: Vec<_> = (0..o.sensors)
+            .map(|k| draw_sensor(k, &o.room_mm, rng))
+            .collect();
         let truths: Vec<Model> = sensors.iter().map(|s| Model::standard(&s.truth)).collect();
         let wand = if o.collinear_wand {
-            vec![Vector3::zeros(), Vector3::new(200.0, 0.0, 0.0), Vector3::new(500.0, 0.0, 0.0)]
+            vec![
+                Vector3::zeros(),
+                Vector3::new(200.0, 0.0, 0.0),
+                Vector3::new(500.0, 0.0, 0.0),
+            ]
         } else {
-            vec![Vector3::zeros(), Vector3::new(500.0, 0.0, 0.0), Vector3::new(200.0, 150.0, 0.0)]
+            vec![
+                Vector3::zeros(),
+                Vector3::new(500.0, 0.0, 0.0),
+                Vector3::new(200.0, 150.0, 0.0),
+            ]
         };
         let [rx, ry, _] = o.room_mm;
         let frame_leds = vec![
@@ -298,12 +318,19 @@ impl NetworkRoom {
             Vector3::new(0.4 * rx + 1200.0, 0.4 * ry, 0.0),
             Vector3::new(0.4 * rx, 0.4 * ry + 600.0, 0.0),
         ];
-        let phases: [f64; 12] = std::array::from_fn(|_| std::f64::consts::TAU * rng.random::<f64>());
+        let phases: [f64; 12] =
+            std::array::from_fn(|_| std::f64::consts::TAU * rng.random::<f64>());
         let mut sightings = Vec::new();
         let mut wand_poses = Vec::with_capacity(frames);
         let (mut ss, mut n) = (0.0, 0usize);
-        let see = |s: usize, p: &Vector3<f64>, rng: &mut ChaCha8Rng| -> Result<Option<(Vector2<f64>, Vector2<f64>)>, SimError> {
-            let Some(m) = true_impact(&truths[s], &geometry, &sensors[s].world_from_sensor, p, 0.95) else {
+        let see = |s: usize, p: &Vector3<f64>, rng: &mut ChaCha8Rng| -> Sighted {
+            let Some(m) = true_impact(
+                &truths[s],
+                &geometry,
+                &sensors[s].world_from_sensor,
+                p,
+                0.95,
+            ) else {
                 return Ok(None);
             };
             let measured = measure(chain, &geometry, &m, o.snr_db, rng)?;
@@ -319,7 +346,12 @@ impl NetworkRoom {
                     if let Some((m, measured)) = see(s, &p, rng)? {
                         ss += (measured - m).norm_squared();
                         n += 1;
-                        sightings.push(RoomSighting { frame: f, sensor: s, led: RoomLed::Wand(l), measured });
+                        sightings.push(RoomSighting {
+                            frame: f,
+                            sensor: s,
+                            led: RoomLed::Wand(l),
+                            measured,
+                        });
                     }
                 }
             }
@@ -345,7 +377,12 @@ impl NetworkRoom {
             for (l, p) in frame_leds.iter().enumerate() {
                 for s in 0..o.sensors {
                     if let Some((_, measured)) = see(s, p, rng)? {
-                        sightings.push(RoomSighting { frame: f, sensor: s, led: RoomLed::Frame(l), measured });
+                        sightings.push(RoomSighting {
+                            frame: f,
+                            sensor: s,
+                            led: RoomLed::Frame(l),
+                            measured,
+                        });
                     }
                 }
             }
@@ -359,7 +396,16 @@ impl NetworkRoom {
             let mut p = wand_pose(&o.room_mm, &phases, t).t;
             p += Vector3::from_fn(|_, _| 200.0 * normal(rng));
             let seen: Vec<usize> = (0..o.sensors)
-                .filter(|&s| true_impact(&truths[s], &geometry, &sensors[s].world_from_sensor, &p, 0.95).is_some())
+                .filter(|&s| {
+                    true_impact(
+                        &truths[s],
+                        &geometry,
+                        &sensors[s].world_from_sensor,
+                        &p,
+                        0.95,
+                    )
+                    .is_some()
+                })
                 .collect();
             if seen.len() < 2 {
                 continue;

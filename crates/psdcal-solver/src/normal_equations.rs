@@ -469,12 +469,19 @@ fn subtract_sparse(
         if wj.iter().any(|v| *v != 0.0) {
             let xj: [f64; 6] = std::array::from_fn(|c| {
                 let col = inv.column(c);
-                wj[0] * col[0] + wj[1] * col[1] + wj[2] * col[2] + wj[3] * col[3] + wj[4] * col[4] + wj[5] * col[5]
+                wj[0] * col[0]
+                    + wj[1] * col[1]
+                    + wj[2] * col[2]
+                    + wj[3] * col[3]
+                    + wj[4] * col[4]
+                    + wj[5] * col[5]
             });
             rows.push((j, wj, xj));
         }
     }
-    let dot = |a: &[f64; 6], b: &[f64; 6]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5];
+    let dot = |a: &[f64; 6], b: &[f64; 6]| {
+        a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5]
+    };
     let ss = s.as_mut_slice();
     let gs: [f64; 6] = std::array::from_fn(|c| g[c]);
     for (a, (j, _, xj)) in rows.iter().enumerate() {

@@ -17,7 +17,9 @@ fn sparse_and_dense_terms_give_the_same_normal_equations_and_step() {
         let start = rng.random_range(0..p - 7);
         let columns: Vec<usize> = (start..start + 6).chain([p - 1]).collect();
         let r: Vec<f64> = (0..d).map(|_| rng.random_range(-1.0..1.0)).collect();
-        let a: Vec<f64> = (0..d * columns.len()).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let a: Vec<f64> = (0..d * columns.len())
+            .map(|_| rng.random_range(-1.0..1.0))
+            .collect();
         let b: Vec<f64> = (0..d * 6).map(|_| rng.random_range(-1.0..1.0)).collect();
         let mut full = vec![0.0; d * p];
         for (j, &c) in columns.iter().enumerate() {
@@ -25,8 +27,23 @@ fn sparse_and_dense_terms_give_the_same_normal_equations_and_step() {
         }
         let block = (k % 4 != 3).then_some((k % n, &b[..]));
         let w = 0.5 + (k % 2) as f64;
-        dense.add(w, &ResidualTerm { r: &r, a: &full, block });
-        sparse.add_columns(w, &ResidualTerm { r: &r, a: &a, block }, &columns);
+        dense.add(
+            w,
+            &ResidualTerm {
+                r: &r,
+                a: &full,
+                block,
+            },
+        );
+        sparse.add_columns(
+            w,
+            &ResidualTerm {
+                r: &r,
+                a: &a,
+                block,
+            },
+            &columns,
+        );
     }
     // A prior on every parameter keeps the system regular.
     for j in 0..p {

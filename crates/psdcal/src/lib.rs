@@ -77,11 +77,11 @@ mod simulation;
 mod study;
 
 pub use base::option_text;
+pub use frontend::arrays;
 pub use network::calibrate_network::{calibrate_network_files, NetworkCalibrated, NetworkRequest};
 pub use network::network_input::{read_network, NetworkFiles, NetworkInput};
 pub use network::network_page::network_page;
 pub use network::simulate_network::{simulate_network, NetworkSimRequest};
-pub use frontend::arrays;
 
 pub use answer::aoa::{aoa_table, measurement, AoaTable};
 pub use answer::correct::{correct, Corrected};

@@ -32,9 +32,15 @@ pub fn data(room: &NetworkRoom, with_frame: bool) -> NetworkData {
             .collect(),
         wand: room.wand.clone(),
         wand_names: (1..=room.wand.len()).map(|k| format!("w{k}")).collect(),
-        frame_leds: if with_frame { room.frame_leds.clone() } else { vec![] },
+        frame_leds: if with_frame {
+            room.frame_leds.clone()
+        } else {
+            vec![]
+        },
         frame_names: if with_frame {
-            (1..=room.frame_leds.len()).map(|k| format!("L{k}")).collect()
+            (1..=room.frame_leds.len())
+                .map(|k| format!("L{k}"))
+                .collect()
         } else {
             vec![]
         },

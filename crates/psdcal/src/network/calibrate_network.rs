@@ -9,7 +9,9 @@
 
 use std::path::{Path, PathBuf};
 
-use psdcal_io::{refuse_overwrite, write_atomic_bytes, write_calibration, Calibration, ReadLimits, StdDevs};
+use psdcal_io::{
+    refuse_overwrite, write_atomic_bytes, write_calibration, Calibration, ReadLimits, StdDevs,
+};
 use psdcal_network::{calibrate_network, NetworkOptions, NetworkResult};
 use serde_json::{json, Value};
 
@@ -50,18 +52,31 @@ pub struct NetworkCalibrated {
 /// `-`, `_` and `.` become `_`).
 fn file_part(id: &str) -> String {
     id.chars()
-        .map(|c| if c.is_ascii_alphanumeric() || "-_.".contains(c) { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect()
 }
 
 /// Reads, calibrates; nothing written yet.
-pub fn calibrate_network_files(request: &NetworkRequest, limits: ReadLimits) -> Result<NetworkCalibrated> {
+pub fn calibrate_network_files(
+    request: &NetworkRequest,
+    limits: ReadLimits,
+) -> Result<NetworkCalibrated> {
     let input = read_network(&request.files, limits)?;
     let stem = request
         .out
         .file_stem()
         .map_or("rig".to_string(), |s| s.to_string_lossy().into_owned());
-    let folder = request.out.parent().unwrap_or_else(|| Path::new("")).to_path_buf();
+    let folder = request
+        .out
+        .parent()
+        .unwrap_or_else(|| Path::new(""))
+        .to_path_buf();
     let calibrations: Vec<PathBuf> = input
         .data
         .sensors
@@ -197,7 +212,11 @@ impl NetworkCalibrated {
     pub fn summary(&self) -> Summary {
         let r = &self.result;
         let d = &self.input.data;
-        let dropped_outliers = r.dropped.iter().filter(|x| x.1 == psdcal_network::DropReason::Outlier).count();
+        let dropped_outliers = r
+            .dropped
+            .iter()
+            .filter(|x| x.1 == psdcal_network::DropReason::Outlier)
+            .count();
         let mut text = format!(
             "network of {} sensors calibrated from {} frames ({} dropped: {} with a bad sighting, \
              {} not placed); point noise σ {:.3e} mm; wand-length RMS {:.3} mm\n{}\n",
@@ -213,13 +232,28 @@ impl NetworkCalibrated {
         let mut sensors = Vec::new();
         for (k, e) in r.sensors.iter().enumerate() {
             let sd = e.position_covariance.diagonal().map(|v| v.max(0.0).sqrt());
-            let rot = e.pose_covariance.fixed_view::<3, 3>(0, 0).trace().max(0.0).sqrt().to_degrees();
+            let rot = e
+                .pose_covariance
+                .fixed_view::<3, 3>(0, 0)
+                .trace()
+                .max(0.0)
+                .sqrt()
+                .to_degrees();
             let f = e.model.get("f").unwrap_or(f64::NAN);
             text.push_str(&format!(
                 "  {}: at ({:.1}, {:.1}, {:.1}) ± ({:.2}, {:.2}, {:.2}) mm, orientation σ {:.4}°, \
                  f {:.4} mm, {} points, {:.0} % of its area covered\n",
-                d.sensors[k].id, e.position_mm.x, e.position_mm.y, e.position_mm.z, sd.x, sd.y, sd.z,
-                rot, f, e.points, 100.0 * r.diagnostics.coverage[k].fraction
+                d.sensors[k].id,
+                e.position_mm.x,
+                e.position_mm.y,
+                e.position_mm.z,
+                sd.x,
+                sd.y,
+                sd.z,
+                rot,
+                f,
+                e.points,
+                100.0 * r.diagnostics.coverage[k].fraction
             ));
             sensors.push(json!({
                 "id": d.sensors[k].id,
@@ -236,7 +270,11 @@ impl NetworkCalibrated {
         for item in &r.diagnostics.items {
             text.push_str(&format!("  [{}] {}\n", item.code, item.message));
         }
-        text.push_str(&format!("wrote {} and {} calibrations beside it\n", self.out.display(), self.calibrations.len()));
+        text.push_str(&format!(
+            "wrote {} and {} calibrations beside it\n",
+            self.out.display(),
+            self.calibrations.len()
+        ));
         let json = json!({
             "out": self.out.display().to_string(),
             "sensors": sensors,

@@ -156,7 +156,12 @@ pub fn read_network(files: &NetworkFiles, limits: ReadLimits) -> Result<NetworkI
                 at(),
                 row.led,
                 wand.source,
-                frame.as_ref().map_or(" (no --frame given)".to_string(), |f| format!(" ({})", f.source))
+                frame
+                    .as_ref()
+                    .map_or(" (no --frame given)".to_string(), |f| format!(
+                        " ({})",
+                        f.source
+                    ))
             ))
         })?;
         let f = *frame_index.entry(row.frame.as_str()).or_insert_with(|| {
@@ -172,7 +177,10 @@ pub fn read_network(files: &NetworkFiles, limits: ReadLimits) -> Result<NetworkI
                     .map_err(|e| Error::Input(format!("{}: {e}", at())))?
             }
             _ => {
-                return Err(Error::Input(format!("{}: a value is not a finite number", at())))
+                return Err(Error::Input(format!(
+                    "{}: a value is not a finite number",
+                    at()
+                )))
             }
         };
         if matches!(led, Led::Wand(_)) {
@@ -197,14 +205,13 @@ pub fn read_network(files: &NetworkFiles, limits: ReadLimits) -> Result<NetworkI
         sensors,
         wand: wand.positions,
         wand_names: wand.names,
-        frame_leds: frame.as_ref().map(|f| f.positions.clone()).unwrap_or_default(),
+        frame_leds: frame
+            .as_ref()
+            .map(|f| f.positions.clone())
+            .unwrap_or_default(),
         frame_names: frame.map(|f| f.names).unwrap_or_default(),
         frames,
         observations,
     };
-    Ok(NetworkInput {
-        data,
-        labs,
-        inputs,
-    })
+    Ok(NetworkInput { data, labs, inputs })
 }

@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
 use psdcal_network::Led;
-use psdcal_report::{coverage_svg, histogram_svg, scatter_svg, Block, Frame, Page, PointSet, Table};
+use psdcal_report::{
+    coverage_svg, histogram_svg, scatter_svg, Block, Frame, Page, PointSet, Table,
+};
 
 use crate::base::error::{Error, Result};
 use crate::network::calibrate_network::NetworkCalibrated;
@@ -23,8 +25,16 @@ fn sensor_points(c: &NetworkCalibrated, k: usize) -> Vec<Vector3<f64>> {
     let g = c.input.data.sensors[k].geometry;
     let world_from_sensor = e.sensor_from_world.inverse();
     let mut points = vec![e.position_mm];
-    for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (0.0, 0.0)] {
-        let ab = e.model.ray(&nalgebra::Vector2::new(0.5 * x * g.lx, 0.5 * y * g.ly));
+    for (x, y) in [
+        (-1.0, -1.0),
+        (1.0, -1.0),
+        (1.0, 1.0),
+        (-1.0, 1.0),
+        (0.0, 0.0),
+    ] {
+        let ab = e
+            .model
+            .ray(&nalgebra::Vector2::new(0.5 * x * g.lx, 0.5 * y * g.ly));
         let d = Vector3::new(ab.x, ab.y, 1.0).normalize();
         for s in 1..=15 {
             points.push(world_from_sensor.transform(&(d * (FOV_MM * s as f64 / 15.0))));
@@ -34,11 +44,23 @@ fn sensor_points(c: &NetworkCalibrated, k: usize) -> Vec<Vector3<f64>> {
 }
 
 /// One projected view (`axes` picks the world coordinates drawn).
-fn view(c: &NetworkCalibrated, title: &str, axes: (usize, usize), labels: (&str, &str)) -> Result<String> {
+fn view(
+    c: &NetworkCalibrated,
+    title: &str,
+    axes: (usize, usize),
+    labels: (&str, &str),
+) -> Result<String> {
     let pick = |p: &Vector3<f64>| (p[axes.0], p[axes.1]);
     let mut sets = vec![PointSet {
         label: "wand (every 10th frame)".into(),
-        points: c.result.wands.iter().flatten().step_by(10).map(|w| pick(&w.t)).collect(),
+        points: c
+            .result
+            .wands
+            .iter()
+            .flatten()
+            .step_by(10)
+            .map(|w| pick(&w.t))
+            .collect(),
     }];
     for k in 0..c.result.sensors.len() {
         sets.push(PointSet {
@@ -46,7 +68,12 @@ fn view(c: &NetworkCalibrated, title: &str, axes: (usize, usize), labels: (&str,
             points: sensor_points(c, k).iter().map(pick).collect(),
         });
     }
-    let frame = Frame::fit(title, labels.0, labels.1, sets.iter().flat_map(|s| s.points.clone()));
+    let frame = Frame::fit(
+        title,
+        labels.0,
+        labels.1,
+        sets.iter().flat_map(|s| s.points.clone()),
+    );
     Ok(scatter_svg(&sets, &frame)?)
 }
 
@@ -77,14 +104,33 @@ pub fn network_page(c: &NetworkCalibrated, dir: &Path) -> Result<PathBuf> {
     ]));
     let mut table = Table {
         caption: "Sensors (position and σ in the world, mm; orientation σ in degrees)".into(),
-        headers: ["sensor", "x", "y", "z", "σx", "σy", "σz", "σ rot (°)", "f (mm)", "points", "coverage", "RMS (mm)"]
-            .map(String::from)
-            .to_vec(),
+        headers: [
+            "sensor",
+            "x",
+            "y",
+            "z",
+            "σx",
+            "σy",
+            "σz",
+            "σ rot (°)",
+            "f (mm)",
+            "points",
+            "coverage",
+            "RMS (mm)",
+        ]
+        .map(String::from)
+        .to_vec(),
         rows: vec![],
     };
     for (k, e) in r.sensors.iter().enumerate() {
         let sd = e.position_covariance.diagonal().map(|v| v.max(0.0).sqrt());
-        let rot = e.pose_covariance.fixed_view::<3, 3>(0, 0).trace().max(0.0).sqrt().to_degrees();
+        let rot = e
+            .pose_covariance
+            .fixed_view::<3, 3>(0, 0)
+            .trace()
+            .max(0.0)
+            .sqrt()
+            .to_degrees();
         table.rows.push(vec![
             d.sensors[k].id.clone(),
             format!("{:.1}", e.position_mm.x),
@@ -101,21 +147,41 @@ pub fn network_page(c: &NetworkCalibrated, dir: &Path) -> Result<PathBuf> {
         ]);
     }
     page.push(Block::Table(table));
-    page.push(Block::Heading("Coverage of each sensor's active area".into()));
+    page.push(Block::Heading(
+        "Coverage of each sensor's active area".into(),
+    ));
     let mut figures = Vec::new();
-    let kept: std::collections::HashSet<usize> = r.wands.iter().enumerate().filter(|w| w.1.is_some()).map(|w| w.0).collect();
+    let kept: std::collections::HashSet<usize> = r
+        .wands
+        .iter()
+        .enumerate()
+        .filter(|w| w.1.is_some())
+        .map(|w| w.0)
+        .collect();
     for k in 0..d.sensors.len() {
         let g = d.sensors[k].geometry;
         let points: Vec<(f64, f64)> = d
             .observations
             .iter()
-            .filter(|o| o.sensor == k && (matches!(o.led, Led::Frame(_)) || kept.contains(&o.frame)))
+            .filter(|o| {
+                o.sensor == k && (matches!(o.led, Led::Frame(_)) || kept.contains(&o.frame))
+            })
             .step_by(3)
             .map(|o| (o.measured.x, o.measured.y))
             .collect();
-        let set = [PointSet { label: d.sensors[k].id.clone(), points }];
+        let set = [PointSet {
+            label: d.sensors[k].id.clone(),
+            points,
+        }];
         let frame = Frame::sensor(&d.sensors[k].id, g.lx, g.ly);
-        figures.push((coverage_svg(&set, g.lx, g.ly, &frame)?, format!("{}: {:.0} % of the area", d.sensors[k].id, 100.0 * r.diagnostics.coverage[k].fraction)));
+        figures.push((
+            coverage_svg(&set, g.lx, g.ly, &frame)?,
+            format!(
+                "{}: {:.0} % of the area",
+                d.sensors[k].id,
+                100.0 * r.diagnostics.coverage[k].fraction
+            ),
+        ));
     }
     page.push(Block::Figures(figures));
     page.push(Block::Heading("Wand-length residuals".into()));
@@ -127,11 +193,19 @@ pub fn network_page(c: &NetworkCalibrated, dir: &Path) -> Result<PathBuf> {
         )]));
     }
     page.push(Block::List(
-        r.diagnostics.worst_frames.iter().map(|(f, e)| format!("frame {}: {e:.3} mm", d.frames[*f])).collect(),
+        r.diagnostics
+            .worst_frames
+            .iter()
+            .map(|(f, e)| format!("frame {}: {e:.3} mm", d.frames[*f]))
+            .collect(),
     ));
     page.push(Block::Heading("Diagnostics and advice".into()));
     page.push(Block::List(
-        r.diagnostics.items.iter().map(|i| format!("[{}] {}", i.code, i.message)).collect(),
+        r.diagnostics
+            .items
+            .iter()
+            .map(|i| format!("[{}] {}", i.code, i.message))
+            .collect(),
     ));
     let path = dir.join("index.html");
     psdcal_io::write_atomic_bytes(&path, page.render().as_bytes())?;

@@ -78,7 +78,9 @@ fn record(s: &NetworkRoomSensor, room: &NetworkRoom, lab: bool) -> Calibration {
         );
         r.covariance = psdcal_io::Covariance {
             parameters: names,
-            matrix: (0..n).map(|i| (0..n).map(|j| s.lab_covariance[(i, j)]).collect()).collect(),
+            matrix: (0..n)
+                .map(|i| (0..n).map(|j| s.lab_covariance[(i, j)]).collect())
+                .collect(),
         };
     }
     r.store_valid_region();
@@ -127,16 +129,26 @@ pub fn simulate_network(request: &NetworkSimRequest) -> Result<Summary> {
     let room = NetworkRoom::simulate(&options, &chain, &mut rng)?;
     let ids: Vec<String> = (1..=room.sensors.len()).map(|k| format!("s{k}")).collect();
     let wand_names: Vec<String> = (1..=room.wand.len()).map(|k| format!("w{k}")).collect();
-    let frame_names: Vec<String> = (1..=room.frame_leds.len()).map(|k| format!("L{k}")).collect();
+    let frame_names: Vec<String> = (1..=room.frame_leds.len())
+        .map(|k| format!("L{k}"))
+        .collect();
     let mut sensors = Table {
         header: vec!["sensor".into(), "calibration".into()],
         rows: vec![],
     };
     let mut true_rig = Vec::new();
     for (k, s) in room.sensors.iter().enumerate() {
-        write_calibration(out.join(format!("lab/{}.json", ids[k])), &record(s, &room, true))?;
-        write_calibration(out.join(format!("true/{}.json", ids[k])), &record(s, &room, false))?;
-        sensors.rows.push(vec![ids[k].clone(), format!("lab/{}.json", ids[k])]);
+        write_calibration(
+            out.join(format!("lab/{}.json", ids[k])),
+            &record(s, &room, true),
+        )?;
+        write_calibration(
+            out.join(format!("true/{}.json", ids[k])),
+            &record(s, &room, false),
+        )?;
+        sensors
+            .rows
+            .push(vec![ids[k].clone(), format!("lab/{}.json", ids[k])]);
         true_rig.push(json!({
             "id": ids[k], "calibration": format!("true/{}.json", ids[k]),
             "world_from_sensor": pose_json(&s.world_from_sensor),
@@ -146,7 +158,9 @@ pub fn simulate_network(request: &NetworkSimRequest) -> Result<Summary> {
     led_table(&wand_names, &room.wand).write_to(Some(&out.join("wand.csv")))?;
     led_table(&frame_names, &room.frame_leds).write_to(Some(&out.join("frame.csv")))?;
     let mut points = Table {
-        header: ["frame", "sensor", "led", "x_mm", "y_mm"].map(String::from).to_vec(),
+        header: ["frame", "sensor", "led", "x_mm", "y_mm"]
+            .map(String::from)
+            .to_vec(),
         rows: Vec::with_capacity(room.sightings.len()),
     };
     for s in &room.sightings {
@@ -164,15 +178,24 @@ pub fn simulate_network(request: &NetworkSimRequest) -> Result<Summary> {
     }
     points.write_to(Some(&out.join("network_points.csv")))?;
     let mut rig_points = Table {
-        header: ["emitter", "sensor", "x_mm", "y_mm"].map(String::from).to_vec(),
+        header: ["emitter", "sensor", "x_mm", "y_mm"]
+            .map(String::from)
+            .to_vec(),
         rows: vec![],
     };
     for (e, s, m) in &room.emitter_sightings {
-        rig_points.rows.push(vec![format!("e{}", e + 1), ids[*s].clone(), num(m.x), num(m.y)]);
+        rig_points.rows.push(vec![
+            format!("e{}", e + 1),
+            ids[*s].clone(),
+            num(m.x),
+            num(m.y),
+        ]);
     }
     rig_points.write_to(Some(&out.join("rig_points.csv")))?;
     let truth = Table {
-        header: ["emitter", "x_mm", "y_mm", "z_mm"].map(String::from).to_vec(),
+        header: ["emitter", "x_mm", "y_mm", "z_mm"]
+            .map(String::from)
+            .to_vec(),
         rows: room
             .emitters
             .iter()
@@ -184,7 +207,10 @@ pub fn simulate_network(request: &NetworkSimRequest) -> Result<Summary> {
     let write_json = |name: &str, v: &serde_json::Value| -> Result<()> {
         let text = serde_json::to_string_pretty(v)
             .map_err(|e| Error::Input(format!("cannot encode {name}: {e}")))?;
-        Ok(write_atomic_bytes(out.join(name), (text + "\n").as_bytes())?)
+        Ok(write_atomic_bytes(
+            out.join(name),
+            (text + "\n").as_bytes(),
+        )?)
     };
     write_json(
         "true_rig.json",
@@ -204,7 +230,8 @@ pub fn simulate_network(request: &NetworkSimRequest) -> Result<Summary> {
             })).collect::<Vec<_>>(),
         }),
     )?;
-    let text = format!(
+    let text =
+        format!(
         "Simulated by psdcal {}: a {}×{}×{} mm room, {} sensors (lens 2, each with its own lab \
          error), a {} wand waved {} s at {} Hz ({} frames, {} with a wrong sighting), a static \
          frame of {} LEDs, {} test emitters; {} dB; point noise σ {:.3e} mm; seed {}.\n\
