@@ -18,8 +18,8 @@ use psdcal_model::Severity;
 use serde::Serialize;
 
 use crate::adjust::Adjusted;
-use crate::calibrate::{Gauge, SensorEstimate};
 use crate::data::{Led, NetworkData};
+use crate::estimate::{Gauge, SensorEstimate};
 use crate::geometry::meet_rays;
 
 /// Cells per side of the coverage grid.

@@ -23,6 +23,7 @@ pub mod data;
 pub mod diagnose;
 mod error;
 pub mod essential;
+pub mod estimate;
 pub mod geometry;
 pub mod problem;
 pub mod start;
