@@ -72,7 +72,7 @@ fn option_pairs(
 /// `gains` with signals), `focal_guess=8.0`, `cost="template"|"image"`,
 /// `noise="uniform"|"channel-snr"|"channel-floor"`,
 /// `preliminary="auto"|"straightness"|"homography"|"off"`, `normalize=True`,
-/// `robust="huber:0.1"`, `uncertainty="linear"|"bootstrap:N[:SEED]"`,
+/// `robust="huber:2.5"`, `uncertainty="linear"|"bootstrap:N[:SEED]"`,
 /// `psd_map=PATH`, `set={"l1": -1.3e-3}` (or `["l1=-1.3e-3"]`), `gains=PATH`
 /// (gains.json, with signals), `lx=9.0`, `ly=9.0` (active area, mm),
 /// `strict=False`. Data dropped and the fit's diagnostics are issued as
@@ -202,6 +202,7 @@ pub fn simulate<'py>(
         })?,
         seed,
         out: std::path::PathBuf::new(),
+        force: false,
     };
     let data = py
         .detach(|| psdcal::simulate_data(&request))

@@ -70,7 +70,7 @@ pub struct CalibrateArgs {
     /// Skip the data normalisation of the homographies
     #[arg(long)]
     pub no_normalize: bool,
-    /// Robust loss: huber:SCALE or cauchy:SCALE (SCALE in mm of the cost)
+    /// Robust loss: huber:K or cauchy:K, K in units of the residuals' noise σ (estimated)
     #[arg(long, value_name = "LOSS:SCALE", value_parser = parse_robust)]
     pub robust: Option<RobustLoss>,
     /// Covariance of the estimate: linear (analytic, the default) or

@@ -25,6 +25,9 @@ pub struct Cli {
     /// files have no limit; docs/formats.md, "Limits")
     #[arg(long, global = true, value_name = "MB", value_parser = clap::value_parser!(u64).range(1..=1_048_576))]
     pub max_input_mb: Option<u64>,
+    /// Replace files in an output folder that psdcal did not write there
+    #[arg(long, global = true)]
+    pub force: bool,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -161,7 +164,7 @@ impl Cli {
             Command::PsdMap(args) => Job::PsdMap(args),
             Command::SimulateScan(args) => Job::SimulateScan(args),
             Command::Simulate(args) => Job::Simulate(args),
-            Command::Study(args) => Job::Study(args.into_config()),
+            Command::Study(args) => Job::Study(args.into_config(self.force)),
             Command::Demo(args) => Job::Demo(args),
             Command::Aoa(args) => {
                 crate::cli_locate::json_needs_out("aoa", &args.out, output)?;

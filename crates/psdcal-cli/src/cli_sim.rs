@@ -100,7 +100,7 @@ pub struct DemoArgs {
 
 impl StudyArgs {
     /// The configuration: `all` expands, duplicates go, the paper's order.
-    pub fn into_config(self) -> StudyRequest {
+    pub fn into_config(self, force: bool) -> StudyRequest {
         StudyRequest {
             tables: psdcal::expand_tables(&self.tables),
             trials: self.trials,
@@ -109,6 +109,7 @@ impl StudyArgs {
             record_cycles: self.record_cycles,
             out: self.out,
             report: self.report,
+            force,
         }
     }
 }

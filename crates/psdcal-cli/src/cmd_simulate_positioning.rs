@@ -44,7 +44,7 @@ pub struct PositioningArgs {
 }
 
 /// Runs `simulate-positioning`.
-pub fn run(a: &PositioningArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(a: &PositioningArgs, output: Output, force: bool) -> anyhow::Result<()> {
     let rig = psdcal::simulate_positioning(&PositioningRequest {
         lens: a.lens,
         snr_db: a.snr,
@@ -59,6 +59,7 @@ pub fn run(a: &PositioningArgs, output: Output) -> anyhow::Result<()> {
         },
         seed: a.seed,
         out: a.out.clone(),
+        force,
     })?;
     let summary = psdcal::Summary::new(rig.text(&a.out), rig.to_json(&a.out));
     crate::messages::emit(output, &summary)

@@ -56,11 +56,9 @@ pub fn run(args: &TrackArgs, output: Output, limits: psdcal::ReadLimits) -> anyh
         limits,
     };
     let summary = psdcal::track(&request, std::io::stdin().lock(), std::io::stdout().lock())?;
+    crate::messages::print_warnings(&summary.warnings());
     if output != Output::Quiet {
-        eprintln!(
-            "track: {} samples, {} windows, {} malformed lines",
-            summary.samples, summary.windows, summary.malformed
-        );
+        eprintln!("{}", summary.text());
     }
     Ok(())
 }

@@ -3,7 +3,9 @@
 //! `psdcal` binary.
 //!
 //! Exit codes: 0 success, 1 failure (one `error: ...` line on stderr),
-//! 2 usage error (clap, or an output that is one of the inputs).
+//! 2 usage error (clap, or an output that is one of the inputs), 141
+//! (128 + SIGPIPE, as a shell shows a process a closed pipe ended) with
+//! nothing printed when standard output was closed by its reader.
 
 pub mod args;
 pub mod choice;
@@ -45,14 +47,14 @@ use crate::cli::{Cli, Job};
 /// Parses the arguments, runs the job and prints; the process's exit code.
 pub fn main() -> ExitCode {
     // Parsed in its own scope: the job reuses clap's ~150 KB once it is freed.
-    let (output, job, limits) = {
+    let (output, job, limits, force) = {
         let mut command = Cli::command();
         let matches = command.get_matches_mut();
         let cli = match Cli::from_arg_matches(&matches) {
             Ok(cli) => cli,
             Err(usage) => usage.exit(),
         };
-        let limits = cli.read_limits();
+        let (limits, force) = (cli.read_limits(), cli.force);
         let (output, job) = match cli.into_job() {
             Ok(parsed) => parsed,
             Err(usage) => usage.format(&mut Cli::command()).exit(),
@@ -61,7 +63,7 @@ pub fn main() -> ExitCode {
             eprintln!("error: {clash}");
             return ExitCode::from(2);
         }
-        (output, job, limits)
+        (output, job, limits, force)
     };
     let result = match &job {
         Job::Check(files, load) => cmd_check::run(files, load, output),
@@ -69,7 +71,7 @@ pub fn main() -> ExitCode {
         Job::Gains(args) => cmd_gains::run(args, output, limits),
         Job::PsdMap(args) => cmd_psd_map::run(args, output, limits),
         Job::SimulateScan(args) => cmd_simulate_scan::run(args, output),
-        Job::Simulate(args) => cmd_simulate::run(args, output, limits),
+        Job::Simulate(args) => cmd_simulate::run(args, output, limits, force),
         Job::Study(config) => cmd_study::run(config, output),
         Job::Demo(args) => cmd_demo::run(args, output),
         Job::Demodulate(args) => cmd_demodulate::run(args, output, limits),
@@ -83,14 +85,15 @@ pub fn main() -> ExitCode {
         Job::Aoa(config) => cmd_aoa::run(config, output, limits),
         Job::Locate(config) => cmd_locate::run(config, output, limits),
         Job::Map(request, out) => cmd_map::run(request, out.as_deref(), output),
-        Job::Report(config) => cmd_report::run(config, output, limits),
+        Job::Report(config) => cmd_report::run(config, output, limits, force),
         Job::Evaluate(args) => cmd_evaluate::run(args, output, limits),
-        Job::SimulatePositioning(args) => cmd_simulate_positioning::run(args, output),
+        Job::SimulatePositioning(args) => cmd_simulate_positioning::run(args, output, force),
         Job::Export(args) => cmd_export::run(args, output, limits),
         Job::Diff(args) => cmd_diff::run(args, output, limits),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(error) if psdcal::is_closed_output(&*error) => ExitCode::from(141),
         Err(error) => {
             messages::print_error(&messages::lower(error));
             ExitCode::FAILURE

@@ -63,9 +63,9 @@ pub fn emit(output: Output, summary: &psdcal::Summary) -> anyhow::Result<()> {
     print_warnings(&summary.warnings);
     match output {
         Output::Quiet => {}
-        Output::Json => println!("{}", serde_json::to_string_pretty(&summary.json)?),
+        Output::Json => psdcal::print_text(&(serde_json::to_string_pretty(&summary.json)? + "\n"))?,
         Output::Text if summary.table_on_stdout => eprint!("{}", summary.text),
-        Output::Text => print!("{}", summary.text),
+        Output::Text => psdcal::print_text(&summary.text)?,
     }
     Ok(())
 }

@@ -55,6 +55,7 @@ mod location;
 mod network_files;
 mod number_text;
 mod observations;
+mod output_folder;
 mod points;
 mod poses;
 mod positioning;
@@ -79,7 +80,7 @@ mod truth;
 mod validate;
 mod warning;
 
-pub use atomic::{write_atomic, write_atomic_at, write_atomic_bytes};
+pub use atomic::{write_atomic, write_atomic_at, write_atomic_bytes, PendingFile, STALE_AGE};
 pub use calibration::{
     read_calibration, read_calibration_with, write_calibration, BootstrapRecord, Calibration,
     CostKind, Covariance, Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile,
@@ -106,6 +107,7 @@ pub use network_files::{
 };
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, Observations};
+pub use output_folder::{OutputFolder, MANIFEST};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
 pub use poses::{write_poses, PoseRow, Poses};
 pub use positioning::{EstimateRow, MatchedEstimate, PositionEstimates, PositionTruth, TruthRow};

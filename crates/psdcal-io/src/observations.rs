@@ -11,7 +11,7 @@
 //! numbers); checks against the template (unknown LEDs, duplicates, points
 //! off the sensor) are [`crate::validate_data_set`]'s.
 
-use crate::csv_table::CsvTable;
+use crate::csv_table::CsvStream;
 use crate::error::IoError;
 use crate::limits::ReadLimits;
 
@@ -43,27 +43,26 @@ pub struct Observations {
 }
 
 impl Observations {
-    csv_table_readers!("observations.csv");
+    csv_table_readers!(streamed "observations.csv");
 
-    fn from_table(table: CsvTable) -> Result<Self, IoError> {
-        let image_col = table.column("image")?;
-        let led_col = table.column("led")?;
-        let x_col = table.column("x_mm")?;
-        let y_col = table.column("y_mm")?;
-        table.require_rows()?;
-        let rows = table
-            .rows
-            .iter()
-            .map(|row| {
-                Ok(Observation {
-                    image: table.identifier(row, &image_col, "an image identifier")?,
-                    led: table.identifier(row, &led_col, "an LED identifier")?,
-                    x_mm: table.number(row, &x_col)?,
-                    y_mm: table.number(row, &y_col)?,
-                    line_no: row.line,
-                })
+    fn from_stream<R: std::io::BufRead>(stream: CsvStream<R>) -> Result<Self, IoError> {
+        let head = &stream.head;
+        let image_col = head.column("image")?;
+        let led_col = head.column("led")?;
+        let x_col = head.column("x_mm")?;
+        let y_col = head.column("y_mm")?;
+        let (table, rows) = stream.map_rows(|table, row| {
+            Ok(Observation {
+                image: table.identifier(row, &image_col, "an image identifier")?,
+                led: table.identifier(row, &led_col, "an LED identifier")?,
+                x_mm: table.number(row, &x_col)?,
+                y_mm: table.number(row, &y_col)?,
+                line_no: row.line,
             })
-            .collect::<Result<_, IoError>>()?;
+        })?;
+        if rows.is_empty() {
+            table.require_rows()?;
+        }
         Ok(Self {
             source: table.source,
             rows,

@@ -7,7 +7,9 @@
 //! `vx2`, `vy1`, `vy2`; a rig: `SENSOR/vx1` … for every sensor of
 //! rig.json; extra columns ignored), otherwise the fields are the sensors
 //! in rig.json's order, four each. A line that is not the needed finite
-//! numbers (or longer than 1 MiB, or not UTF-8) is [`Sample::Malformed`].
+//! numbers (or not UTF-8) is [`Sample::Malformed`]; a line longer than
+//! [`MAX_LINE_BYTES`] (1 MiB) is [`Sample::TooLong`], skipped without being
+//! held in memory (at most 1 MiB of it is), and reading goes on.
 //!
 //! Recording file: one sensor, raw.csv, raw.npy or raw.tdms
 //! ([`RawReader`]); a rig, raw.tdms with the channels `SENSOR/vx1` … (a group
@@ -36,6 +38,29 @@ pub enum Sample {
     Values(Vec<f64>),
     /// A line that is not a sample.
     Malformed,
+    /// A line longer than [`MAX_LINE_BYTES`], skipped.
+    TooLong,
+}
+
+/// Skips the input up to and including the next newline (or to its end),
+/// holding no more of it than the reader's buffer.
+fn skip_line(input: &mut impl BufRead) -> std::io::Result<()> {
+    loop {
+        let buffer = input.fill_buf()?;
+        if buffer.is_empty() {
+            return Ok(());
+        }
+        match buffer.iter().position(|&b| b == b'\n') {
+            Some(end) => {
+                input.consume(end + 1);
+                return Ok(());
+            }
+            None => {
+                let n = buffer.len();
+                input.consume(n);
+            }
+        }
+    }
 }
 
 /// Rows read from a file at a time.
@@ -194,10 +219,13 @@ impl<R: BufRead> Source<R> {
                     return Ok(None);
                 }
                 if line.len() > MAX_LINE_BYTES && line.last() != Some(&b'\n') {
-                    // Skip the rest of the line.
-                    let mut rest = Vec::new();
-                    let _ = input.read_until(b'\n', &mut rest);
-                    return Ok(Some(Sample::Malformed));
+                    skip_line(input).map_err(|source| IoError::Read {
+                        file: "standard input".to_string(),
+                        source,
+                    })?;
+                    line.clear();
+                    line.shrink_to(64 << 10);
+                    return Ok(Some(Sample::TooLong));
                 }
                 let Ok(text) = std::str::from_utf8(line) else {
                     return Ok(Some(Sample::Malformed));

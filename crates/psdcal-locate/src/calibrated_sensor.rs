@@ -16,7 +16,7 @@
 use nalgebra::{DMatrix, Matrix2, Matrix2x3, Matrix3, Vector2};
 use psdcal_model::psd::{impact_point_gain_jacobian, impact_point_with_gains, is_on_active_area};
 use psdcal_model::{
-    Amplitudes, ChannelGains, Model, Param, PsdGeometry, SensorModel, Stage, ValidRegion,
+    Amplitudes, ChannelGains, Model, Param, PsdGeometry, RegionEnd, SensorModel, Stage, ValidRegion,
 };
 
 use crate::aoa::{alpha_wrt_ray, angle_of_arrival_with_jacobians, AngleOfArrival, AoaJacobians};
@@ -219,13 +219,20 @@ impl CalibratedSensor {
                 wrt_block: Vec::new(),
             }),
             Some(map) if !map.contains(point) => {
-                let distance_mm = (point - self.valid_region.centre()).norm();
+                let d = point - self.valid_region.centre();
+                let distance_mm = d.norm();
+                let limit_mm = match map.stage.hull() {
+                    Some(h) if distance_mm > 0.0 => {
+                        h.exit_distance(&self.valid_region.centre(), &(d / distance_mm))
+                    }
+                    _ => distance_mm,
+                };
                 Err(LocateError::BeyondValidRegion {
                     x: point.x,
                     y: point.y,
                     distance_mm,
-                    limit_mm: distance_mm,
-                    fold: false,
+                    limit_mm,
+                    end: RegionEnd::DomainEdge,
                 })
             }
             Some(map) => Ok(map.correct(point)),
@@ -233,9 +240,13 @@ impl CalibratedSensor {
     }
 
     /// The same sensor with a given valid region (the one stored with its
-    /// calibration).
+    /// calibration), within the sensor's domain (its PSD map's scan hull).
     pub fn with_valid_region(mut self, region: ValidRegion) -> Self {
-        self.valid_region = region;
+        let domain = self
+            .psd_map
+            .as_ref()
+            .and_then(|_| self.chain().measured_domain().cloned());
+        self.valid_region = region.with_domain(domain);
         self
     }
 
@@ -444,6 +455,6 @@ pub(crate) fn check_region(region: &ValidRegion, point: &Vector2<f64>) -> Result
             y: point.y,
             distance_mm: o.distance_mm,
             limit_mm: o.limit_mm,
-            fold: o.fold,
+            end: o.end,
         })
 }

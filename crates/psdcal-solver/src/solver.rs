@@ -48,6 +48,26 @@ pub enum RobustLoss {
 }
 
 impl RobustLoss {
+    /// The loss's scale.
+    pub fn scale(&self) -> f64 {
+        match *self {
+            RobustLoss::Huber { scale } | RobustLoss::Cauchy { scale } => scale,
+        }
+    }
+
+    /// The same loss with its scale multiplied by `factor` (a scale given in
+    /// units of the residuals' noise made absolute).
+    pub fn scaled(self, factor: f64) -> Self {
+        match self {
+            RobustLoss::Huber { scale } => RobustLoss::Huber {
+                scale: scale * factor,
+            },
+            RobustLoss::Cauchy { scale } => RobustLoss::Cauchy {
+                scale: scale * factor,
+            },
+        }
+    }
+
     /// `ρ(s)` for a squared residual norm `s`.
     pub fn rho(&self, s: f64) -> f64 {
         match *self {

@@ -100,6 +100,7 @@ pub use base::error::{Error, Result};
 pub use base::option_text::plane_at_distance;
 pub use base::options::CalibrationOptions;
 pub use base::provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
+pub use base::stdout::{is_closed_output, print_text, write_stdout, STANDARD_OUTPUT};
 pub use base::summary::Summary;
 pub use base::summary_text::summary_text;
 pub use base::table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};

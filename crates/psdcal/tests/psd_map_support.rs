@@ -40,6 +40,7 @@ pub fn write_seed_files(dir: &Path, seed: u64) {
         record_cycles: DEFAULT_RECORD_CYCLES,
         seed,
         out: dir.join(format!("nl{seed}")),
+        force: false,
     })
     .unwrap();
     let scan = dir.join(format!("scan{seed}.csv"));

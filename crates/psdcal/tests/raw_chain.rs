@@ -30,6 +30,7 @@ fn request(dir: &Path, snr_db: Option<f64>, seed: u64) -> SimulateRequest {
         record_cycles: 65,
         seed,
         out: dir.to_path_buf(),
+        force: false,
     }
 }
 

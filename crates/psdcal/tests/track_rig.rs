@@ -47,6 +47,7 @@ fn scene(dir: &Path) -> Scene {
         room,
         seed: 5,
         out: dir.to_path_buf(),
+        force: false,
     })
     .unwrap();
     let rig = read_rig(dir.join("rig.json")).unwrap();

@@ -146,7 +146,7 @@ pub(super) fn check_format(format: &str) -> Result<(), String> {
         Err(format!(
             "\"format\" is \"{}\"; expected \"{CALIBRATION_FORMAT}\" (this is not a psdcal \
              calibration file)",
-            format.escape_debug()
+            crate::limits::excerpt(format).escape_debug()
         ))
     }
 }

@@ -179,15 +179,7 @@ pub fn answer_points(
     };
     let written = match out {
         Some(path) => write_atomic(path, |w| write(w)),
-        None => {
-            let mut stdout = io::stdout().lock();
-            write(&mut stdout)
-                .and_then(|()| stdout.flush())
-                .map_err(|source| IoError::Write {
-                    file: "standard output".to_string(),
-                    source,
-                })
-        }
+        None => crate::base::stdout::write_stdout(write),
     };
     if let Some(e) = failure {
         return Err(e);

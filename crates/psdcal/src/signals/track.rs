@@ -15,7 +15,10 @@
 //! window's first sample, counted from the first sample of the stream.
 //!
 //! A line that is not a sample gives a row with the status `malformed_line`
-//! and is not counted as a sample; the stream goes on. Statuses per LED:
+//! (`line_too_long` for a line over 1 MiB, skipped without being held in
+//! memory) and is not counted as a sample; the stream goes on. The samples
+//! of a last, incomplete window are not answered; the summary says how many
+//! ([`TrackSummary::warnings`]). Statuses per LED:
 //! `ok`, `dark`, `saturated`, `too_short`, `tone_collision`, or the
 //! location code of an angle or position that cannot be computed (e.g.
 //! `outside_valid_region`, `too_few_sensors`).
@@ -71,8 +74,35 @@ pub struct TrackSummary {
     pub samples: u64,
     /// Windows answered.
     pub windows: u64,
-    /// Malformed lines.
+    /// Malformed lines (too long ones included).
     pub malformed: u64,
+    /// Samples of the last, incomplete window (not answered).
+    pub unanswered: u64,
+    /// The window's length, samples.
+    pub window: u64,
+}
+
+impl TrackSummary {
+    /// One line: samples, windows, malformed lines.
+    pub fn text(&self) -> String {
+        format!(
+            "track: {} samples, {} windows, {} malformed lines",
+            self.samples, self.windows, self.malformed
+        )
+    }
+
+    /// What the stream left unanswered: the samples of a last window that
+    /// the input ended before filling.
+    pub fn warnings(&self) -> Vec<String> {
+        if self.unanswered == 0 {
+            return Vec::new();
+        }
+        vec![format!(
+            "the input ended {} samples into a window of {}: those samples were not answered \
+             (a window is answered once full)",
+            self.unanswered, self.window
+        )]
+    }
 }
 
 const HEADER: &str = "t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status";
@@ -140,16 +170,19 @@ pub fn track(
         .config
         .validate()
         .map_err(|e| Error::Options(e.to_string()))?;
-    let mut summary = TrackSummary::default();
-    // A reader that went away (`| head`) ends the stream quietly.
+    let mut summary = TrackSummary {
+        window: window as u64,
+        ..TrackSummary::default()
+    };
+    // A reader that went away (`| head`) is an error too: the caller tells
+    // it apart (`is_closed_output`) to end quietly with its own status.
     macro_rules! emit {
         ($result:expr) => {
             match $result {
                 Ok(()) => {}
-                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => return Ok(summary),
                 Err(source) => {
                     return Err(Error::Io(psdcal_io::IoError::Write {
-                        file: "standard output".to_string(),
+                        file: crate::base::stdout::STANDARD_OUTPUT.to_string(),
                         source,
                     }))
                 }
@@ -165,14 +198,19 @@ pub fn track(
     let mut windows = Windows::new(sensors.len(), window, fs, freqs, request.config);
     let options = LocateOptions::default();
     while let Some(sample) = source.next_sample().map_err(stream_error)? {
-        let Sample::Values(values) = sample else {
-            summary.malformed += 1;
-            let t = (summary.samples as f64) / fs;
-            let commas = ",".repeat(empty_fields);
-            emit!(
-                writeln!(output, "{},{commas}malformed_line", num(t)).and_then(|()| output.flush())
-            );
-            continue;
+        let values = match sample {
+            Sample::Values(values) => values,
+            other => {
+                summary.malformed += 1;
+                let t = (summary.samples as f64) / fs;
+                let commas = ",".repeat(empty_fields);
+                let status = match other {
+                    Sample::TooLong => "line_too_long",
+                    _ => "malformed_line",
+                };
+                emit!(writeln!(output, "{},{commas}{status}", num(t)).and_then(|()| output.flush()));
+                continue;
+            }
         };
         summary.samples += 1;
         if let Some(Window { t0_s, estimates }) = windows.push(&values) {
@@ -189,6 +227,7 @@ pub fn track(
             summary.windows += 1;
         }
     }
+    summary.unanswered = windows.pending() as u64;
     Ok(summary)
 }
 

@@ -45,6 +45,9 @@ pub struct PositioningRequest {
     pub seed: u64,
     /// Output folder (created if missing).
     pub out: PathBuf,
+    /// Replace files in `out` that psdcal did not write there
+    /// (docs/formats.md, "Output folders").
+    pub force: bool,
 }
 
 /// What was written.
@@ -96,6 +99,18 @@ impl SimulatedRig {
     }
 }
 
+/// The files written into each sensor's folder `sK`.
+const SENSOR_FILES: [&str; 5] = [
+    "template.csv",
+    "observations.csv",
+    "signals.csv",
+    "truth.json",
+    "calibration.json",
+];
+
+/// The rig's files.
+const RIG_FILES: [&str; 3] = ["rig.json", "rig_points.csv", "truth.csv"];
+
 /// Simulates, calibrates and writes the rig (module documentation).
 pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig> {
     let out = &request.out;
@@ -108,6 +123,11 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
     let mut rng = ChaCha8Rng::seed_from_u64(request.seed);
     rng.set_stream(1);
     let room = Room::draw(&request.room, &truth, &geometry, &mut rng)?;
+    let names: Vec<String> = (1..=room.sensors.len())
+        .flat_map(|k| SENSOR_FILES.map(|f| format!("s{k}/{f}")))
+        .chain(RIG_FILES.map(String::from))
+        .collect();
+    let folder = psdcal_io::OutputFolder::claim(out, &names, request.force)?;
     let mut files = Vec::new();
     let mut sensors_json = Vec::new();
     for (k, pose) in room.sensors.iter().enumerate() {
@@ -124,6 +144,8 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
             record_cycles: request.record_cycles,
             seed: request.seed.wrapping_mul(1000).wrapping_add(k as u64 + 1),
             out: dir.clone(),
+            // Claimed above, with the rig's other files.
+            force: true,
         })?;
         let set = DataSet::from_files(
             &DataSetFiles {
@@ -136,13 +158,7 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
         let calibrated =
             crate::calibration::calibrate::calibrate(&set, &CalibrationOptions::default())?;
         calibrated.write(&set, &dir.join("calibration.json"), None)?;
-        for f in [
-            "template.csv",
-            "observations.csv",
-            "signals.csv",
-            "truth.json",
-            "calibration.json",
-        ] {
+        for f in SENSOR_FILES {
             files.push(format!("{id}/{f}"));
         }
         sensors_json.push(serde_json::json!({
@@ -199,7 +215,8 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
     }
     points.write_to(Some(&out.join("rig_points.csv")))?;
     truth_rows.write_to(Some(&out.join("truth.csv")))?;
-    files.extend(["rig.json", "rig_points.csv", "truth.csv"].map(String::from));
+    files.extend(RIG_FILES.map(String::from));
+    folder.finish()?;
     let r = &request.room;
     Ok(SimulatedRig {
         description: format!(

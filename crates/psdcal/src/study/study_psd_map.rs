@@ -131,6 +131,7 @@ pub(crate) fn data_set(seed: u64, nonlinearity: bool) -> Result<DataSet> {
         record_cycles: DEFAULT_RECORD_CYCLES,
         seed,
         out: PathBuf::new(),
+        force: false,
     })?;
     let template = Template {
         source: "template.csv".into(),
