@@ -8,8 +8,13 @@ pub fn run(
     request: &psdcal::NetworkRequest,
     output: Output,
     limits: psdcal::ReadLimits,
+    force: bool,
 ) -> anyhow::Result<()> {
-    let calibrated = psdcal::calibrate_network_files(request, limits)?;
+    let request = psdcal::NetworkRequest {
+        force,
+        ..request.clone()
+    };
+    let calibrated = psdcal::calibrate_network_files(&request, limits)?;
     let argv: Vec<String> = std::env::args().collect();
     calibrated.write(&argv.join(" "))?;
     if let Some(dir) = &request.report {
@@ -19,6 +24,14 @@ pub fn run(
 }
 
 /// Runs `simulate-network`.
-pub fn simulate(request: &psdcal::NetworkSimRequest, output: Output) -> anyhow::Result<()> {
-    crate::messages::emit(output, &psdcal::simulate_network(request)?)
+pub fn simulate(
+    request: &psdcal::NetworkSimRequest,
+    output: Output,
+    force: bool,
+) -> anyhow::Result<()> {
+    let request = psdcal::NetworkSimRequest {
+        force,
+        ..request.clone()
+    };
+    crate::messages::emit(output, &psdcal::simulate_network(&request)?)
 }

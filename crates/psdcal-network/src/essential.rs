@@ -72,9 +72,27 @@ pub fn epipolar_error(e: &Matrix3<f64>, xi: &Vector3<f64>, xj: &Vector3<f64>) ->
     0.5 * (alg / n1 + alg / n2)
 }
 
-/// RANSAC over eight-pair samples, then the eight-point fit to every inlier
-/// and its decomposition. `threshold` is the epipolar error (rad) below which
-/// a pair agrees.
+/// Pairs a RANSAC hypothesis is scored on, evenly spread over all of them:
+/// the search costs the same however long the wand was waved.
+const SCORED: usize = 2000;
+
+/// How many times the best hypothesis' median error a pair may stray and
+/// still agree.
+const MEDIAN_FACTOR: f64 = 4.0;
+
+/// The median of `v` (reordered).
+fn median_of(v: &mut [f64]) -> f64 {
+    let mid = v.len() / 2;
+    *v.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// Least-median RANSAC over eight-pair samples (each hypothesis scored by
+/// its median epipolar error over up to [`SCORED`] pairs, so no threshold
+/// has to be guessed), then the eight-point fit to every inlier and its
+/// decomposition. A pair agrees when its error is below the larger of
+/// `threshold` (rad) and [`MEDIAN_FACTOR`] × the fit's median error: a lab
+/// model's systematic error (a few mrad) moves every ray a little, a wrong
+/// sighting moves one far.
 pub fn relative_pose(
     pairs: &[(Vector3<f64>, Vector3<f64>)],
     threshold: f64,
@@ -85,7 +103,9 @@ pub fn relative_pose(
     if n < 8 {
         return None;
     }
-    let mut best: Option<(usize, Matrix3<f64>)> = None;
+    let scored: Vec<_> = pairs.iter().step_by(n.div_ceil(SCORED)).collect();
+    let mut errors = Vec::with_capacity(scored.len());
+    let mut best: Option<(f64, Matrix3<f64>)> = None;
     let mut sample = Vec::with_capacity(8);
     for _ in 0..iterations {
         sample.clear();
@@ -99,21 +119,29 @@ pub fn relative_pose(
         let Some(e) = eight_point(&chosen) else {
             continue;
         };
-        let count = pairs
-            .iter()
-            .filter(|(xi, xj)| epipolar_error(&e, xi, xj) < threshold)
-            .count();
-        if best.as_ref().is_none_or(|(c, _)| count > *c) {
-            best = Some((count, e));
+        errors.clear();
+        errors.extend(scored.iter().map(|(xi, xj)| epipolar_error(&e, xi, xj)));
+        let m = median_of(&mut errors);
+        if m.is_finite() && best.as_ref().is_none_or(|(b, _)| m < *b) {
+            best = Some((m, e));
         }
     }
     let (_, mut e) = best?;
     // Refit on the inliers twice (the set settles).
     let mut inliers = vec![false; n];
-    for _ in 0..2 {
-        for (flag, (xi, xj)) in inliers.iter_mut().zip(pairs) {
-            *flag = epipolar_error(&e, xi, xj) < threshold;
+    let mut all = vec![0.0; n];
+    let mut mark = |e: &Matrix3<f64>, inliers: &mut [bool]| {
+        for (a, (xi, xj)) in all.iter_mut().zip(pairs) {
+            *a = epipolar_error(e, xi, xj);
         }
+        let mut sorted = all.clone();
+        let bound = threshold.max(MEDIAN_FACTOR * median_of(&mut sorted));
+        for (flag, a) in inliers.iter_mut().zip(&all) {
+            *flag = *a < bound;
+        }
+    };
+    for _ in 0..2 {
+        mark(&e, &mut inliers);
         let chosen: Vec<_> = pairs
             .iter()
             .zip(&inliers)
@@ -122,9 +150,7 @@ pub fn relative_pose(
             .collect();
         e = eight_point(&chosen)?;
     }
-    for (flag, (xi, xj)) in inliers.iter_mut().zip(pairs) {
-        *flag = epipolar_error(&e, xi, xj) < threshold;
-    }
+    mark(&e, &mut inliers);
     let j_from_i = decompose(&e, pairs, &inliers)?;
     Some(RelativePose { j_from_i, inliers })
 }

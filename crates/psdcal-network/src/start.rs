@@ -32,7 +32,9 @@ use crate::NetworkError;
 pub struct StartOptions {
     /// Least shared sightings that place a sensor from another.
     pub min_shared: usize,
-    /// Epipolar error (rad) below which a ray pair agrees.
+    /// Epipolar error (rad) below which a ray pair always agrees (it agrees
+    /// up to 4 × the relative pose's median error when that is larger: the
+    /// lab models' systematic error).
     pub epipolar_threshold: f64,
     /// RANSAC samples per sensor pair.
     pub ransac_iterations: usize,

@@ -6,11 +6,17 @@
 //! the lab record with the refined lens, its covariance from the network,
 //! the lab file named in its provenance), so that `locate --rig` and
 //! `track --rig` use them as they are.
+//!
+//! rig.json is the file `--out` names (replaced as any `--out` is); the
+//! refined calibrations beside it and the report page are named by psdcal,
+//! so they replace only files psdcal wrote there (psdcal-io's
+//! `OutputFolder`: refused before anything is written, unless `force`).
 
 use std::path::{Path, PathBuf};
 
 use psdcal_io::{
-    refuse_overwrite, write_atomic_bytes, write_calibration, Calibration, ReadLimits, StdDevs,
+    refuse_overwrite, write_atomic_bytes, write_calibration, Calibration, OutputFolder,
+    ReadLimits, StdDevs,
 };
 use psdcal_network::{calibrate_network, NetworkOptions, NetworkResult};
 use serde_json::{json, Value};
@@ -19,6 +25,7 @@ use crate::base::error::{Error, Result};
 use crate::base::provenance::{provenance, InputHashes};
 use crate::base::summary::Summary;
 use crate::network::network_input::{read_network, NetworkFiles, NetworkInput};
+use crate::network::network_page::claim_page;
 
 /// What `calibrate-network` does.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,6 +40,11 @@ pub struct NetworkRequest {
     /// Also write a report page (index.html) into this folder
     #[cfg_attr(feature = "clap", arg(long, value_name = "DIR"))]
     pub report: Option<PathBuf>,
+    /// Replace files beside `out` and in `report` that psdcal did not write
+    /// there (otherwise refused before anything is written; docs/formats.md,
+    /// "Output folders"). The command line's global `--force`.
+    #[cfg_attr(feature = "clap", arg(skip))]
+    pub force: bool,
 }
 
 /// A calibrated network and where it goes.
@@ -46,6 +58,8 @@ pub struct NetworkCalibrated {
     pub out: PathBuf,
     /// Each sensor's refined calibration.json.
     pub calibrations: Vec<PathBuf>,
+    /// Replace files psdcal did not write ([`NetworkRequest::force`]).
+    pub force: bool,
 }
 
 /// A sensor id as a file-name part (characters other than letters, digits,
@@ -99,13 +113,32 @@ pub fn calibrate_network_files(
         outs.push(("a refined calibration", c));
     }
     refuse_overwrite(&ins, &outs)?;
+    // Refused before the calibration's work when a file psdcal names is not
+    // psdcal's; claimed again when written.
+    claim(&request.out, &calibrations, request.force)?;
+    if let Some(dir) = &request.report {
+        claim_page(dir, request.force)?;
+    }
     let result = calibrate_network(&input.data, &NetworkOptions::default())?;
     Ok(NetworkCalibrated {
         input,
         result,
         out: request.out.clone(),
         calibrations,
+        force: request.force,
     })
+}
+
+/// The folder of the refined calibrations beside `out`, checked: each is
+/// absent or psdcal's (or `force`).
+fn claim(out: &Path, calibrations: &[PathBuf], force: bool) -> Result<OutputFolder> {
+    let dir = out.parent().unwrap_or_else(|| Path::new(""));
+    let names: Vec<String> = calibrations
+        .iter()
+        .filter_map(|c| c.file_name())
+        .map(|n| n.to_string_lossy().into_owned())
+        .collect();
+    Ok(OutputFolder::claim(dir, &names, force)?)
 }
 
 fn rows(m: &dyn Fn(usize, usize) -> f64, n: usize) -> Vec<Vec<f64>> {
@@ -197,14 +230,23 @@ impl NetworkCalibrated {
         })
     }
 
-    /// Writes rig.json and the refined calibrations.
+    /// Writes rig.json and the refined calibrations (refused before any
+    /// write when a calibration's name holds a file psdcal did not write).
     pub fn write(&self, command: &str) -> Result<()> {
+        let folder = claim(&self.out, &self.calibrations, self.force)?;
+        let text = serde_json::to_string_pretty(&self.rig_json())
+            .map_err(|e| Error::Input(format!("cannot encode rig.json: {e}")))?;
+        if let Some(dir) = self.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
+                path: dir.to_path_buf(),
+                message: format!("cannot create the output folder {}: {e}", dir.display()),
+            })?;
+        }
         for k in 0..self.result.sensors.len() {
             write_calibration(&self.calibrations[k], &self.refined(k, command))?;
         }
-        let text = serde_json::to_string_pretty(&self.rig_json())
-            .map_err(|e| Error::Input(format!("cannot encode rig.json: {e}")))?;
         write_atomic_bytes(&self.out, (text + "\n").as_bytes())?;
+        folder.finish()?;
         Ok(())
     }
 

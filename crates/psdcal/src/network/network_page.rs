@@ -77,12 +77,22 @@ fn view(
     Ok(scatter_svg(&sets, &frame)?)
 }
 
-/// Writes `dir/index.html` (module documentation).
+/// The page's file in its folder.
+const PAGE: &str = "index.html";
+
+/// The report folder, checked: its page is absent or psdcal's (or `force`).
+pub(crate) fn claim_page(dir: &Path, force: bool) -> Result<psdcal_io::OutputFolder> {
+    Ok(psdcal_io::OutputFolder::claim(
+        dir,
+        &[PAGE.to_string()],
+        force,
+    )?)
+}
+
+/// Writes `dir/index.html` (module documentation); a page there that
+/// psdcal did not write is kept, the run refused (unless `c.force`).
 pub fn network_page(c: &NetworkCalibrated, dir: &Path) -> Result<PathBuf> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
-        path: dir.to_path_buf(),
-        message: format!("cannot create the report folder {}: {e}", dir.display()),
-    })?;
+    let folder = claim_page(dir, c.force)?;
     let r = &c.result;
     let d = &c.input.data;
     let mut page = Page::new("psdcal network calibration");
@@ -207,7 +217,12 @@ pub fn network_page(c: &NetworkCalibrated, dir: &Path) -> Result<PathBuf> {
             .map(|i| format!("[{}] {}", i.code, i.message))
             .collect(),
     ));
-    let path = dir.join("index.html");
+    std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
+        path: dir.to_path_buf(),
+        message: format!("cannot create the report folder {}: {e}", dir.display()),
+    })?;
+    let path = dir.join(PAGE);
     psdcal_io::write_atomic_bytes(&path, page.render().as_bytes())?;
+    folder.finish()?;
     Ok(path)
 }

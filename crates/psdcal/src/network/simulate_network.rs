@@ -18,7 +18,7 @@
 
 use std::path::PathBuf;
 
-use psdcal_io::{write_atomic_bytes, write_calibration, Calibration, StdDevs};
+use psdcal_io::{write_atomic_bytes, write_calibration, Calibration, OutputFolder, StdDevs};
 use psdcal_model::Pose;
 use psdcal_sim::network_room::{NetworkRoom, NetworkRoomOptions, NetworkRoomSensor, RoomLed};
 use rand::SeedableRng;
@@ -58,6 +58,11 @@ pub struct NetworkSimRequest {
     /// A wand of three LEDs on one line (default: a T)
     #[cfg_attr(feature = "clap", arg(long))]
     pub collinear_wand: bool,
+    /// Replace files in `out` that psdcal did not write there (otherwise
+    /// refused before anything is written; docs/formats.md, "Output
+    /// folders"). The command line's global `--force`.
+    #[cfg_attr(feature = "clap", arg(skip))]
+    pub force: bool,
 }
 
 /// The lab record of a simulated sensor (`lab`: its lab values and
@@ -102,18 +107,24 @@ fn pose_json(p: &Pose) -> serde_json::Value {
     json!({ "rvec": p.rvec.as_slice(), "t_mm": p.t.as_slice() })
 }
 
-/// Simulates and writes the room (module documentation).
+/// The files written under fixed names (besides `lab/<id>.json` and
+/// `true/<id>.json`).
+const FILES: [&str; 8] = [
+    "sensors.csv",
+    "wand.csv",
+    "frame.csv",
+    "network_points.csv",
+    "rig_points.csv",
+    "truth.csv",
+    "true_rig.json",
+    "network_truth.json",
+];
+
+/// Simulates and writes the room (module documentation); refused before
+/// anything is written when one of its files in `out` is not psdcal's
+/// (unless `request.force`).
 pub fn simulate_network(request: &NetworkSimRequest) -> Result<Summary> {
     let out = &request.out;
-    let mkdir = |d: &PathBuf| {
-        std::fs::create_dir_all(d).map_err(|e| Error::OutputFolder {
-            path: d.clone(),
-            message: format!("cannot create the output folder {}: {e}", d.display()),
-        })
-    };
-    for d in [out.clone(), out.join("lab"), out.join("true")] {
-        mkdir(&d)?;
-    }
     let options = NetworkRoomOptions {
         sensors: request.sensors,
         duration_s: request.seconds,
@@ -128,6 +139,18 @@ pub fn simulate_network(request: &NetworkSimRequest) -> Result<Summary> {
     rng.set_stream(3);
     let room = NetworkRoom::simulate(&options, &chain, &mut rng)?;
     let ids: Vec<String> = (1..=room.sensors.len()).map(|k| format!("s{k}")).collect();
+    let names: Vec<String> = FILES
+        .iter()
+        .map(|f| f.to_string())
+        .chain(ids.iter().flat_map(|id| [format!("lab/{id}.json"), format!("true/{id}.json")]))
+        .collect();
+    let folder = OutputFolder::claim(out, &names, request.force)?;
+    for d in [out.clone(), out.join("lab"), out.join("true")] {
+        std::fs::create_dir_all(&d).map_err(|e| Error::OutputFolder {
+            path: d.clone(),
+            message: format!("cannot create the output folder {}: {e}", d.display()),
+        })?;
+    }
     let wand_names: Vec<String> = (1..=room.wand.len()).map(|k| format!("w{k}")).collect();
     let frame_names: Vec<String> = (1..=room.frame_leds.len())
         .map(|k| format!("L{k}"))
@@ -230,6 +253,7 @@ pub fn simulate_network(request: &NetworkSimRequest) -> Result<Summary> {
             })).collect::<Vec<_>>(),
         }),
     )?;
+    folder.finish()?;
     let text =
         format!(
         "Simulated by psdcal {}: a {}×{}×{} mm room, {} sensors (lens 2, each with its own lab \
