@@ -15,6 +15,7 @@
 
 use nalgebra::{DMatrix, Vector2};
 use psdcal_model::Pose;
+use psdcal_solver::inverse_scaled;
 use psdcal_solver::solver::{
     normal_equations as linearize, solve, RobustLoss, SolverOptions, SolverReport,
 };
@@ -246,7 +247,9 @@ pub fn adjust(
     }
     let ls = SolverOptions {
         max_iterations: options.max_iterations,
-        cost_tolerance: 1e-10,
+        // χ² within 1e-8 of itself: the estimate within a small fraction
+        // of its σ of the minimum.
+        cost_tolerance: 1e-8,
         step_tolerance: 1e-10,
         ..SolverOptions::default()
     };
@@ -269,7 +272,11 @@ pub fn adjust(
     }
     let problem = problem_at(&blocks, &statics, sigma, &state)?;
     let ne = linearize(&problem, &state, None)?;
-    let (covariance, _) = ne.inverse_blocks().ok_or(NetworkError::Numerical {
+    // The wand poses' own covariances are not wanted: S⁻¹ alone.
+    let covariance = ne
+        .schur_complement()
+        .and_then(|s| inverse_scaled(&s))
+        .ok_or(NetworkError::Numerical {
         stage: "covariance",
         reason: "the network's information matrix is singular (a sensor or the gauge is not \
                  determined by the data)"

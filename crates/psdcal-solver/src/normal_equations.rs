@@ -423,9 +423,20 @@ impl NormalEquations {
     /// a dozen `cpuid` instructions that cost 13 µs each under a hypervisor
     /// (measured here) — more than the whole product for the sizes of
     /// calibration.
+    ///
+    /// With [`Self::sparse_rows`], only each `W_i`'s non-zero rows are
+    /// visited (a network's frame touches the sensors that saw it).
     pub fn schur_complement(&self) -> Option<DMatrix<f64>> {
         let p = self.u.nrows();
         let mut s = self.u.clone();
+        if self.sparse_rows {
+            let mut rhs = DVector::zeros(p);
+            for (w, v) in self.w.iter().zip(&self.v) {
+                let inv = v.cholesky()?.inverse();
+                subtract_sparse(&mut s, &mut rhs, w, &inv, &Vector6::zeros());
+            }
+            return Some(s);
+        }
         let mut x = vec![0.0; 6 * p];
         for (w, v) in self.w.iter().zip(&self.v) {
             let inv = v.cholesky()?.inverse();

@@ -1,5 +1,6 @@
 //! Sparse terms (`add_columns`) against the same terms written densely
-//! (`add`): the same normal equations, the same step.
+//! (`add`): the same normal equations, the same step, the same Schur
+//! complement.
 
 use nalgebra::DMatrix;
 use psdcal_solver::{NormalEquations, ResidualTerm};
@@ -64,4 +65,11 @@ fn sparse_and_dense_terms_give_the_same_normal_equations_and_step() {
     for (x, y) in s1.db.iter().zip(&s2.db) {
         assert!((x - y).norm() < 1e-10 * (1.0 + x.norm()));
     }
+    // The Schur complement (the covariance's) over the non-zero rows alone.
+    let (c1, c2) = (
+        dense.schur_complement().unwrap(),
+        sparse.schur_complement().unwrap(),
+    );
+    assert!((&c1 - &c2).norm() <= 1e-10 * (1.0 + c1.norm()));
+    assert_eq!(c2, c2.transpose());
 }
