@@ -348,21 +348,26 @@ impl NormalEquations {
         damp(&mut s, lambda);
         let mut rhs = -&self.g_a;
         let mut v_inv = Vec::with_capacity(self.v.len());
+        let mut factors = Vec::with_capacity(if self.sparse_rows { self.v.len() } else { 0 });
         for i in 0..self.v.len() {
             let mut vi = self.v[i];
             for k in 0..6 {
                 vi[(k, k)] *= 1.0 + lambda;
                 vi[(k, k)] += 1e-12 * lambda.max(1e-12) * (1.0 + vi[(k, k)]);
             }
-            let inv = vi.cholesky()?.inverse();
+            let chol = vi.cholesky()?;
+            let inv = chol.inverse();
             if p > 0 && self.sparse_rows {
-                subtract_sparse(&mut s, &mut rhs, &self.w[i], &inv, &self.g_b[i]);
+                factors.push(chol.l().try_inverse()?);
             } else if p > 0 {
                 let wv = &self.w[i] * inv;
                 s -= &wv * self.w[i].transpose();
                 rhs += &wv * self.g_b[i];
             }
             v_inv.push(inv);
+        }
+        if p > 0 && self.sparse_rows {
+            subtract_by_products(&mut s, &mut rhs, &self.w, &factors, &self.g_b);
         }
         let da = if p > 0 {
             solve_scaled(&s, &rhs)?
@@ -371,11 +376,11 @@ impl NormalEquations {
         };
         let db = (0..self.v.len())
             .map(|i| {
-                let wt_da: Vector6<f64> = if p > 0 {
-                    Vector6::from_iterator((self.w[i].transpose() * &da).iter().copied())
-                } else {
-                    Vector6::zeros()
-                };
+                // W_iᵀ δa, column by column of the column-major W_i.
+                let w = self.w[i].as_slice();
+                let wt_da = Vector6::from_fn(|c, _| {
+                    w[c * p..c * p + p].iter().zip(da.iter()).map(|(x, y)| x * y).sum()
+                });
                 v_inv[i] * (-self.g_b[i] - wt_da)
             })
             .collect();
@@ -430,11 +435,13 @@ impl NormalEquations {
         let p = self.u.nrows();
         let mut s = self.u.clone();
         if self.sparse_rows {
-            let mut rhs = DVector::zeros(p);
-            for (w, v) in self.w.iter().zip(&self.v) {
-                let inv = v.cholesky()?.inverse();
-                subtract_sparse(&mut s, &mut rhs, w, &inv, &Vector6::zeros());
-            }
+            let factors = self
+                .v
+                .iter()
+                .map(|v| v.cholesky()?.l().try_inverse())
+                .collect::<Option<Vec<_>>>()?;
+            let zeros = vec![Vector6::zeros(); self.v.len()];
+            subtract_by_products(&mut s, &mut DVector::zeros(p), &self.w, &factors, &zeros);
             return Some(s);
         }
         let mut x = vec![0.0; 6 * p];
@@ -463,46 +470,54 @@ impl NormalEquations {
     }
 }
 
-/// `S −= W V⁻¹ Wᵀ`, `rhs += W V⁻¹ g` over the non-zero rows of `W` only
-/// (upper triangle computed, mirrored: `S` stays exactly symmetric).
-fn subtract_sparse(
+/// Frames side by side in one product of [`subtract_by_products`].
+const CHUNK: usize = 64;
+
+/// `S −= Σ W_i V_i⁻¹ W_iᵀ`, `rhs += Σ W_i V_i⁻¹ g_i` given `L_i⁻¹`
+/// (`V_i = L_i L_iᵀ`): with `X_i = W_i L_i⁻ᵀ` (p × 6), `W_i V_i⁻¹ W_iᵀ =
+/// X_i X_iᵀ` and `W_i V_i⁻¹ g_i = X_i (L_i⁻¹ g_i)`; [`CHUNK`] of the `X_i`
+/// side by side make one matrix product (matrixmultiply's kernels: many
+/// frames, each touching most of the global block, as a network's do).
+/// `S` is mirrored from its upper triangle afterwards (exactly symmetric).
+/// Sums in a fixed order: the result does not depend on the machine's
+/// threads.
+fn subtract_by_products(
     s: &mut DMatrix<f64>,
     rhs: &mut DVector<f64>,
-    w: &DMatrix<f64>,
-    inv: &Matrix6<f64>,
-    g: &Vector6<f64>,
+    w: &[DMatrix<f64>],
+    l_inv: &[Matrix6<f64>],
+    g: &[Vector6<f64>],
 ) {
-    let p = w.nrows();
-    let ws = w.as_slice();
-    let mut rows: Vec<(usize, [f64; 6], [f64; 6])> = Vec::with_capacity(p);
-    for j in 0..p {
-        let wj: [f64; 6] = std::array::from_fn(|c| ws[c * p + j]);
-        if wj.iter().any(|v| *v != 0.0) {
-            let xj: [f64; 6] = std::array::from_fn(|c| {
-                let col = inv.column(c);
-                wj[0] * col[0]
-                    + wj[1] * col[1]
-                    + wj[2] * col[2]
-                    + wj[3] * col[3]
-                    + wj[4] * col[4]
-                    + wj[5] * col[5]
-            });
-            rows.push((j, wj, xj));
-        }
-    }
-    let dot = |a: &[f64; 6], b: &[f64; 6]| {
-        a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5]
-    };
-    let ss = s.as_mut_slice();
-    let gs: [f64; 6] = std::array::from_fn(|c| g[c]);
-    for (a, (j, _, xj)) in rows.iter().enumerate() {
-        rhs[*j] += dot(xj, &gs);
-        for (k, wk, _) in &rows[a..] {
-            let v = dot(xj, wk);
-            ss[k * p + j] -= v;
-            if j != k {
-                ss[j * p + k] -= v;
+    let p = s.nrows();
+    let mut x = DMatrix::<f64>::zeros(p, 6 * CHUNK.min(w.len()));
+    for start in (0..w.len()).step_by(CHUNK) {
+        let end = (start + CHUNK).min(w.len());
+        for i in start..end {
+            let wi = w[i].as_slice();
+            let li = &l_inv[i];
+            let lg = li * g[i];
+            let first = 6 * (i - start);
+            for c in 0..6 {
+                // Column c of X_i: Σ_l W_i[:, l] L⁻¹[c, l] (L⁻¹ lower: l ≤ c).
+                let column = &mut x.as_mut_slice()[(first + c) * p..(first + c + 1) * p];
+                column.fill(0.0);
+                for l in 0..=c {
+                    let f = li[(c, l)];
+                    for (out, v) in column.iter_mut().zip(&wi[l * p..l * p + p]) {
+                        *out += f * v;
+                    }
+                }
+                for (r, v) in rhs.iter_mut().zip(column.iter()) {
+                    *r += v * lg[c];
+                }
             }
+        }
+        let used = x.columns(0, 6 * (end - start));
+        s.gemm(-1.0, &used, &used.transpose(), 1.0);
+    }
+    for k in 0..p {
+        for j in 0..k {
+            s[(k, j)] = s[(j, k)];
         }
     }
 }
