@@ -1,14 +1,17 @@
 //! The bundle adjustment's passes, the dropped frames and the covariance
-//! (docs/model.md, "Network calibration"):
+//! (docs/network.md):
 //!
 //! 1. the point noise `σ` is first taken robustly from the start's
 //!    residuals: for 2-D Gaussian residuals of σ per axis, `‖r‖²` has median
 //!    `2 ln 2 · σ²`;
-//! 2. two passes under the Cauchy loss (scale 3σ) with `σ` re-estimated
-//!    between them; a frame with a sighting beyond `outlier_sigma · σ` is
-//!    dropped (a wrong or reflected LED), a static LED's sighting too;
-//! 3. a least-squares pass on what is kept, `σ² = Σ‖r‖² / (2n − unknowns)`,
-//!    repeated once when `σ` moved by more than 5 % (it weighs the prior);
+//! 2. one pass under the Cauchy loss (scale 3σ), stopped once an iteration
+//!    moves the cost by less than 10⁻³ of itself (it only has to tell the
+//!    bad frames apart), then `σ` re-estimated by the median; a frame with
+//!    a sighting beyond `outlier_sigma · σ` is dropped (a wrong or reflected
+//!    LED), a static LED's sighting too;
+//! 3. a least-squares pass on what is kept (to a χ² within 10⁻⁸ of its
+//!    minimum), `σ² = Σ‖r‖² / (2n − unknowns)`, repeated when `σ` moved by
+//!    more than 5 % (it weighs the prior), three passes at most;
 //! 4. the covariance of the global block (sensor poses and lenses, the
 //!    lab prior included) is `S⁻¹` of the whitened normal equations at the
 //!    solution, with `S` the Schur complement of the wand poses.
@@ -202,7 +205,7 @@ pub fn adjust(
     let mut iterations = 0;
     let robust = SolverOptions {
         max_iterations: options.max_iterations,
-        cost_tolerance: 1e-4,
+        cost_tolerance: 1e-3,
         step_tolerance: 1e-6,
         robust: Some(RobustLoss::Cauchy {
             scale: options.robust_sigma,

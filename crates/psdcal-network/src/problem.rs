@@ -1,5 +1,5 @@
 //! The bundle adjustment of a network as a problem for the one solver
-//! (docs/model.md, "Network calibration").
+//! (docs/network.md).
 //!
 //! Unknowns: each sensor's `sensor_from_world` `T_s` (6; held at the
 //! identity for sensor 0 when no static frame fixes the world) and its freed

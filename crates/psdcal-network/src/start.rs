@@ -1,5 +1,4 @@
-//! The start of a network calibration, without any guess (docs/model.md,
-//! "Network calibration"):
+//! The start of a network calibration, without any guess (docs/network.md):
 //!
 //! 1. every observation becomes a unit ray through its sensor's lab model;
 //! 2. the view graph's maximum spanning tree ([`crate::view_graph`]) orders
