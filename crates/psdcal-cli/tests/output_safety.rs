@@ -76,7 +76,14 @@ fn network_outputs_replace_only_psdcal_s_own_files() {
     let mine = room.join("sensors.csv");
     fs::write(&mine, b"my sensors").unwrap();
     let simulate = |more: &[&str]| {
-        let mut args = vec!["simulate-network", "-q", "--seconds", "4", "--out", s(&room)];
+        let mut args = vec![
+            "simulate-network",
+            "-q",
+            "--seconds",
+            "4",
+            "--out",
+            s(&room),
+        ];
         args.extend_from_slice(more);
         psdcal(args)
     };

@@ -280,11 +280,11 @@ pub fn adjust(
         .schur_complement()
         .and_then(|s| inverse_scaled(&s))
         .ok_or(NetworkError::Numerical {
-        stage: "covariance",
-        reason: "the network's information matrix is singular (a sensor or the gauge is not \
+            stage: "covariance",
+            reason: "the network's information matrix is singular (a sensor or the gauge is not \
                  determined by the data)"
-            .into(),
-    })?;
+                .into(),
+        })?;
     dropped.sort_unstable();
     Ok(Adjusted {
         state,

@@ -379,7 +379,11 @@ impl NormalEquations {
                 // W_iᵀ δa, column by column of the column-major W_i.
                 let w = self.w[i].as_slice();
                 let wt_da = Vector6::from_fn(|c, _| {
-                    w[c * p..c * p + p].iter().zip(da.iter()).map(|(x, y)| x * y).sum()
+                    w[c * p..c * p + p]
+                        .iter()
+                        .zip(da.iter())
+                        .map(|(x, y)| x * y)
+                        .sum()
                 });
                 v_inv[i] * (-self.g_b[i] - wt_da)
             })

@@ -15,8 +15,7 @@
 use std::path::{Path, PathBuf};
 
 use psdcal_io::{
-    refuse_overwrite, write_atomic_bytes, write_calibration, Calibration, OutputFolder,
-    ReadLimits, StdDevs,
+    refuse_overwrite, write_atomic_bytes, write_calibration, Calibration, ReadLimits, StdDevs,
 };
 use psdcal_network::{calibrate_network, NetworkOptions, NetworkResult};
 use serde_json::{json, Value};
@@ -25,7 +24,7 @@ use crate::base::error::{Error, Result};
 use crate::base::provenance::{provenance, InputHashes};
 use crate::base::summary::Summary;
 use crate::network::network_input::{read_network, NetworkFiles, NetworkInput};
-use crate::network::network_page::claim_page;
+use crate::network::network_outputs::{claim_calibrations, claim_page};
 
 /// What `calibrate-network` does.
 #[derive(Debug, Clone, PartialEq)]
@@ -115,7 +114,7 @@ pub fn calibrate_network_files(
     refuse_overwrite(&ins, &outs)?;
     // Refused before the calibration's work when a file psdcal names is not
     // psdcal's; claimed again when written.
-    claim(&request.out, &calibrations, request.force)?;
+    claim_calibrations(&request.out, &calibrations, request.force)?;
     if let Some(dir) = &request.report {
         claim_page(dir, request.force)?;
     }
@@ -127,18 +126,6 @@ pub fn calibrate_network_files(
         calibrations,
         force: request.force,
     })
-}
-
-/// The folder of the refined calibrations beside `out`, checked: each is
-/// absent or psdcal's (or `force`).
-fn claim(out: &Path, calibrations: &[PathBuf], force: bool) -> Result<OutputFolder> {
-    let dir = out.parent().unwrap_or_else(|| Path::new(""));
-    let names: Vec<String> = calibrations
-        .iter()
-        .filter_map(|c| c.file_name())
-        .map(|n| n.to_string_lossy().into_owned())
-        .collect();
-    Ok(OutputFolder::claim(dir, &names, force)?)
 }
 
 fn rows(m: &dyn Fn(usize, usize) -> f64, n: usize) -> Vec<Vec<f64>> {
@@ -233,7 +220,7 @@ impl NetworkCalibrated {
     /// Writes rig.json and the refined calibrations (refused before any
     /// write when a calibration's name holds a file psdcal did not write).
     pub fn write(&self, command: &str) -> Result<()> {
-        let folder = claim(&self.out, &self.calibrations, self.force)?;
+        let folder = claim_calibrations(&self.out, &self.calibrations, self.force)?;
         let text = serde_json::to_string_pretty(&self.rig_json())
             .map_err(|e| Error::Input(format!("cannot encode rig.json: {e}")))?;
         if let Some(dir) = self.out.parent().filter(|d| !d.as_os_str().is_empty()) {

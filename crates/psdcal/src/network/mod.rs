@@ -4,5 +4,6 @@
 
 pub(crate) mod calibrate_network;
 pub(crate) mod network_input;
+pub(crate) mod network_outputs;
 pub(crate) mod network_page;
 pub(crate) mod simulate_network;

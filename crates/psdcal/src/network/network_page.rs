@@ -15,6 +15,7 @@ use psdcal_report::{
 
 use crate::base::error::{Error, Result};
 use crate::network::calibrate_network::NetworkCalibrated;
+use crate::network::network_outputs::{claim_page, PAGE};
 
 /// Length of the drawn field-of-view edges, mm.
 const FOV_MM: f64 = 1500.0;
@@ -75,18 +76,6 @@ fn view(
         sets.iter().flat_map(|s| s.points.clone()),
     );
     Ok(scatter_svg(&sets, &frame)?)
-}
-
-/// The page's file in its folder.
-const PAGE: &str = "index.html";
-
-/// The report folder, checked: its page is absent or psdcal's (or `force`).
-pub(crate) fn claim_page(dir: &Path, force: bool) -> Result<psdcal_io::OutputFolder> {
-    Ok(psdcal_io::OutputFolder::claim(
-        dir,
-        &[PAGE.to_string()],
-        force,
-    )?)
 }
 
 /// Writes `dir/index.html` (module documentation); a page there that

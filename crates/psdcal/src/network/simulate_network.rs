@@ -142,7 +142,10 @@ pub fn simulate_network(request: &NetworkSimRequest) -> Result<Summary> {
     let names: Vec<String> = FILES
         .iter()
         .map(|f| f.to_string())
-        .chain(ids.iter().flat_map(|id| [format!("lab/{id}.json"), format!("true/{id}.json")]))
+        .chain(
+            ids.iter()
+                .flat_map(|id| [format!("lab/{id}.json"), format!("true/{id}.json")]),
+        )
         .collect();
     let folder = OutputFolder::claim(out, &names, request.force)?;
     for d in [out.clone(), out.join("lab"), out.join("true")] {
