@@ -9,7 +9,6 @@ use crate::adjust::{adjust, AdjustOptions, DropReason};
 use crate::data::NetworkData;
 use crate::diagnose::{diagnose, NetworkDiagnostics};
 pub use crate::estimate::{Gauge, SensorEstimate};
-use crate::geometry::centre_with_jacobian;
 use crate::start::{start, StartOptions};
 use crate::view_graph::TreeEdge;
 use crate::NetworkError;
@@ -130,7 +129,7 @@ pub fn calibrate_network(
             let lens_covariance =
                 DMatrix::from_fn(n_lens, n_lens, |i, j| a.covariance[(lens[i], lens[j])]);
             let _ = cols;
-            let (position_mm, j) = centre_with_jacobian(&pose);
+            let (position_mm, j) = pose.centre_with_jacobian();
             SensorEstimate {
                 sensor_from_world: pose,
                 pose_covariance,

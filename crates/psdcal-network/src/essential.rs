@@ -87,10 +87,10 @@ fn median_of(v: &mut [f64]) -> f64 {
 }
 
 /// Least-median RANSAC over eight-pair samples (each hypothesis scored by
-/// its median epipolar error over up to [`SCORED`] pairs, so no threshold
+/// its median epipolar error over up to 2 000 pairs, so no threshold
 /// has to be guessed), then the eight-point fit to every inlier and its
 /// decomposition. A pair agrees when its error is below the larger of
-/// `threshold` (rad) and [`MEDIAN_FACTOR`] × the fit's median error: a lab
+/// `threshold` (rad) and 4 × the fit's median error: a lab
 /// model's systematic error (a few mrad) moves every ray a little, a wrong
 /// sighting moves one far.
 pub fn relative_pose(

@@ -58,4 +58,22 @@ impl SensorEstimate {
     pub fn rms_image_mm(&self) -> f64 {
         (self.residual_mm2 / self.points.max(1) as f64).sqrt()
     }
+
+    /// The position's σ per world axis, mm.
+    pub fn position_sigma_mm(&self) -> Vector3<f64> {
+        self.position_covariance
+            .diagonal()
+            .map(|v| v.max(0.0).sqrt())
+    }
+
+    /// The orientation's σ, degrees: the root of the rotation vector's
+    /// variances summed.
+    pub fn orientation_sigma_deg(&self) -> f64 {
+        self.pose_covariance
+            .fixed_view::<3, 3>(0, 0)
+            .trace()
+            .max(0.0)
+            .sqrt()
+            .to_degrees()
+    }
 }

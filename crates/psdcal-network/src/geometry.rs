@@ -1,6 +1,7 @@
 //! Small 3-D geometry of the start: the least-squares meeting point of
-//! rays, the rigid fit of two point sets (Kabsch), a sensor's optical
-//! centre in the world with its Jacobian.
+//! rays, the rigid fit of two point sets (Kabsch). (A sensor's optical
+//! centre in the world with its Jacobian is psdcal-model's
+//! `Pose::centre_with_jacobian`.)
 //!
 //! - Rays `c_k + s d_k` (unit `d_k`) meet at the `X` minimising
 //!   `Σ ‖(I − d_k d_kᵀ)(X − c_k)‖²`: `(Σ P_k) X = Σ P_k c_k`, `P_k = I − d_k d_kᵀ`.
@@ -8,10 +9,8 @@
 //!   and `H = Σ (a_k − ā)(b_k − b̄)ᵀ = U Σ Vᵀ`, `R = V diag(1, 1, det(V Uᵀ)) Uᵀ`,
 //!   `t = b̄ − R ā`. For collinear points the rotation about their line is
 //!   arbitrary (the minimal rotation is returned).
-//! - A sensor at `sensor_from_world = (R, t)` has its centre at `c = −Rᵀ t`;
-//!   `∂c/∂t = −Rᵀ`, `∂c/∂rvec_k = −(∂R/∂rvec_k)ᵀ t`.
 
-use nalgebra::{Matrix3, SMatrix, Vector3};
+use nalgebra::{Matrix3, Vector3};
 use psdcal_model::Pose;
 
 /// The least-squares meeting point of rays (origins, unit directions), or
@@ -82,17 +81,4 @@ pub fn rotation_between(a: &Vector3<f64>, b: &Vector3<f64>) -> Option<Matrix3<f6
     }
     let angle = s.atan2(c);
     Some(Pose::new(axis / s * angle, Vector3::zeros()).rotation())
-}
-
-/// A sensor's optical centre in the world, `−Rᵀ t`, and its Jacobian with
-/// respect to `sensor_from_world`'s `(rvec, t)` (module documentation).
-pub fn centre_with_jacobian(sensor_from_world: &Pose) -> (Vector3<f64>, SMatrix<f64, 3, 6>) {
-    let (r, dr) = sensor_from_world.rotation_with_derivatives();
-    let t = sensor_from_world.t;
-    let mut j = SMatrix::<f64, 3, 6>::zeros();
-    for (k, d) in dr.iter().enumerate() {
-        j.set_column(k, &(-(d.transpose() * t)));
-    }
-    j.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-r.transpose()));
-    (-(r.transpose() * t), j)
 }

@@ -345,25 +345,15 @@ impl Problem for NetworkProblem<'_> {
         visit: &mut dyn FnMut(&ResidualTerm<'_>, Option<&[usize]>),
     ) -> Result<(), NetworkError> {
         if !jacobians {
-            for (b, obs) in self.by_block.iter().enumerate() {
-                for &k in obs {
-                    let r = self
-                        .residual_mm(state, Some(b), k)
-                        .map_err(|e| self.error(k, e))?
-                        * self.inv_sigma;
-                    visit(
-                        &ResidualTerm {
-                            r: r.as_slice(),
-                            a: &[],
-                            block: None,
-                        },
-                        None,
-                    );
-                }
-            }
-            for &k in &self.statics {
+            let sightings = self
+                .by_block
+                .iter()
+                .enumerate()
+                .flat_map(|(b, obs)| obs.iter().map(move |&k| (Some(b), k)));
+            let statics = self.statics.iter().map(|&k| (None, k));
+            for (b, k) in sightings.chain(statics) {
                 let r = self
-                    .residual_mm(state, None, k)
+                    .residual_mm(state, b, k)
                     .map_err(|e| self.error(k, e))?
                     * self.inv_sigma;
                 visit(

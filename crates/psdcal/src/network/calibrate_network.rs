@@ -260,14 +260,7 @@ impl NetworkCalibrated {
         );
         let mut sensors = Vec::new();
         for (k, e) in r.sensors.iter().enumerate() {
-            let sd = e.position_covariance.diagonal().map(|v| v.max(0.0).sqrt());
-            let rot = e
-                .pose_covariance
-                .fixed_view::<3, 3>(0, 0)
-                .trace()
-                .max(0.0)
-                .sqrt()
-                .to_degrees();
+            let (sd, rot) = (e.position_sigma_mm(), e.orientation_sigma_deg());
             let f = e.model.get("f").unwrap_or(f64::NAN);
             text.push_str(&format!(
                 "  {}: at ({:.1}, {:.1}, {:.1}) ± ({:.2}, {:.2}, {:.2}) mm, orientation σ {:.4}°, \

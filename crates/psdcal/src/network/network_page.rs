@@ -122,14 +122,7 @@ pub fn network_page(c: &NetworkCalibrated, dir: &Path) -> Result<PathBuf> {
         rows: vec![],
     };
     for (k, e) in r.sensors.iter().enumerate() {
-        let sd = e.position_covariance.diagonal().map(|v| v.max(0.0).sqrt());
-        let rot = e
-            .pose_covariance
-            .fixed_view::<3, 3>(0, 0)
-            .trace()
-            .max(0.0)
-            .sqrt()
-            .to_degrees();
+        let (sd, rot) = (e.position_sigma_mm(), e.orientation_sigma_deg());
         table.rows.push(vec![
             d.sensors[k].id.clone(),
             format!("{:.1}", e.position_mm.x),
