@@ -15,10 +15,10 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
 
-use crate::csv_table::CsvTable;
+use crate::csv_table::{CsvStream, CsvTable};
 use crate::error::IoError;
 use crate::limits::ReadLimits;
-use crate::points::PointInput;
+use crate::points::{point_input, PointInput};
 
 /// One row of sensors.csv.
 #[derive(Debug, Clone, PartialEq)]
@@ -150,65 +150,79 @@ pub struct NetworkPoints {
     pub rows: Vec<NetworkPointRow>,
 }
 
+/// network_points.csv's columns, for messages.
+const EXPECTED_COLUMNS: &str = "frame, sensor, led, x_mm, y_mm (or vx1, vx2, vy1, vy2)";
+
 impl NetworkPoints {
-    /// Reads network_points.csv.
-    pub fn read_with(path: &Path, limits: ReadLimits) -> Result<Self, IoError> {
-        let table = CsvTable::read_path(
-            path,
-            "frame, sensor, led, x_mm, y_mm (or vx1, vx2, vy1, vy2)",
-            limits,
-        )?;
-        let frame = table.column("frame")?;
-        let sensor = table.column("sensor")?;
-        let led = table.column("led")?;
-        let x = table.find_column("x_mm")?;
-        let y = table.find_column("y_mm")?;
-        let amplitudes = (x.is_none() || y.is_none()) && table.find_column("vx1")?.is_some();
-        let amp_cols = if amplitudes {
-            Some([
-                table.column("vx1")?,
-                table.column("vx2")?,
-                table.column("vy1")?,
-                table.column("vy2")?,
-            ])
+    csv_table_readers!(streamed "network_points.csv");
+
+    /// Each record converted as it is read (a long wave's file is never
+    /// held as text).
+    fn from_stream<R: std::io::BufRead>(stream: CsvStream<R>) -> Result<Self, IoError> {
+        let head = &stream.head;
+        let frame = head.column("frame")?;
+        let sensor = head.column("sensor")?;
+        let led = head.column("led")?;
+        let x = head.find_column("x_mm")?;
+        let y = head.find_column("y_mm")?;
+        let amplitudes = (x.is_none() || y.is_none()) && head.find_column("vx1")?.is_some();
+        let columns = if amplitudes {
+            vec![
+                head.column("vx1")?,
+                head.column("vx2")?,
+                head.column("vy1")?,
+                head.column("vy2")?,
+            ]
         } else {
-            None
+            vec![
+                x.ok_or_else(|| head.missing_column("x_mm"))?,
+                y.ok_or_else(|| head.missing_column("y_mm"))?,
+            ]
         };
-        let xy = if amplitudes {
-            None
-        } else {
-            Some((
-                x.ok_or_else(|| table.missing_column("x_mm"))?,
-                y.ok_or_else(|| table.missing_column("y_mm"))?,
-            ))
-        };
-        table.require_rows()?;
-        let mut rows = Vec::with_capacity(table.rows.len());
-        for row in &table.rows {
-            let input = match (&amp_cols, &xy) {
-                (Some(c), _) => PointInput::Amplitudes(psdcal_model::Amplitudes {
-                    vx1: table.number(row, &c[0])?,
-                    vx2: table.number(row, &c[1])?,
-                    vy1: table.number(row, &c[2])?,
-                    vy2: table.number(row, &c[3])?,
-                }),
-                (None, Some((x, y))) => PointInput::Position(nalgebra::Vector2::new(
-                    table.number(row, x)?,
-                    table.number(row, y)?,
-                )),
-                (None, None) => unreachable!("x_mm, y_mm or the amplitudes are required above"),
-            };
-            rows.push(NetworkPointRow {
+        let (table, rows) = stream.map_rows(|table, row| {
+            Ok(NetworkPointRow {
                 line_no: row.line,
                 frame: table.identifier(row, &frame, "a frame identifier")?,
                 sensor: table.identifier(row, &sensor, "a sensor identifier")?,
                 led: table.identifier(row, &led, "an LED identifier")?,
-                input,
-            });
+                // An empty or non-finite cell: the network's reader names
+                // the line.
+                input: point_input(table, row, &columns, amplitudes)?,
+            })
+        })?;
+        if rows.is_empty() {
+            table.require_rows()?;
         }
         Ok(Self {
             source: table.source,
             rows,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_are_read_as_they_stream_with_non_finite_cells_kept_as_such() {
+        let text = "frame,sensor,led,x_mm,y_mm\n0,s1,w1,0.5,-1\n0,s2,w1,,2\n";
+        let p = NetworkPoints::from_str("network_points.csv", text).unwrap();
+        assert_eq!(p.rows.len(), 2);
+        assert_eq!(
+            (p.rows[0].frame.as_str(), p.rows[0].sensor.as_str()),
+            ("0", "s1")
+        );
+        assert_eq!(
+            p.rows[0].input,
+            PointInput::Position(nalgebra::Vector2::new(0.5, -1.0))
+        );
+        assert!(matches!(p.rows[1].input, PointInput::NonFinite { .. }));
+        let e = NetworkPoints::from_str("p.csv", "frame,sensor,led,x_mm,y_mm\n0,s1,w1,abc,1\n");
+        assert!(e.unwrap_err().to_string().starts_with("p.csv:2:"));
+        let amps = "frame,sensor,led,vx1,vx2,vy1,vy2\n0,s1,w1,1,2,3,4\n";
+        let p = NetworkPoints::from_str("a.csv", amps).unwrap();
+        assert!(matches!(p.rows[0].input, PointInput::Amplitudes(_)));
+        assert!(NetworkPoints::from_str("e.csv", "frame,sensor,led,x_mm,y_mm\n").is_err());
     }
 }
