@@ -18,7 +18,7 @@ use nalgebra::Vector3;
 use crate::csv_table::{CsvStream, CsvTable};
 use crate::error::IoError;
 use crate::limits::ReadLimits;
-use crate::points::{point_input, PointInput};
+use crate::points::{point_columns, point_input, PointInput};
 
 /// One row of sensors.csv.
 #[derive(Debug, Clone, PartialEq)]
@@ -163,22 +163,7 @@ impl NetworkPoints {
         let frame = head.column("frame")?;
         let sensor = head.column("sensor")?;
         let led = head.column("led")?;
-        let x = head.find_column("x_mm")?;
-        let y = head.find_column("y_mm")?;
-        let amplitudes = (x.is_none() || y.is_none()) && head.find_column("vx1")?.is_some();
-        let columns = if amplitudes {
-            vec![
-                head.column("vx1")?,
-                head.column("vx2")?,
-                head.column("vy1")?,
-                head.column("vy2")?,
-            ]
-        } else {
-            vec![
-                x.ok_or_else(|| head.missing_column("x_mm"))?,
-                y.ok_or_else(|| head.missing_column("y_mm"))?,
-            ]
-        };
+        let (columns, amplitudes) = point_columns(head)?;
         let (table, rows) = stream.map_rows(|table, row| {
             Ok(NetworkPointRow {
                 line_no: row.line,
