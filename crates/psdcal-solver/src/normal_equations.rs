@@ -101,22 +101,7 @@ impl NormalEquations {
                 *slot += weight * dot(aj, ak);
             }
         }
-        if let Some((i, b)) = term.block {
-            let b = &b[..6 * d];
-            let w_i = self.w[i].as_mut_slice();
-            let v_i = self.v[i].as_mut_slice();
-            let g_i = &mut self.g_b[i];
-            for (c, bc) in b.chunks_exact(d).enumerate() {
-                g_i[c] += weight * dot(bc, r);
-                for (slot, bk) in v_i[6 * c..6 * c + 6].iter_mut().zip(b.chunks_exact(d)) {
-                    *slot += weight * dot(bc, bk);
-                }
-                // W_i is p × 6, column-major: entry (j, c) at c·p + j.
-                for (slot, aj) in w_i[c * p..c * p + p].iter_mut().zip(a.chunks_exact(d)) {
-                    *slot += weight * dot(aj, bc);
-                }
-            }
-        }
+        self.add_block(weight, term, a, None);
     }
 
     /// [`Self::add`] for a two-row residual (an image point), the common
@@ -226,6 +211,38 @@ impl NormalEquations {
         }
     }
 
+    /// A `d`-row term's share of its block (any `d`): `g_i += w Bᵀ r`,
+    /// `V_i += w BᵀB`, `W_i += w AᵀB`, with `a`'s column `j` the global
+    /// column `columns[j]` (or `j`).
+    fn add_block(
+        &mut self,
+        weight: f64,
+        term: &ResidualTerm<'_>,
+        a: &[f64],
+        columns: Option<&[usize]>,
+    ) {
+        let Some((i, b)) = term.block else {
+            return;
+        };
+        let (d, p, r) = (term.r.len(), self.g_a.len(), term.r);
+        let dot = |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(x, y)| x * y).sum() };
+        let b = &b[..6 * d];
+        let w_i = self.w[i].as_mut_slice();
+        let v_i = self.v[i].as_mut_slice();
+        let g_i = &mut self.g_b[i];
+        for (c, bc) in b.chunks_exact(d).enumerate() {
+            g_i[c] += weight * dot(bc, r);
+            for (slot, bk) in v_i[6 * c..6 * c + 6].iter_mut().zip(b.chunks_exact(d)) {
+                *slot += weight * dot(bc, bk);
+            }
+            // W_i is p × 6, column-major: entry (j, c) at c·p + j.
+            for (j, aj) in a.chunks_exact(d).enumerate() {
+                let column = columns.map_or(j, |cs| cs[j]);
+                w_i[c * p + column] += weight * dot(aj, bc);
+            }
+        }
+    }
+
     /// [`Self::add`] for a term whose `a` (d × k, column-major) holds the
     /// global columns `columns` only (the others are zero): the same sums
     /// over the non-zero entries, `O(d k²)` instead of `O(d p²)`.
@@ -251,21 +268,7 @@ impl NormalEquations {
                 }
             }
         }
-        if let Some((i, b)) = term.block {
-            let b = &b[..6 * d];
-            let w_i = self.w[i].as_mut_slice();
-            let v_i = self.v[i].as_mut_slice();
-            let g_i = &mut self.g_b[i];
-            for (c, bc) in b.chunks_exact(d).enumerate() {
-                g_i[c] += weight * dot(bc, r);
-                for (slot, bk) in v_i[6 * c..6 * c + 6].iter_mut().zip(b.chunks_exact(d)) {
-                    *slot += weight * dot(bc, bk);
-                }
-                for (j, aj) in a.chunks_exact(d).enumerate() {
-                    w_i[c * p + columns[j]] += weight * dot(aj, bc);
-                }
-            }
-        }
+        self.add_block(weight, term, a, Some(columns));
     }
 
     /// [`Self::add_columns`] for a two-row residual, its rows copied apart.
