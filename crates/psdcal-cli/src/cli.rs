@@ -45,6 +45,12 @@ pub enum Command {
     /// Calibrate a mounted sensor in situ from emitters at surveyed 3-D positions (its pose in the room too)
     #[command(after_help = include_str!("../help/calibrate_in_situ.txt"))]
     CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
+    /// Calibrate a room of sensors from a waved wand: every pose and lens, no surveyed emitters (rig.json)
+    #[command(after_help = include_str!("../help/calibrate_network.txt"))]
+    CalibrateNetwork(psdcal::NetworkRequest),
+    /// Simulate a room of sensors, a waved wand, a static frame and test emitters
+    #[command(after_help = include_str!("../help/simulate_network.txt"))]
+    SimulateNetwork(psdcal::NetworkSimRequest),
     /// Simulate a calibration data set through the whole signal chain
     #[command(after_help = include_str!("../help/simulate.txt"))]
     Simulate(crate::cli_sim::SimulateArgs),

@@ -26,6 +26,7 @@ pub mod cmd_focal_check;
 pub mod cmd_gains;
 mod cmd_locate;
 mod cmd_map;
+pub mod cmd_network;
 pub mod cmd_plan;
 pub mod cmd_psd_map;
 pub mod cmd_report;
@@ -35,7 +36,6 @@ pub mod cmd_simulate_positioning;
 pub mod cmd_simulate_scan;
 mod cmd_study;
 pub mod cmd_track;
-mod guard;
 pub mod messages;
 
 use std::process::ExitCode;
@@ -60,7 +60,7 @@ pub fn main() -> ExitCode {
             Ok(parsed) => parsed,
             Err(usage) => usage.format(&mut Cli::command()).exit(),
         };
-        if let Err(clash) = guard::check(&command, &matches, limits) {
+        if let Err(clash) = psdcal::refuse_input_overwrite(&command, &matches, limits) {
             messages::say(&format!("error: {clash}\n"));
             return ExitCode::from(2);
         }
@@ -81,6 +81,8 @@ pub fn main() -> ExitCode {
         Job::Plain(Plan(args)) => cmd_plan::run(args, output, limits, force),
         Job::Plain(FocalCheck(args)) => cmd_focal_check::run(args, output, limits),
         Job::Plain(CalibrateInSitu(args)) => cmd_calibrate_in_situ::run(args, output, limits),
+        Job::Plain(CalibrateNetwork(args)) => cmd_network::run(args, output, limits, force),
+        Job::Plain(SimulateNetwork(args)) => cmd_network::simulate(args, output, force),
         Job::Correct(config) => cmd_correct::run(config, output, limits),
         Job::Aoa(config) => cmd_aoa::run(config, output, limits),
         Job::Locate(config) => cmd_locate::run(config, output, limits),

@@ -84,6 +84,56 @@ fn folder_outputs_replace_only_psdcal_s_own_files() {
 }
 
 #[test]
+fn network_outputs_replace_only_psdcal_s_own_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let room = dir.path().join("room");
+    fs::create_dir(&room).unwrap();
+    let mine = room.join("sensors.csv");
+    fs::write(&mine, b"my sensors").unwrap();
+    let simulate = |more: &[&str]| {
+        let mut args = vec![
+            "simulate-network",
+            "-q",
+            "--seconds",
+            "4",
+            "--out",
+            s(&room),
+        ];
+        args.extend_from_slice(more);
+        psdcal(args)
+    };
+    assert_refused(&simulate(&[]), &mine, b"my sensors");
+    assert!(!room.join("wand.csv").exists());
+    assert!(simulate(&["--force"]).status.success());
+    assert!(simulate(&[]).status.success());
+    // The refined calibrations beside rig.json and the report page.
+    let f = |name: &str| room.join(name);
+    let calibrate = |more: &[&str]| {
+        let (sensors, wand, frame) = (f("sensors.csv"), f("wand.csv"), f("frame.csv"));
+        let (points, rig, report) = (f("network_points.csv"), f("out/rig.json"), f("page"));
+        let mut args = vec!["calibrate-network", "-q", "--sensors", s(&sensors)];
+        args.extend(["--wand", s(&wand), "--frame", s(&frame)]);
+        args.extend(["--observations", s(&points), "--out", s(&rig)]);
+        args.extend(["--report", s(&report)]);
+        args.extend_from_slice(more);
+        psdcal(args)
+    };
+    fs::create_dir_all(f("out")).unwrap();
+    fs::write(f("out/rig.s2.json"), b"mine").unwrap();
+    assert_refused(&calibrate(&[]), &f("out/rig.s2.json"), b"mine");
+    assert!(!f("out/rig.json").exists() && !f("page").exists());
+    fs::remove_file(f("out/rig.s2.json")).unwrap();
+    fs::create_dir_all(f("page")).unwrap();
+    fs::write(f("page/index.html"), b"mine").unwrap();
+    assert_refused(&calibrate(&[]), &f("page/index.html"), b"mine");
+    let out = calibrate(&["--force"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = calibrate(&[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(f("out/rig.s8.json").exists());
+}
+
+#[test]
 fn calibrate_writes_through_links_keeps_modes_and_refuses_folders() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

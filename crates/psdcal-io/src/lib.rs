@@ -52,6 +52,7 @@ mod export;
 mod gains_file;
 mod limits;
 mod location;
+mod network_files;
 mod number_text;
 mod observations;
 mod output_folder;
@@ -102,6 +103,9 @@ pub use limits::{
     MAX_LINE_BYTES,
 };
 pub use location::Location;
+pub use network_files::{
+    LedPositions, NetworkPointRow, NetworkPoints, NetworkSensorRow, NetworkSensors,
+};
 pub use number_text::{number_text, shown_number};
 pub use observations::{Observation, ObservationText, Observations};
 pub use output_folder::{OutputFolder, MANIFEST};

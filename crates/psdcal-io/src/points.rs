@@ -257,22 +257,7 @@ impl PointStream<&'static [u8]> {
 
 impl<R: BufRead> PointStream<R> {
     fn with(head: CsvTable, rows: Option<CsvStream<R>>) -> Result<Self, IoError> {
-        let x = head.find_column("x_mm")?;
-        let y = head.find_column("y_mm")?;
-        let amplitudes = (x.is_none() || y.is_none()) && head.find_column("vx1")?.is_some();
-        let columns = if amplitudes {
-            vec![
-                head.column("vx1")?,
-                head.column("vx2")?,
-                head.column("vy1")?,
-                head.column("vy2")?,
-            ]
-        } else {
-            vec![
-                x.ok_or_else(|| head.missing_column("x_mm"))?,
-                y.ok_or_else(|| head.missing_column("y_mm"))?,
-            ]
-        };
+        let (columns, amplitudes) = point_columns(&head)?;
         Ok(Self {
             head,
             rows,
@@ -331,6 +316,28 @@ impl<R: BufRead> PointStream<R> {
     fn input(&self, row: &CsvRow) -> Result<PointInput, IoError> {
         point_input(&self.head, row, &self.columns, self.amplitudes)
     }
+}
+
+/// The columns of a row's point: `x_mm, y_mm`, or, when either is missing
+/// and `vx1` is there, `vx1, vx2, vy1, vy2` (then `true`, amplitudes).
+pub(crate) fn point_columns(head: &CsvTable) -> Result<(Vec<Col>, bool), IoError> {
+    let x = head.find_column("x_mm")?;
+    let y = head.find_column("y_mm")?;
+    let amplitudes = (x.is_none() || y.is_none()) && head.find_column("vx1")?.is_some();
+    let columns = if amplitudes {
+        vec![
+            head.column("vx1")?,
+            head.column("vx2")?,
+            head.column("vy1")?,
+            head.column("vy2")?,
+        ]
+    } else {
+        vec![
+            x.ok_or_else(|| head.missing_column("x_mm"))?,
+            y.ok_or_else(|| head.missing_column("y_mm"))?,
+        ]
+    };
+    Ok((columns, amplitudes))
 }
 
 /// Whether a cell that is not a finite number is empty or a number that is

@@ -18,7 +18,7 @@ use std::collections::HashMap;
 use crate::csv_table::CsvTable;
 use crate::error::IoError;
 use crate::limits::ReadLimits;
-use crate::points::{point_input, PointInput};
+use crate::points::{point_columns, point_input, PointInput};
 use crate::rig::RigFile;
 
 const EXPECTED_COLUMNS: &str = "emitter, sensor, x_mm, y_mm (or vx1, vx2, vy1, vy2)";
@@ -53,22 +53,7 @@ impl RigObservations {
     fn from_table(table: CsvTable) -> Result<Self, IoError> {
         let emitter = table.column("emitter")?;
         let sensor = table.column("sensor")?;
-        let x = table.find_column("x_mm")?;
-        let y = table.find_column("y_mm")?;
-        let amplitudes = (x.is_none() || y.is_none()) && table.find_column("vx1")?.is_some();
-        let columns = if amplitudes {
-            vec![
-                table.column("vx1")?,
-                table.column("vx2")?,
-                table.column("vy1")?,
-                table.column("vy2")?,
-            ]
-        } else {
-            vec![
-                x.ok_or_else(|| table.missing_column("x_mm"))?,
-                y.ok_or_else(|| table.missing_column("y_mm"))?,
-            ]
-        };
+        let (columns, amplitudes) = point_columns(&table)?;
         table.require_rows()?;
         let mut rows = Vec::with_capacity(table.rows.len());
         for row in &table.rows {

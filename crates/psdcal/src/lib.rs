@@ -70,6 +70,7 @@ mod calibration;
 mod dataset;
 mod frontend;
 mod live;
+mod network;
 mod psd_map;
 mod reports;
 mod signals;
@@ -78,6 +79,10 @@ mod study;
 
 pub use base::option_text;
 pub use frontend::arrays;
+pub use network::calibrate_network::{calibrate_network_files, NetworkCalibrated, NetworkRequest};
+pub use network::network_input::{read_network, NetworkFiles, NetworkInput};
+pub use network::network_page::network_page;
+pub use network::simulate_network::{simulate_network, NetworkSimRequest};
 
 pub use answer::aoa::{aoa_table, measurement, AoaTable};
 pub use answer::correct::{correct, Corrected};
@@ -92,6 +97,8 @@ pub use answer::locate::{locate_table, LocateTable, LocateTarget};
 pub use answer::map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
 pub use answer::point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use base::advice::{advice, error_text};
+#[cfg(feature = "clap")]
+pub use base::command_files::refuse_input_overwrite;
 pub use base::error::{Error, Result};
 pub use base::option_text::plane_at_distance;
 pub use base::options::CalibrationOptions;

@@ -8,7 +8,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 /// The folders, lowest first: each may import from those before it.
-const LAYERS: [&str; 11] = [
+const LAYERS: [&str; 12] = [
     "base",
     "dataset",
     "psd_map",
@@ -18,6 +18,7 @@ const LAYERS: [&str; 11] = [
     "live",
     "simulation",
     "reports",
+    "network",
     "study",
     "frontend",
 ];

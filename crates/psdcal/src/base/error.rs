@@ -44,6 +44,9 @@ pub enum Error {
     /// A simulation could not run.
     #[error(transparent)]
     Simulation(#[from] SimError),
+    /// A network calibration could not be done.
+    #[error(transparent)]
+    Network(#[from] psdcal_network::NetworkError),
     /// A plot or page could not be drawn.
     #[error(transparent)]
     Report(#[from] ReportError),
