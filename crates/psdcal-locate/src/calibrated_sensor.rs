@@ -16,7 +16,7 @@
 use nalgebra::{DMatrix, Matrix2, Matrix2x3, Matrix3, Vector2};
 use psdcal_model::psd::{impact_point_gain_jacobian, impact_point_with_gains, is_on_active_area};
 use psdcal_model::{
-    Amplitudes, ChannelGains, Model, Param, PsdGeometry, RegionEnd, SensorModel, Stage, ValidRegion,
+    Amplitudes, ChannelGains, Model, PsdGeometry, RegionEnd, SensorModel, Stage, ValidRegion,
 };
 
 use crate::aoa::{alpha_wrt_ray, angle_of_arrival_with_jacobians, AngleOfArrival, AoaJacobians};
@@ -24,6 +24,7 @@ use crate::caution::Caution;
 use crate::error::{finite, LocateError};
 use crate::plane::{intersect_plane, Plane, PlaneIntersection};
 use crate::psd_map::{MapCorrection, SensorPsdMap};
+use crate::sensor_chains::ChainCache;
 use crate::uncertainty::{point_noise_covariance, propagate, ParameterCovariance};
 
 /// What a sensor measured for one emitter.
@@ -101,6 +102,8 @@ pub struct CalibratedSensor {
     /// The PSD's non-linearity map, applied to the measured point before
     /// `model` (docs/model.md §8.3); `None` without one.
     pub psd_map: Option<SensorPsdMap>,
+    /// The chains `aoa` evaluates, built once per state of the fields above.
+    chains: ChainCache,
 }
 
 /// A measured point and, for amplitude input through gains, `∂m/∂g`.
@@ -198,6 +201,7 @@ impl CalibratedSensor {
             gains: None,
             covariance: ParameterCovariance::none(),
             psd_map: None,
+            chains: ChainCache::default(),
         }
     }
 
@@ -345,8 +349,9 @@ impl CalibratedSensor {
         let measured = self.measured_point(measurement)?;
         self.check_valid_region(&measured.point)?;
         let corrected = self.map_corrected(&measured.point)?;
+        let chains = self.chains.get(self);
         let (mut aoa, mut jacobians) =
-            angle_of_arrival_with_jacobians(&Model::standard(&self.model), &corrected.point)?;
+            angle_of_arrival_with_jacobians(&chains.standard, &corrected.point)?;
         // ∂(a, b)/∂m' before the map's chain rule, for the map's columns.
         let ray_wrt_corrected = jacobians.ray_wrt_measured;
         aoa.measured = measured.point;
@@ -357,30 +362,32 @@ impl CalibratedSensor {
         } else {
             // ∂(a, b)/∂θ over the chain's flat parameters: the model's
             // columns, and the gains' for amplitudes through gains.
-            let chain = self.chain();
+            let chain = &chains.chain;
             let mut wrt_params = DMatrix::zeros(2, chain.len());
-            for (k, p) in Param::ALL.iter().enumerate() {
-                if let Some(c) = chain.index(p.name()) {
+            for (k, column) in chains.model_columns.iter().enumerate() {
+                if let Some(c) = *column {
                     wrt_params.set_column(c, &jacobians.ray_wrt_model.column(k));
                 }
             }
-            if let (Some(g), Some(columns)) = (wrt_gains, chain.gain_columns()) {
+            if let (Some(g), Some(columns)) = (wrt_gains, chains.gain_columns) {
                 for (k, c) in columns.into_iter().enumerate() {
                     wrt_params.set_column(c, &g.column(k));
                 }
             }
-            if let Some(map) = &self.psd_map {
-                for (k, p) in map.stage.parameters().iter().enumerate() {
-                    if let Some(c) = chain.index(&p.name) {
-                        let column = Vector2::new(
-                            corrected.wrt_block[2 * k],
-                            corrected.wrt_block[2 * k + 1],
-                        );
-                        wrt_params.set_column(c, &(ray_wrt_corrected * column));
-                    }
+            for (k, column) in chains.map_columns.iter().enumerate() {
+                if let Some(c) = *column {
+                    let column =
+                        Vector2::new(corrected.wrt_block[2 * k], corrected.wrt_block[2 * k + 1]);
+                    wrt_params.set_column(c, &(ray_wrt_corrected * column));
                 }
             }
-            propagate(&self.covariance, &chain, &wrt_params)?
+            match &chains.covariance_columns {
+                Some(columns) => {
+                    let out = self.covariance.propagate_columns(&wrt_params, columns);
+                    Matrix2::new(out[(0, 0)], out[(0, 1)], out[(1, 0)], out[(1, 1)])
+                }
+                None => propagate(&self.covariance, chain, &wrt_params)?,
+            }
         };
         let ray_covariance_measurement =
             point_noise_covariance(&jacobians.ray_wrt_measured, options.point_sigma_mm);

@@ -64,6 +64,7 @@ pub mod plane;
 pub mod psd_map;
 pub mod rig;
 pub mod sensitivity;
+mod sensor_chains;
 pub mod track_filter;
 pub mod triangulate;
 pub mod uncertainty;

@@ -1,0 +1,115 @@
+//! The chains a [`CalibratedSensor`]'s answers evaluate, built once per
+//! state of the sensor, not once per point.
+//!
+//! `aoa` needs the standard chain of the sensor's model, the full chain
+//! (gains, PSD map) whose flat parameters the covariance is over, and the
+//! columns joining them (by parameter name). Building a chain sorts its
+//! stages and names its parameters: about 10 times the cost of the angle
+//! itself. The sensor's fields are public, so the cache keeps a copy of
+//! what it was built from and is rebuilt when any of it changed (compared
+//! on every call: a few hundred instructions).
+
+use std::sync::{Arc, RwLock};
+
+use psdcal_model::{ChannelGains, Model, Param, PsdGeometry, SensorModel, Stage};
+
+use crate::calibrated_sensor::CalibratedSensor;
+use crate::psd_map::SensorPsdMap;
+use crate::uncertainty::covariance_columns;
+
+/// What the chains were built from.
+#[derive(Debug, Clone, PartialEq)]
+struct ChainKey {
+    model: SensorModel,
+    geometry: PsdGeometry,
+    gains: Option<ChannelGains>,
+    psd_map: Option<SensorPsdMap>,
+    covariance_names: Vec<String>,
+}
+
+/// The chains of one sensor state and their column maps.
+#[derive(Debug)]
+pub(crate) struct SensorChains {
+    key: ChainKey,
+    /// `Model::standard` of the sensor's model.
+    pub standard: Model,
+    /// [`CalibratedSensor::chain`].
+    pub chain: Model,
+    /// The column in `chain` of each of `Param::ALL` (`None`: not in it).
+    pub model_columns: Vec<Option<usize>>,
+    /// The gains' columns in `chain`, if it has them.
+    pub gain_columns: Option<[usize; 3]>,
+    /// The column in `chain` of each of the PSD map's parameters.
+    pub map_columns: Vec<Option<usize>>,
+    /// The column in `chain` of each covariance name; `None` when a name
+    /// is not in the chain (`propagate` then says which).
+    pub covariance_columns: Option<Vec<Option<usize>>>,
+}
+
+/// A sensor's [`SensorChains`], shared by the threads answering with it.
+/// A copy of the sensor starts empty; two sensors compare equal whatever
+/// their caches hold.
+#[derive(Default)]
+pub(crate) struct ChainCache(RwLock<Option<Arc<SensorChains>>>);
+
+impl ChainCache {
+    /// The chains of `sensor` as it is now.
+    pub fn get(&self, sensor: &CalibratedSensor) -> Arc<SensorChains> {
+        let key = key_of(sensor);
+        let held = self.0.read().map(|held| held.clone()).unwrap_or_default();
+        if let Some(chains) = held.filter(|c| c.key == key) {
+            return chains;
+        }
+        let chains = Arc::new(build(sensor, key));
+        if let Ok(mut held) = self.0.write() {
+            *held = Some(Arc::clone(&chains));
+        }
+        chains
+    }
+}
+
+fn key_of(sensor: &CalibratedSensor) -> ChainKey {
+    ChainKey {
+        model: sensor.model,
+        geometry: sensor.geometry,
+        gains: sensor.gains,
+        psd_map: sensor.psd_map.clone(),
+        covariance_names: sensor.covariance.names().to_vec(),
+    }
+}
+
+fn build(sensor: &CalibratedSensor, key: ChainKey) -> SensorChains {
+    let chain = sensor.chain();
+    let model_columns = Param::ALL.iter().map(|p| chain.index(p.name())).collect();
+    let map_columns = sensor.psd_map.as_ref().map_or_else(Vec::new, |map| {
+        let names = map.stage.parameters();
+        names.iter().map(|p| chain.index(&p.name)).collect()
+    });
+    SensorChains {
+        standard: Model::standard(&sensor.model),
+        model_columns,
+        gain_columns: chain.gain_columns(),
+        map_columns,
+        covariance_columns: covariance_columns(&sensor.covariance, &chain).ok(),
+        chain,
+        key,
+    }
+}
+
+impl Clone for ChainCache {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl PartialEq for ChainCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for ChainCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ChainCache")
+    }
+}
