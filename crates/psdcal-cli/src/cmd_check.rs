@@ -5,10 +5,11 @@ use psdcal::{DataSet, DataSetFiles, LoadOptions};
 use crate::messages::print_warnings;
 use crate::messages::Output;
 
-/// Runs `check`: the summary is written straight from its fields (no JSON
-/// tree of a data set with hundreds of thousands of images).
+/// Runs `check`: observations are checked as they are read, and the
+/// summary written straight from its fields (no JSON tree of a data set
+/// with hundreds of thousands of images).
 pub fn run(files: &DataSetFiles, load: &LoadOptions, output: Output) -> anyhow::Result<()> {
-    let summary = DataSet::check_files(files, load)?;
+    let summary = DataSet::from_files(files, load)?.summary();
     print_warnings(&summary.warnings);
     match output {
         Output::Quiet => {}

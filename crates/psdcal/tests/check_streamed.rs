@@ -1,10 +1,12 @@
-//! `DataSet::check_files` validates observations as they are read (no row
-//! kept as text); it must say exactly what reading the whole set and
-//! summarising it says, on good data and on every kind of fault.
+//! `DataSet::from_files` validates an observations.csv as it is read (no
+//! row kept as text); it must say exactly what reading the whole file
+//! first (`Observations::read`, then `DataSet::from_memory`) says, on good
+//! data and on every kind of fault.
 
 use std::path::{Path, PathBuf};
 
-use psdcal::{DataSet, DataSetFiles, LoadOptions, PointSource};
+use psdcal::{DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource};
+use psdcal_io::{Observations, Template};
 
 fn example(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -22,8 +24,14 @@ fn files(observations: &Path) -> DataSetFiles {
 
 /// Both paths on one file: the same summary, or the same error message.
 fn same_answer(observations: &Path, options: &LoadOptions) -> String {
-    let whole = DataSet::from_files(&files(observations), options).map(|set| set.summary());
-    let streamed = DataSet::check_files(&files(observations), options);
+    let whole = Observations::read(observations)
+        .map_err(psdcal::Error::from)
+        .and_then(|rows| {
+            let template = Template::read(example("template.csv")).unwrap();
+            DataSet::from_memory(template, MemoryPoints::Observations(rows), options)
+        })
+        .map(|set| set.summary());
+    let streamed = DataSet::from_files(&files(observations), options).map(|set| set.summary());
     match (whole, streamed) {
         (Ok(a), Ok(b)) => {
             assert_eq!(a, b);

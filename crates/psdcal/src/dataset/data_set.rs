@@ -61,8 +61,13 @@ pub struct DataSet {
     /// The template.
     pub template: Template,
     /// Every observation read (impact points; from amplitudes when the
-    /// source was signals).
+    /// source was signals). Empty for an observations.csv read by
+    /// [`Self::from_files`]: its rows are validated as they are read and
+    /// only the usable points kept (`validated`), so memory follows the
+    /// points, not the file's text.
     pub observations: Observations,
+    /// The number of rows of the points file (or in memory).
+    pub rows: usize,
     /// The amplitudes, when the source was signals.
     pub signals: Option<Signals>,
     /// Known gains divided out of the amplitudes (from a gains file).
@@ -91,9 +96,9 @@ impl DataSet {
             None => None,
         };
         let points = match &files.points {
-            PointSource::Observations(path) => MemoryPoints::Observations(
-                inputs.read(path, |s, r| Observations::from_reader_with(s, r, limits))?,
-            ),
+            PointSource::Observations(path) => {
+                return Self::streamed(template, path, options, inputs);
+            }
             PointSource::Signals(path) => MemoryPoints::Signals(
                 inputs.read(path, |s, r| Signals::from_reader_with(s, r, limits))?,
                 known.map(|g| g.gains()),
@@ -104,35 +109,33 @@ impl DataSet {
         Ok(set)
     }
 
-    /// What [`Self::from_files`] then [`Self::summary`] report, with the
-    /// observations checked as they are read (none kept as text): memory
-    /// follows the usable points, not the file (`psdcal check` on files of
-    /// any size within the read limits).
-    pub fn check_files(files: &DataSetFiles, options: &LoadOptions) -> Result<DataSetSummary> {
-        let (PointSource::Observations(path), None) = (&files.points, &files.gains) else {
-            return Ok(Self::from_files(files, options)?.summary());
-        };
-        let limits = options.limits;
-        let template = Template::read_with(&files.template, limits)?;
-        let validation = ValidationOptions {
-            geometry: options.geometry,
-            strict: options.strict,
-        };
+    /// observations.csv checked row by row as it is read
+    /// ([`DataSetValidator`]): no row is kept as text.
+    fn streamed(
+        template: Template,
+        path: &Path,
+        options: &LoadOptions,
+        mut inputs: InputHashes,
+    ) -> Result<Self> {
         let source = path.display().to_string();
-        let mut validator = DataSetValidator::new(&template, &source, &validation);
-        let file = std::fs::File::open(path).map_err(|e| psdcal_io::IoError::Read {
-            file: source.clone(),
-            source: e,
+        let mut validator = DataSetValidator::new(&template, &source, &validation(options));
+        let rows = inputs.read(path, |s, r| {
+            Observations::for_each_row(s, r, options.limits, |row| validator.push(row))
         })?;
-        let rows = Observations::for_each_row(&source, file, limits, |row| validator.push(row))?;
         let validated = validator.finish()?;
-        Ok(DataSetSummary::new(
-            &template,
-            &source,
+        Ok(Self {
+            template,
+            observations: Observations {
+                source,
+                rows: Vec::new(),
+            },
             rows,
-            &validated,
-            &options.geometry,
-        ))
+            signals: None,
+            known_gains: None,
+            validated,
+            options: *options,
+            inputs,
+        })
     }
 
     /// Validates a data set given in memory.
@@ -149,16 +152,10 @@ impl DataSet {
                 (o, Some(s), gains)
             }
         };
-        let validated = validate_data_set(
-            &template,
-            &observations,
-            &ValidationOptions {
-                geometry: options.geometry,
-                strict: options.strict,
-            },
-        )?;
+        let validated = validate_data_set(&template, &observations, &validation(options))?;
         Ok(Self {
             template,
+            rows: observations.rows.len(),
             observations,
             signals,
             known_gains,
@@ -178,7 +175,7 @@ impl DataSet {
         DataSetSummary::new(
             &self.template,
             &self.observations.source,
-            self.observations.rows.len(),
+            self.rows,
             &self.validated,
             &self.options.geometry,
         )
@@ -194,5 +191,13 @@ impl DataSet {
 pub fn source_path(source: &PointSource) -> &Path {
     match source {
         PointSource::Observations(p) | PointSource::Signals(p) => p,
+    }
+}
+
+/// How a data set's points are checked against its template.
+fn validation(options: &LoadOptions) -> ValidationOptions {
+    ValidationOptions {
+        geometry: options.geometry,
+        strict: options.strict,
     }
 }
