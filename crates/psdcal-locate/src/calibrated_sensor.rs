@@ -24,7 +24,7 @@ use crate::caution::Caution;
 use crate::error::{finite, LocateError};
 use crate::plane::{intersect_plane, Plane, PlaneIntersection};
 use crate::psd_map::{MapCorrection, SensorPsdMap};
-use crate::sensor_chains::ChainCache;
+use crate::sensor_chains::{ChainCache, SensorState};
 use crate::uncertainty::{point_noise_covariance, propagate, ParameterCovariance};
 
 /// What a sensor measured for one emitter.
@@ -349,7 +349,14 @@ impl CalibratedSensor {
         let measured = self.measured_point(measurement)?;
         self.check_valid_region(&measured.point)?;
         let corrected = self.map_corrected(&measured.point)?;
-        let chains = self.chains.get(self);
+        let state = SensorState {
+            model: &self.model,
+            geometry: &self.geometry,
+            gains: &self.gains,
+            psd_map: &self.psd_map,
+            covariance: &self.covariance,
+        };
+        let chains = self.chains.get(state, || self.chain());
         let (mut aoa, mut jacobians) =
             angle_of_arrival_with_jacobians(&chains.standard, &corrected.point)?;
         // ∂(a, b)/∂m' before the map's chain rule, for the map's columns.

@@ -1,4 +1,4 @@
-//! The chains a [`CalibratedSensor`]'s answers evaluate, built once per
+//! The chains a calibrated sensor's answers evaluate, built once per
 //! state of the sensor, not once per point.
 //!
 //! `aoa` needs the standard chain of the sensor's model, the full chain
@@ -11,11 +11,22 @@
 
 use std::sync::{Arc, RwLock};
 
-use psdcal_model::{ChannelGains, Model, Param, PsdGeometry, SensorModel, Stage};
+use psdcal_model::{
+    ChannelGains, Model, Param, ParameterCovariance, PsdGeometry, SensorModel, Stage,
+};
 
-use crate::calibrated_sensor::CalibratedSensor;
 use crate::psd_map::SensorPsdMap;
 use crate::uncertainty::covariance_columns;
+
+/// What the chains are built from: a calibrated sensor's fields.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct SensorState<'a> {
+    pub model: &'a SensorModel,
+    pub geometry: &'a PsdGeometry,
+    pub gains: &'a Option<ChannelGains>,
+    pub psd_map: &'a Option<SensorPsdMap>,
+    pub covariance: &'a ParameterCovariance,
+}
 
 /// What the chains were built from.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,7 +44,7 @@ pub(crate) struct SensorChains {
     key: ChainKey,
     /// `Model::standard` of the sensor's model.
     pub standard: Model,
-    /// [`CalibratedSensor::chain`].
+    /// The sensor's full chain (gains, PSD map).
     pub chain: Model,
     /// The column in `chain` of each of `Param::ALL` (`None`: not in it).
     pub model_columns: Vec<Option<usize>>,
@@ -53,14 +64,15 @@ pub(crate) struct SensorChains {
 pub(crate) struct ChainCache(RwLock<Option<Arc<SensorChains>>>);
 
 impl ChainCache {
-    /// The chains of `sensor` as it is now.
-    pub fn get(&self, sensor: &CalibratedSensor) -> Arc<SensorChains> {
-        let key = key_of(sensor);
+    /// The chains of the sensor in `state`; `chain` builds its full chain
+    /// when they must be built again.
+    pub fn get(&self, state: SensorState<'_>, chain: impl FnOnce() -> Model) -> Arc<SensorChains> {
+        let key = key_of(&state);
         let held = self.0.read().map(|held| held.clone()).unwrap_or_default();
         if let Some(chains) = held.filter(|c| c.key == key) {
             return chains;
         }
-        let chains = Arc::new(build(sensor, key));
+        let chains = Arc::new(build(&state, chain(), key));
         if let Ok(mut held) = self.0.write() {
             *held = Some(Arc::clone(&chains));
         }
@@ -68,29 +80,28 @@ impl ChainCache {
     }
 }
 
-fn key_of(sensor: &CalibratedSensor) -> ChainKey {
+fn key_of(state: &SensorState<'_>) -> ChainKey {
     ChainKey {
-        model: sensor.model,
-        geometry: sensor.geometry,
-        gains: sensor.gains,
-        psd_map: sensor.psd_map.clone(),
-        covariance_names: sensor.covariance.names().to_vec(),
+        model: *state.model,
+        geometry: *state.geometry,
+        gains: *state.gains,
+        psd_map: state.psd_map.clone(),
+        covariance_names: state.covariance.names().to_vec(),
     }
 }
 
-fn build(sensor: &CalibratedSensor, key: ChainKey) -> SensorChains {
-    let chain = sensor.chain();
+fn build(sensor: &SensorState<'_>, chain: Model, key: ChainKey) -> SensorChains {
     let model_columns = Param::ALL.iter().map(|p| chain.index(p.name())).collect();
     let map_columns = sensor.psd_map.as_ref().map_or_else(Vec::new, |map| {
         let names = map.stage.parameters();
         names.iter().map(|p| chain.index(&p.name)).collect()
     });
     SensorChains {
-        standard: Model::standard(&sensor.model),
+        standard: Model::standard(sensor.model),
         model_columns,
         gain_columns: chain.gain_columns(),
         map_columns,
-        covariance_columns: covariance_columns(&sensor.covariance, &chain).ok(),
+        covariance_columns: covariance_columns(sensor.covariance, &chain).ok(),
         chain,
         key,
     }
