@@ -6,7 +6,9 @@ use std::path::PathBuf;
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
-use psdcal::arrays::{aoa_rows, correct_rows, locate_rows, measurements_from_rows, parameters};
+use psdcal::arrays::{
+    aoa_into, correct_into, locate_into, locate_options, measurements_from_rows, parameters,
+};
 use psdcal::{CalibratedSensor, LoadedSensor};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -32,14 +34,49 @@ impl Calibration {
     }
 }
 
-/// An `(N, k)` float64 array of rows.
-fn array<'py, const K: usize>(py: Python<'py>, rows: &[[f64; K]]) -> Bound<'py, PyArray2<f64>> {
-    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
-    match Array2::from_shape_vec((rows.len(), K), flat) {
-        Ok(a) => a.into_pyarray(py),
-        // The shape is the rows' own: this cannot fail.
-        Err(_) => PyArray2::zeros(py, [rows.len(), K], false),
+/// Rows answered per chunk: between chunks the GIL is taken back briefly to
+/// check for Ctrl-C (a chunk of aoa takes about 10 ms).
+const CHUNK_ROWS: usize = 16_384;
+
+/// Runs `step` on the rows `0..n` in chunks of [`CHUNK_ROWS`], the GIL
+/// released during each chunk (other Python threads run) and signals
+/// checked between them (Ctrl-C raises KeyboardInterrupt).
+fn in_chunks(
+    py: Python<'_>,
+    n: usize,
+    mut step: impl FnMut(std::ops::Range<usize>) -> psdcal::Result<()> + Send,
+) -> PyResult<()> {
+    let mut start = 0;
+    while start < n {
+        let end = (start + CHUNK_ROWS).min(n);
+        py.detach(|| step(start..end)).map_err(|e| error(&e))?;
+        py.check_signals()?;
+        start = end;
     }
+    Ok(())
+}
+
+/// The measurements of a points array (converted with the GIL released).
+fn measurements(py: Python<'_>, t: &crate::input::Table) -> PyResult<Vec<psdcal::Measurement>> {
+    py.detach(|| measurements_from_rows(&t.rows()))
+        .map_err(|e| error(&e))
+}
+
+/// The options of a per-point answer from `point_sigma_mm`.
+fn point_options(point_sigma_mm: Option<&Bound<'_, PyAny>>) -> PyResult<psdcal::LocateOptions> {
+    let sigma = point_sigma_mm
+        .map(|v| crate::input::number(v, "point_sigma_mm"))
+        .transpose()?;
+    locate_options(sigma).map_err(|e| error(&e))
+}
+
+/// An `(N, k)` float64 array of a flat row-major vector (moved, not
+/// copied).
+fn flat_array(py: Python<'_>, values: Vec<f64>, k: usize) -> PyResult<Bound<'_, PyArray2<f64>>> {
+    let n = values.len() / k;
+    Array2::from_shape_vec((n, k), values)
+        .map(|a| a.into_pyarray(py))
+        .map_err(|e| input_error(format!("array: {e}")))
 }
 
 #[pymethods]
@@ -135,31 +172,43 @@ impl Calibration {
     /// standard deviations `(N, 2)` in degrees (the calibration's, plus the
     /// point noise's with `point_sigma_mm`). A row that cannot be answered
     /// (outside the valid region, no light, not finite) raises PsdcalError
-    /// naming it.
+    /// naming it. The computation releases the GIL (other Python threads
+    /// run meanwhile) and stops at Ctrl-C (KeyboardInterrupt).
     #[pyo3(signature = (points, return_sigma=false, point_sigma_mm=None))]
     fn aoa<'py>(
         &self,
         py: Python<'py>,
         points: &Bound<'py, PyAny>,
         return_sigma: bool,
-        point_sigma_mm: Option<f64>,
+        point_sigma_mm: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Py<PyAny>> {
+        let options = point_options(point_sigma_mm)?;
         let t = table(points, "points")?;
-        let m = measurements_from_rows(&t.rows()).map_err(|e| error(&e))?;
-        let a = aoa_rows(&self.sensor, &t.name, &m, point_sigma_mm).map_err(|e| error(&e))?;
-        let alpha = array(py, &a.alpha_deg);
+        let m = measurements(py, &t)?;
+        let n = m.len();
+        let (mut alpha, mut sigma) = (Vec::with_capacity(2 * n), Vec::with_capacity(2 * n));
+        in_chunks(py, n, |range| {
+            aoa_into(
+                &self.sensor,
+                &t.name,
+                &m,
+                range,
+                &options,
+                &mut alpha,
+                &mut sigma,
+            )
+        })?;
+        let alpha = flat_array(py, alpha, 2)?;
         if return_sigma {
-            Ok((alpha, array(py, &a.sigma_deg))
-                .into_pyobject(py)?
-                .into_any()
-                .unbind())
+            let sigma = flat_array(py, sigma, 2)?;
+            Ok((alpha, sigma).into_pyobject(py)?.into_any().unbind())
         } else {
             Ok(alpha.into_any().unbind())
         }
     }
 
     /// Ideal (corrected) points `(N, 2)`, mm, of measured points `(N, 2)` or
-    /// amplitudes `(N, 4)`.
+    /// amplitudes `(N, 4)`. Releases the GIL; stops at Ctrl-C.
     #[pyo3(signature = (points, /))]
     fn correct<'py>(
         &self,
@@ -167,15 +216,18 @@ impl Calibration {
         points: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let t = table(points, "points")?;
-        let m = measurements_from_rows(&t.rows()).map_err(|e| error(&e))?;
-        let ideal = correct_rows(&self.sensor, &t.name, &m).map_err(|e| error(&e))?;
-        Ok(array(py, &ideal))
+        let m = measurements(py, &t)?;
+        let mut ideal = Vec::with_capacity(2 * m.len());
+        in_chunks(py, m.len(), |range| {
+            correct_into(&self.sensor, &t.name, &m, range, &mut ideal)
+        })?;
+        flat_array(py, ideal, 2)
     }
 
     /// Emitter positions `(N, 3)`, mm, sensor frame, on the plane
     /// `z = distance` (mm) or on `plane = (nx, ny, nz, d)` (`n·P = d`);
     /// `return_covariance=True` also returns their 3 × 3 covariances
-    /// `(N, 3, 3)`, mm².
+    /// `(N, 3, 3)`, mm². Releases the GIL; stops at Ctrl-C.
     #[pyo3(signature = (points, distance=None, plane=None, return_covariance=false, point_sigma_mm=None))]
     fn locate<'py>(
         &self,
@@ -184,7 +236,7 @@ impl Calibration {
         distance: Option<&Bound<'py, PyAny>>,
         plane: Option<&Bound<'py, PyAny>>,
         return_covariance: bool,
-        point_sigma_mm: Option<f64>,
+        point_sigma_mm: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Py<PyAny>> {
         let plane = match (distance, plane) {
             (Some(d), None) => psdcal::plane_at_distance(&crate::input::option_text(d)?),
@@ -196,17 +248,28 @@ impl Calibration {
             }
         }
         .map_err(|m| error(&psdcal::Error::Options(m)))?;
+        let options = point_options(point_sigma_mm)?;
         let t = table(points, "points")?;
-        let m = measurements_from_rows(&t.rows()).map_err(|e| error(&e))?;
-        let l = locate_rows(&self.sensor, &t.name, &m, &plane, point_sigma_mm)
-            .map_err(|e| error(&e))?;
-        let positions = array(py, &l.position_mm);
+        let m = measurements(py, &t)?;
+        let n = m.len();
+        let mut positions = Vec::with_capacity(3 * n);
+        let mut covariance = Vec::with_capacity(if return_covariance { 9 * n } else { 0 });
+        in_chunks(py, n, |range| {
+            locate_into(
+                &self.sensor,
+                &t.name,
+                &m,
+                range,
+                (&plane, &options),
+                &mut positions,
+                return_covariance.then_some(&mut covariance),
+            )
+        })?;
+        let positions = flat_array(py, positions, 3)?;
         if !return_covariance {
             return Ok(positions.into_any().unbind());
         }
-        let n = l.covariance_mm2.len();
-        let flat: Vec<f64> = l.covariance_mm2.iter().flatten().copied().collect();
-        let cov = numpy::ndarray::Array3::from_shape_vec((n, 3, 3), flat)
+        let cov = numpy::ndarray::Array3::from_shape_vec((n, 3, 3), covariance)
             .map_err(|e| input_error(format!("covariance: {e}")))?;
         Ok((positions, cov.into_pyarray(py))
             .into_pyobject(py)?

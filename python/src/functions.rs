@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use crate::calibration::Calibration;
-use crate::input::{option_text, path, path_or_table};
+use crate::input::{number, option_text, path, path_or_table};
 use crate::{error, input_error};
 
 /// Issues `message` as a Python `UserWarning` (what the command line
@@ -72,7 +72,7 @@ fn option_pairs(
 /// `gains` with signals), `focal_guess=8.0`, `cost="template"|"image"`,
 /// `noise="uniform"|"channel-snr"|"channel-floor"`,
 /// `preliminary="auto"|"straightness"|"homography"|"off"`, `normalize=True`,
-/// `robust="huber:0.1"`, `uncertainty="linear"|"bootstrap:N[:SEED]"`,
+/// `robust="huber:2.5"`, `uncertainty="linear"|"bootstrap:N[:SEED]"`,
 /// `psd_map=PATH`, `set={"l1": -1.3e-3}` (or `["l1=-1.3e-3"]`), `gains=PATH`
 /// (gains.json, with signals), `lx=9.0`, `ly=9.0` (active area, mm),
 /// `strict=False`. Data dropped and the fit's diagnostics are issued as
@@ -166,7 +166,7 @@ fn id_number(id: &str) -> PyResult<f64> {
 /// `noise=False` simulates without noise (`snr_db` is then ignored).
 #[pyfunction]
 #[pyo3(
-    signature = (lens=None, snr_db=None, images=None, seed=1, imbalance=false, psd_distortion=false, psd_nonlinearity=false, template=None, record_cycles=None, noise=true),
+    signature = (lens=None, snr_db=None, images=None, seed=None, imbalance=false, psd_distortion=false, psd_nonlinearity=false, template=None, record_cycles=None, noise=true),
     text_signature = "(lens=2, snr_db=40.0, images=9, seed=1, imbalance=False, psd_distortion=False, psd_nonlinearity=False, template='scatter14', record_cycles=65, noise=True)"
 )]
 #[allow(clippy::too_many_arguments)]
@@ -175,7 +175,7 @@ pub fn simulate<'py>(
     lens: Option<&Bound<'py, PyAny>>,
     snr_db: Option<&Bound<'py, PyAny>>,
     images: Option<&Bound<'py, PyAny>>,
-    seed: u64,
+    seed: Option<&Bound<'py, PyAny>>,
     imbalance: bool,
     psd_distortion: bool,
     psd_nonlinearity: bool,
@@ -200,8 +200,9 @@ pub fn simulate<'py>(
         record_cycles: record_cycles.map_or(Ok(psdcal::DEFAULT_RECORD_CYCLES), |v| {
             parsed("record_cycles", v, parse_record_cycles)
         })?,
-        seed,
+        seed: seed.map_or(Ok(1), crate::input::seed)?,
         out: std::path::PathBuf::new(),
+        force: false,
     };
     let data = py
         .detach(|| psdcal::simulate_data(&request))
@@ -275,18 +276,24 @@ pub fn simulate<'py>(
 /// `saturated`, `dark` or `tone_collision`), `sample_rate_hz` and
 /// `warnings`; also writes signals.csv when `out` is given.
 #[pyfunction]
-#[pyo3(signature = (raw, rate=None, schedule=None, tones=None, frequency=1000.0, full_scale=10.0, out=None))]
+#[pyo3(
+    signature = (raw, rate=None, schedule=None, tones=None, frequency=None, full_scale=None, out=None),
+    text_signature = "(raw, rate=None, schedule=None, tones=None, frequency=1000.0, full_scale=10.0, out=None)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn demodulate<'py>(
     py: Python<'py>,
     raw: &Bound<'py, PyAny>,
-    rate: Option<f64>,
+    rate: Option<&Bound<'py, PyAny>>,
     schedule: Option<&Bound<'py, PyAny>>,
     tones: Option<&Bound<'py, PyAny>>,
-    frequency: f64,
-    full_scale: f64,
+    frequency: Option<&Bound<'py, PyAny>>,
+    full_scale: Option<&Bound<'py, PyAny>>,
     out: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let rate = rate.map(|r| number(r, "rate")).transpose()?;
+    let frequency = frequency.map_or(Ok(1000.0), |f| number(f, "frequency"))?;
+    let full_scale = full_scale.map_or(Ok(10.0), |f| number(f, "full_scale"))?;
     let schedule = match schedule {
         Some(s) => path(s, "schedule")?,
         None => return Err(input_error("demodulate: give schedule= (schedule.csv)")),

@@ -137,3 +137,39 @@ pub(crate) fn option_text(value: &Bound<'_, PyAny>) -> PyResult<String> {
     }
     Ok(value.str()?.to_string())
 }
+
+/// A number argument (`float`, `int`, numpy scalars): anything else, or an
+/// integer beyond the `f64` range, is `PsdcalError` naming the argument
+/// (never `OverflowError` or `TypeError`).
+pub(crate) fn number(value: &Bound<'_, PyAny>, what: &str) -> PyResult<f64> {
+    value
+        .extract::<f64>()
+        .map_err(|_| input_error(format!("{what}: expected a number, found {}", shown(value))))
+}
+
+/// A seed: a whole number from 0 to 2⁶⁴ − 1 (as `--seed`); a negative or
+/// larger integer, or anything else, is `PsdcalError`.
+pub(crate) fn seed(value: &Bound<'_, PyAny>) -> PyResult<u64> {
+    if value.is_instance_of::<pyo3::types::PyBool>() {
+        return Err(input_error(
+            "seed: expected a whole number from 0 to 18446744073709551615, found a bool",
+        ));
+    }
+    value.extract::<u64>().map_err(|_| {
+        input_error(format!(
+            "seed: expected a whole number from 0 to 18446744073709551615, found {}",
+            shown(value)
+        ))
+    })
+}
+
+/// A value for a message: its `repr`, clipped to 40 characters.
+fn shown(value: &Bound<'_, PyAny>) -> String {
+    let text = value
+        .repr()
+        .map_or_else(|_| type_name(value), |r| r.to_string());
+    match text.char_indices().nth(40) {
+        Some((i, _)) => format!("{}…", &text[..i]),
+        None => text,
+    }
+}

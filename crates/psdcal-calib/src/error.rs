@@ -96,6 +96,34 @@ pub enum CalibError {
         /// The computed `f²`, mm².
         f_squared: f64,
     },
+    /// The focal search ended at the edge of its interval with the error
+    /// still falling past it: the focal length lies outside the interval
+    /// searched (about `--focal-guess`, or 1–1000 mm without one).
+    #[error(
+        "the focal length lies outside the interval searched ({lo:.4}–{hi:.4} mm{}): the \
+         template-plane error still falls from f = {f:.4} mm to f = {better_f:.4} mm ({cost:.4e} \
+         → {better_cost:.4e} mm²)",
+        match guess {
+            Some(g) => format!(", about --focal-guess {g} mm"),
+            None => String::new(),
+        }
+    )]
+    FocalOutsideSearch {
+        /// The focal guess the interval was centred on, mm.
+        guess: Option<f64>,
+        /// The interval searched, mm.
+        lo: f64,
+        /// Its upper end, mm.
+        hi: f64,
+        /// Where the search ended, mm.
+        f: f64,
+        /// The cost there, mm².
+        cost: f64,
+        /// A focal length past the interval with a lower cost, mm.
+        better_f: f64,
+        /// Its cost, mm².
+        better_cost: f64,
+    },
     /// Measured points outside the domain of the model's first stage (a
     /// PSD map is known only inside its scan's hull, docs/model.md §8.3).
     #[error(

@@ -35,7 +35,7 @@ pub struct DataSetArgs {
 }
 
 /// Calibrate a sensor from images of an LED template (adapted Zhang method + Levenberg-Marquardt)
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 pub struct CalibrateArgs {
     #[command(flatten)]
     pub data: DataSetArgs,
@@ -72,7 +72,7 @@ pub struct CalibrateArgs {
     /// Skip the data normalisation of the homographies
     #[arg(long)]
     pub no_normalize: bool,
-    /// Robust loss: huber:SCALE or cauchy:SCALE (SCALE in mm of the cost)
+    /// Robust loss: huber:K or cauchy:K, K in units of the residuals' noise σ (estimated)
     #[arg(long, value_name = "LOSS:SCALE", value_parser = parse_robust)]
     pub robust: Option<RobustLoss>,
     /// Covariance of the estimate: jackknife (the default: the analytic σ

@@ -25,12 +25,15 @@ pub struct Cli {
     /// files have no limit; docs/formats.md, "Limits")
     #[arg(long, global = true, value_name = "MB", value_parser = clap::value_parser!(u64).range(1..=1_048_576))]
     pub max_input_mb: Option<u64>,
+    /// Replace files in an output folder that psdcal did not write there
+    #[arg(long, global = true)]
+    pub force: bool,
     #[command(subcommand)]
     pub command: Command,
 }
 
 /// The subcommands (each one's arguments built only when it is invoked).
-#[derive(Debug, Subcommand)]
+#[derive(Debug, Clone, PartialEq, Subcommand)]
 #[command(defer = true)]
 pub enum Command {
     /// Validate a calibration data set and summarise images, points and sensor coverage
@@ -42,6 +45,12 @@ pub enum Command {
     /// Calibrate a mounted sensor in situ from emitters at surveyed 3-D positions (its pose in the room too)
     #[command(after_help = include_str!("../help/calibrate_in_situ.txt"))]
     CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
+    /// Calibrate a room of sensors from a waved wand: every pose and lens, no surveyed emitters (rig.json)
+    #[command(after_help = include_str!("../help/calibrate_network.txt"))]
+    CalibrateNetwork(psdcal::NetworkRequest),
+    /// Simulate a room of sensors, a waved wand, a static frame and test emitters
+    #[command(after_help = include_str!("../help/simulate_network.txt"))]
+    SimulateNetwork(psdcal::NetworkSimRequest),
     /// Simulate a calibration data set through the whole signal chain
     #[command(after_help = include_str!("../help/simulate.txt"))]
     Simulate(crate::cli_sim::SimulateArgs),
@@ -87,6 +96,8 @@ pub enum Command {
     /// Angles of arrival per window and LED from raw samples on standard input (live)
     #[command(after_help = include_str!("../help/track.txt"))]
     Track(crate::cmd_track::TrackArgs),
+    /// A rig's positions live in the browser: a 3-D page, /stream (Server-Sent Events) and /rig
+    Serve(crate::cmd_serve::ServeArgs),
     /// A calibration as an OpenCV, mrcal or ROS camera model (fitted, with its error)
     #[command(after_help = include_str!("../help/export.txt"))]
     Export(crate::cmd_export::ExportArgs),
@@ -104,28 +115,15 @@ pub enum Command {
 /// What to run.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Job {
-    Gains(crate::cmd_gains::GainsArgs),
-    PsdMap(crate::cmd_psd_map::PsdMapArgs),
-    SimulateScan(crate::cmd_simulate_scan::SimulateScanArgs),
-    Simulate(crate::cli_sim::SimulateArgs),
+    /// A command run as parsed.
+    Plain(Command),
     Study(psdcal::StudyRequest),
-    Demo(crate::cli_sim::DemoArgs),
     Check(DataSetFiles, LoadOptions),
     Calibrate(CalibrateConfig),
     Correct(CorrectArgs),
     Aoa(crate::cli_locate::AoaArgs),
     Locate(crate::cli_locate::LocateConfig),
     Map(psdcal::MapRequest, Option<PathBuf>),
-    Report(crate::cmd_report::ReportArgs),
-    Evaluate(crate::cmd_evaluate::EvaluateArgs),
-    SimulatePositioning(crate::cmd_simulate_positioning::PositioningArgs),
-    Demodulate(crate::cmd_demodulate::DemodulateArgs),
-    Track(crate::cmd_track::TrackArgs),
-    Export(crate::cmd_export::ExportArgs),
-    Diff(crate::cmd_diff::DiffArgs),
-    Plan(crate::cmd_plan::PlanArgs),
-    FocalCheck(crate::cmd_focal_check::FocalCheckArgs),
-    CalibrateInSitu(crate::cmd_calibrate_in_situ::InSituArgs),
 }
 
 impl Cli {
@@ -151,12 +149,7 @@ impl Cli {
                 let (files, load) = args.into_files(None, limits)?;
                 Job::Check(files, load)
             }
-            Command::Gains(args) => Job::Gains(args),
-            Command::PsdMap(args) => Job::PsdMap(args),
-            Command::SimulateScan(args) => Job::SimulateScan(args),
-            Command::Simulate(args) => Job::Simulate(args),
-            Command::Study(args) => Job::Study(args.into_config()),
-            Command::Demo(args) => Job::Demo(args),
+            Command::Study(args) => Job::Study(args.into_config(self.force)),
             Command::Aoa(args) => {
                 crate::cli_locate::json_needs_out("aoa", &args.out, output)?;
                 Job::Aoa(args)
@@ -166,16 +159,6 @@ impl Cli {
                 let (request, out) = args.into_config(output, limits)?;
                 Job::Map(request, out)
             }
-            Command::Report(args) => Job::Report(args),
-            Command::Evaluate(args) => Job::Evaluate(args),
-            Command::SimulatePositioning(args) => Job::SimulatePositioning(args),
-            Command::Demodulate(args) => Job::Demodulate(args),
-            Command::Track(args) => Job::Track(args),
-            Command::Export(args) => Job::Export(args),
-            Command::Diff(args) => Job::Diff(args),
-            Command::Plan(args) => Job::Plan(args),
-            Command::FocalCheck(args) => Job::FocalCheck(args),
-            Command::CalibrateInSitu(args) => Job::CalibrateInSitu(args),
             Command::Calibrate(args) => {
                 let (files, load) = args.data.into_files(args.gains, limits)?;
                 let choice = args
@@ -220,6 +203,7 @@ impl Cli {
                 crate::cli_locate::json_needs_out("correct", &args.out, output)?;
                 Job::Correct(args)
             }
+            command => Job::Plain(command),
         };
         Ok((output, job))
     }

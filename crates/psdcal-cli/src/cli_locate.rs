@@ -31,7 +31,7 @@ pub struct AoaArgs {
 }
 
 /// Emitter positions on a plane, or from a rig of sensors, with their 3-D covariance
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 #[command(group(ArgGroup::new("target").required(true).args(["distance", "plane", "rig"])))]
 pub struct LocateArgs {
     /// Calibration written by psdcal (with --distance or --plane)
@@ -52,7 +52,7 @@ pub struct LocateArgs {
     /// Plane n.P = d in the sensor frame: NX,NY,NZ,D (D in mm, not 0)
     #[arg(long, value_name = "NX,NY,NZ,D", value_parser = parse_plane, allow_hyphen_values = true)]
     pub plane: Option<Plane>,
-    /// Rig file: sensors with calibrations and poses in a world frame (README 'Rig files')
+    /// Rig file: sensors with calibrations and poses in a world frame (docs/positioning.md, 'Rig files')
     #[arg(long, value_name = "FILE")]
     pub rig: Option<PathBuf>,
     /// Output CSV (written atomically); standard output when absent
@@ -73,7 +73,7 @@ pub struct LocateArgs {
 }
 
 /// Maps of the AoA and position errors over the sensor area (the paper's Figure 9)
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 #[command(group(ArgGroup::new("model").required(true).args(["calibration", "lens"])))]
 #[command(group(ArgGroup::new("source").required(true).args(["errors", "k_sigma"])))]
 pub struct MapArgs {

@@ -62,7 +62,7 @@ pub struct SimulateArgs {
 }
 
 /// Run the paper's Monte Carlo evaluation (Tables 1-10, Figure 9) next to the paper's numbers
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, PartialEq, Args)]
 pub struct StudyArgs {
     /// Tables to run: table1 ... table10, fig9, psdmap (the PSD map's condition), or all
     #[arg(value_name = "TABLE", default_value = "all", value_parser = psdcal::parse_study_id)]
@@ -100,7 +100,7 @@ pub struct DemoArgs {
 
 impl StudyArgs {
     /// The configuration: `all` expands, duplicates go, the paper's order.
-    pub fn into_config(self) -> StudyRequest {
+    pub fn into_config(self, force: bool) -> StudyRequest {
         StudyRequest {
             tables: psdcal::expand_tables(&self.tables),
             trials: self.trials,
@@ -109,6 +109,7 @@ impl StudyArgs {
             record_cycles: self.record_cycles,
             out: self.out,
             report: self.report,
+            force,
         }
     }
 }

@@ -5,14 +5,16 @@ use psdcal::{DataSet, DataSetFiles, LoadOptions};
 use crate::messages::print_warnings;
 use crate::messages::Output;
 
-/// Runs `check`.
+/// Runs `check`: observations are checked as they are read, and the
+/// summary written straight from its fields (no JSON tree of a data set
+/// with hundreds of thousands of images).
 pub fn run(files: &DataSetFiles, load: &LoadOptions, output: Output) -> anyhow::Result<()> {
-    let set = DataSet::from_files(files, load)?;
-    print_warnings(set.warnings());
-    let summary = set.summary();
-    let json = serde_json::to_value(&summary)?;
-    crate::messages::emit(
-        output,
-        &psdcal::Summary::new(psdcal::summary_text(&summary), json),
-    )
+    let summary = DataSet::from_files(files, load)?.summary();
+    print_warnings(&summary.warnings);
+    match output {
+        Output::Quiet => {}
+        Output::Json => psdcal::print_text(&(serde_json::to_string_pretty(&summary)? + "\n"))?,
+        Output::Text => psdcal::print_text(&psdcal::summary_text(&summary))?,
+    }
+    Ok(())
 }

@@ -6,6 +6,8 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::messages::Output;
+use anyhow::Result;
+use psdcal::ReadLimits;
 
 /// Two calibrations of one sensor compared in angles over the active area (did it drift?)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -28,7 +30,7 @@ pub struct DiffArgs {
 }
 
 /// Runs `diff`.
-pub fn run(args: &DiffArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(args: &DiffArgs, output: Output, limits: ReadLimits, force: bool) -> Result<()> {
     let done = psdcal::diff(&psdcal::DiffRequest {
         a: args.a.clone(),
         b: args.b.clone(),
@@ -36,6 +38,7 @@ pub fn run(args: &DiffArgs, output: Output, limits: psdcal::ReadLimits) -> anyho
         out: args.out.clone(),
         report: args.report.clone(),
         limits,
+        force,
     })?;
     let summary = psdcal::Summary::new(done.summary(), done.to_json());
     crate::messages::emit(output, &summary.warn(&done.warnings))

@@ -6,6 +6,8 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::messages::Output;
+use anyhow::Result;
+use psdcal::ReadLimits;
 
 /// Judge estimated positions against a surveyed truth (mean, RMS, 75th/95th percentiles, CE95, SE95, honest error bars)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -25,7 +27,7 @@ pub struct EvaluateArgs {
 }
 
 /// Runs `evaluate`.
-pub fn run(args: &EvaluateArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(args: &EvaluateArgs, output: Output, limits: ReadLimits, force: bool) -> Result<()> {
     let evaluation = psdcal::evaluate(&psdcal::EvaluateRequest {
         truth: args.truth.clone(),
         estimates: args.estimates.clone(),
@@ -33,7 +35,7 @@ pub fn run(args: &EvaluateArgs, output: Output, limits: psdcal::ReadLimits) -> a
         limits,
     })?;
     let files = match &args.report {
-        Some(dir) => evaluation.write_report(dir)?,
+        Some(dir) => evaluation.write_report(dir, force)?,
         None => Vec::new(),
     };
     crate::messages::emit(output, &evaluation.summary(&files))

@@ -24,7 +24,7 @@ pub fn run(args: &GainsArgs, output: Output, limits: psdcal::ReadLimits) -> anyh
     match &args.out {
         Some(path) => psdcal_io::write_gains(path, &file)?,
         None if output != Output::Json => {
-            println!("{}", serde_json::to_string_pretty(&file)?);
+            psdcal::print_text(&(serde_json::to_string_pretty(&file)? + "\n"))?;
             return Ok(());
         }
         None => {}

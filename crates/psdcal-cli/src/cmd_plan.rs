@@ -4,11 +4,13 @@
 use std::path::PathBuf;
 
 use crate::messages::Output;
+use anyhow::Result;
 use clap::Args;
 use psdcal::option_text::{
     parse_assignment, parse_fit, parse_images, parse_range_mm, parse_sides_mm, parse_snr,
     positive_mm, FitList,
 };
+use psdcal::ReadLimits;
 
 /// Plan template poses that minimise the predicted angle-of-arrival uncertainty (poses.csv)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -69,7 +71,7 @@ pub struct PlanArgs {
 }
 
 /// Runs `plan`.
-pub fn run(a: &PlanArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(a: &PlanArgs, output: Output, limits: ReadLimits, force: bool) -> Result<()> {
     let planned = psdcal::plan_poses(&psdcal::PlanRequest {
         f_mm: a.f,
         template: a.template.clone(),
@@ -90,6 +92,7 @@ pub fn run(a: &PlanArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::
         out: a.out.clone(),
         report: a.report.clone(),
         limits,
+        force,
     })?;
     let summary = psdcal::Summary::new(planned.text.clone(), planned.json.clone());
     crate::messages::emit(output, &summary)

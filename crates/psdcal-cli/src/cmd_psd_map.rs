@@ -7,7 +7,9 @@ use clap::Args;
 use psdcal::{PsdGeometry, PsdMapModel, PsdMapRequest};
 
 use crate::messages::Output;
+use anyhow::Result;
 use psdcal::option_text::side_mm;
+use psdcal::ReadLimits;
 
 /// The PSD's own non-linearity map from a lensless scan (psd_map.json for calibrate --psd-map)
 #[derive(Debug, Clone, PartialEq, Args)]
@@ -36,7 +38,7 @@ pub struct PsdMapArgs {
 }
 
 /// Runs `psd-map`.
-pub fn run(args: &PsdMapArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(args: &PsdMapArgs, output: Output, limits: ReadLimits, force: bool) -> Result<()> {
     let request = PsdMapRequest {
         scan: args.scan.clone(),
         model: args.model,
@@ -48,6 +50,7 @@ pub fn run(args: &PsdMapArgs, output: Output, limits: psdcal::ReadLimits) -> any
         command: std::env::args().collect::<Vec<_>>().join(" "),
         report: args.report.clone(),
         limits,
+        force,
     };
     let outcome = psdcal::psd_map_from_scan(&request)?;
     outcome.write(&args.out)?;

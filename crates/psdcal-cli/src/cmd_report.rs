@@ -1,8 +1,9 @@
 //! `psdcal report`: a self-contained HTML page of a calibration with its
 //! plots (the library's `write_report`, drawn by psdcal-report).
 
+use anyhow::Result;
 use clap::Args;
-use psdcal::ReportRequest;
+use psdcal::{ReadLimits, ReportRequest};
 use std::path::PathBuf;
 
 use crate::messages::Output;
@@ -25,12 +26,13 @@ pub struct ReportArgs {
 }
 
 /// Runs `report`.
-pub fn run(args: &ReportArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(args: &ReportArgs, output: Output, limits: ReadLimits, force: bool) -> Result<()> {
     let written = psdcal::write_report(&ReportRequest {
         calibration: args.calibration.clone(),
         data: args.template.clone().zip(args.observations.clone()),
         out: args.out.clone(),
         limits,
+        force,
     })?;
     crate::messages::emit(output, &written.summary(&args.out))
 }

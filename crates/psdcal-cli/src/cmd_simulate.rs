@@ -1,13 +1,14 @@
 //! `psdcal simulate`: one simulated data set written as psdcal's input files
 //! plus truth.json (the library's `simulate_files`).
 
-use psdcal::SimulateRequest;
+use anyhow::Result;
+use psdcal::{ReadLimits, SimulateRequest};
 
 use crate::cli_sim::SimulateArgs;
 use crate::messages::Output;
 
 /// Runs `simulate`.
-pub fn run(args: &SimulateArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+pub fn run(args: &SimulateArgs, output: Output, limits: ReadLimits, force: bool) -> Result<()> {
     let request = SimulateRequest {
         lens: args.lens,
         snr_db: args.snr,
@@ -19,6 +20,7 @@ pub fn run(args: &SimulateArgs, output: Output, limits: psdcal::ReadLimits) -> a
         record_cycles: args.record_cycles,
         seed: args.seed,
         out: args.out.clone(),
+        force,
     };
     let (written, files) = match (args.raw, &args.poses) {
         (None, Some(poses)) => (

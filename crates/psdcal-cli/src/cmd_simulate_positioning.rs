@@ -41,10 +41,27 @@ pub struct PositioningArgs {
     /// Output folder (created if missing)
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Instead: a recording of 2 LEDs moving for S seconds under 4 ceiling sensors (raw.tdms, truth_track.csv)
+    #[arg(long, value_name = "S")]
+    pub moving: Option<f64>,
 }
 
 /// Runs `simulate-positioning`.
-pub fn run(a: &PositioningArgs, output: Output) -> anyhow::Result<()> {
+pub fn run(a: &PositioningArgs, output: Output, force: bool) -> anyhow::Result<()> {
+    if let Some(duration_s) = a.moving {
+        let moving = psdcal::simulate_moving(&psdcal::MovingRequest {
+            lens: a.lens,
+            calibration_snr_db: a.snr,
+            images: a.images,
+            duration_s,
+            noise_v: psdcal::DEFAULT_MOVING_NOISE_V,
+            seed: a.seed,
+            out: a.out.clone(),
+            force,
+        })?;
+        let summary = psdcal::Summary::new(moving.text(&a.out), moving.to_json(&a.out));
+        return crate::messages::emit(output, &summary);
+    }
     let rig = psdcal::simulate_positioning(&PositioningRequest {
         lens: a.lens,
         snr_db: a.snr,
@@ -59,6 +76,7 @@ pub fn run(a: &PositioningArgs, output: Output) -> anyhow::Result<()> {
         },
         seed: a.seed,
         out: a.out.clone(),
+        force,
     })?;
     let summary = psdcal::Summary::new(rig.text(&a.out), rig.to_json(&a.out));
     crate::messages::emit(output, &summary)

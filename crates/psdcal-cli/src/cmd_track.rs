@@ -36,16 +36,25 @@ pub struct TrackArgs {
     /// A .tdms file's channels, four per sensor: group/channel,… (default: vx1, vx2, vy1, vy2)
     #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pub channels: Vec<String>,
+    /// A rig's tracking filter: none, or cv (constant-velocity Kalman filter per LED)
+    #[arg(long, value_name = "none|cv", default_value = "none")]
+    pub filter: String,
+    /// The cv filter's white acceleration σ, mm/s² (default 400: walking at up to 1 m/s)
+    #[arg(long, value_name = "MM_S2")]
+    pub accel_sigma: Option<f64>,
 }
 
-/// Runs `track` (a summary on standard error unless quiet).
-pub fn run(args: &TrackArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+/// The request of `track` (and `serve`).
+pub fn request(
+    args: &TrackArgs,
+    limits: psdcal::ReadLimits,
+) -> anyhow::Result<psdcal::TrackRequest> {
     let target = match (&args.rig, &args.calibration) {
         (Some(rig), _) => psdcal::TrackTarget::Rig(rig.clone()),
         (None, Some(c)) => psdcal::TrackTarget::Sensor(c.clone()),
         (None, None) => anyhow::bail!("give --calibration FILE or --rig FILE"),
     };
-    let request = psdcal::TrackRequest {
+    Ok(psdcal::TrackRequest {
         target,
         rate_hz: args.rate,
         tones: args.tones.clone(),
@@ -54,13 +63,18 @@ pub fn run(args: &TrackArgs, output: Output, limits: psdcal::ReadLimits) -> anyh
         raw: args.raw.clone(),
         channels: args.channels.clone(),
         limits,
-    };
+        filter: psdcal::TrackFilter::from_name(&args.filter, args.accel_sigma)
+            .map_err(anyhow::Error::msg)?,
+    })
+}
+
+/// Runs `track` (a summary on standard error unless quiet).
+pub fn run(args: &TrackArgs, output: Output, limits: psdcal::ReadLimits) -> anyhow::Result<()> {
+    let request = request(args, limits)?;
     let summary = psdcal::track(&request, std::io::stdin().lock(), std::io::stdout().lock())?;
+    crate::messages::print_warnings(&summary.warnings());
     if output != Output::Quiet {
-        eprintln!(
-            "track: {} samples, {} windows, {} malformed lines",
-            summary.samples, summary.windows, summary.malformed
-        );
+        crate::messages::say(&format!("{}\n", summary.text()));
     }
     Ok(())
 }

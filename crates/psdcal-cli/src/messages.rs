@@ -40,19 +40,30 @@ pub fn print_error(error: &anyhow::Error) {
         format!("{error:#}")
     };
     let what = what.replace('\n', " ");
-    eprintln!("error: {what}; {}", psdcal::advice(&**error));
+    say(&format!("error: {what}; {}\n", psdcal::advice(&**error)));
+}
+
+/// Writes `text` on standard error as it is; a closed or full standard
+/// error is ignored (`eprint!` would panic), there being nowhere left to
+/// say anything.
+pub fn say(text: &str) {
+    use std::io::Write;
+    let mut stderr = std::io::stderr().lock();
+    let _ = stderr
+        .write_all(text.as_bytes())
+        .and_then(|()| stderr.flush());
 }
 
 /// Prints warnings on standard error, at most [`MAX_WARNINGS`] of them.
 pub fn print_warnings<W: std::fmt::Display>(warnings: &[W]) {
     for warning in warnings.iter().take(MAX_WARNINGS) {
-        eprintln!("warning: {warning}");
+        say(&format!("warning: {warning}\n"));
     }
     if warnings.len() > MAX_WARNINGS {
-        eprintln!(
-            "warning: {} more warnings not shown (--json lists them all)",
+        say(&format!(
+            "warning: {} more warnings not shown (--json lists them all)\n",
             warnings.len() - MAX_WARNINGS
-        );
+        ));
     }
 }
 
@@ -63,9 +74,9 @@ pub fn emit(output: Output, summary: &psdcal::Summary) -> anyhow::Result<()> {
     print_warnings(&summary.warnings);
     match output {
         Output::Quiet => {}
-        Output::Json => println!("{}", serde_json::to_string_pretty(&summary.json)?),
-        Output::Text if summary.table_on_stdout => eprint!("{}", summary.text),
-        Output::Text => print!("{}", summary.text),
+        Output::Json => psdcal::print_text(&(serde_json::to_string_pretty(&summary.json)? + "\n"))?,
+        Output::Text if summary.table_on_stdout => say(&summary.text),
+        Output::Text => psdcal::print_text(&summary.text)?,
     }
     Ok(())
 }

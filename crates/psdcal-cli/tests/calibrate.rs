@@ -182,7 +182,8 @@ fn refusals_exit_non_zero_with_the_reason() {
         let run = psdcal(&args);
         assert_eq!(run.status.code(), Some(2), "{args:?}: {}", stderr(&run));
     }
-    // An output folder that does not exist.
+    // An output folder that does not exist is created (as simulate and
+    // report create theirs); one that cannot be created is refused.
     let run = psdcal([
         "calibrate",
         "-t",
@@ -192,8 +193,20 @@ fn refusals_exit_non_zero_with_the_reason() {
         "--out",
         dir.path().join("missing/c.json").to_str().unwrap(),
     ]);
+    assert_eq!(run.status.code(), Some(0), "{}", stderr(&run));
+    assert!(dir.path().join("missing/c.json").is_file());
+    std::fs::write(dir.path().join("a-file"), "").unwrap();
+    let run = psdcal([
+        "calibrate",
+        "-t",
+        &example("template.csv"),
+        "-o",
+        &example("observations.csv"),
+        "--out",
+        dir.path().join("a-file/c.json").to_str().unwrap(),
+    ]);
     assert_eq!(run.status.code(), Some(1));
-    assert!(stderr(&run).contains("missing"), "{}", stderr(&run));
+    assert!(stderr(&run).contains("a-file"), "{}", stderr(&run));
 }
 
 /// `--noise channel-snr` takes each record's SNR from signals.csv's

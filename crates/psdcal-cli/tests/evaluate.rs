@@ -98,6 +98,30 @@ fn simulate_locate_evaluate_end_to_end() {
         report.to_str().unwrap(),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
+    // The page is psdcal's: an edited one is kept (issue 33), --force
+    // replaces it.
+    let page = report.join("evaluation.html");
+    std::fs::write(&page, "my notes").unwrap();
+    let truth = room.join("truth.csv");
+    let again = |force: &[&str]| {
+        let mut args = vec![
+            "evaluate",
+            "-q",
+            "--truth",
+            truth.to_str().unwrap(),
+            "--estimates",
+            est.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ];
+        args.extend_from_slice(force);
+        psdcal(args)
+    };
+    let kept = again(&[]);
+    assert_eq!(kept.status.code(), Some(1), "{}", stderr(&kept));
+    assert!(stderr(&kept).contains("evaluation.html") && stderr(&kept).contains("--force"));
+    assert_eq!(std::fs::read_to_string(&page).unwrap(), "my notes");
+    assert!(again(&["--force"]).status.success());
     let json: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
     // Independent computation from the two files.
     let truth = read_csv(&room.join("truth.csv"));

@@ -363,16 +363,30 @@ fn one_mistyped_led_is_named_not_blamed_on_the_poses() {
 
 #[test]
 fn a_report_on_a_degenerate_calibration_is_drawn() {
-    // The reproducer's kind: a calibration whose correction folds at once
-    // (its valid region is empty: the PSD term's determinant is negative
-    // already at the optical centre), and one with an absurd focal length.
+    // The reproducer's kind: a calibration with an absurd focal length is
+    // drawn; one whose correction folds at once (its valid region is empty:
+    // the PSD term's determinant is negative already at the optical centre)
+    // is refused.
     let dir = tempfile::tempdir().unwrap();
     let text = fs::read_to_string(valid("calibration.json")).unwrap();
     // Edited as text: the file's order of names is part of its format.
-    let cases = [
-        ("l1", "\"l1\": 0.0", "\"l1\": -1.0"),
-        ("f", "\"f\": 8.0", "\"f\": 10000.0"),
-    ];
+    // Since calibration files are checked on reading as strictly as a
+    // fresh calibration, the empty region is refused, naming the field.
+    let folded = dir.path().join("l1.json");
+    fs::write(&folded, text.replace("\"l1\": 0.0", "\"l1\": -1.0")).unwrap();
+    let refused = dir.path().join("report-l1");
+    let out = psdcal([
+        "report",
+        "-c",
+        folded.to_str().unwrap(),
+        "--out",
+        refused.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("distortion.l1 = -1: the distortion correction folds"));
+    assert_eq!(stderr(&out).lines().count(), 1, "{}", stderr(&out));
+    assert!(!refused.exists());
+    let cases = [("f", "\"f\": 8.0", "\"f\": 10000.0")];
     for (name, from, to) in cases {
         assert_eq!(text.matches(from).count(), 2, "{name}: the fixture changed");
         let cal = dir.path().join(format!("{name}.json"));

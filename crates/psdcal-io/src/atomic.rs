@@ -15,17 +15,122 @@
 //!
 //! Temporary files are named `.<name>.<pid>.<n>.tmp`, or
 //! `.<name>.<pid>.<n>.tmp.<ext>` for a writer that tells the format by the
-//! extension ([`write_atomic_at`]). A process killed
-//! while writing (SIGKILL, power loss) cannot remove its own: the next write
-//! into the same folder removes every such file whose process is no longer
-//! running (on systems without `/proc`, those older than a day).
+//! extension ([`write_atomic_at`]). The writer holds an exclusive advisory
+//! lock (`flock`) on its temporary file from its creation to its rename. A
+//! process killed while writing (SIGKILL, power loss) cannot remove its
+//! own: the next write into the same folder removes such a file only when it
+//! is provably stale, that is when its lock can be taken (no live writer
+//! holds it, whatever its process id, container or host) **and** it was
+//! last modified more than [`STALE_AGE`] ago. The process id in the name
+//! only makes the name unique; it is never looked up.
+//!
+//! The destination:
+//! - a symbolic link is written through: its target is replaced, the link
+//!   stays;
+//! - an existing file keeps its permission bits (a 0600 file stays 0600);
+//! - an existing folder, or a name ending in `/`, is refused ("is a folder;
+//!   give a file name").
+//!
+//! Several files that belong together (a calibration and its residuals) are
+//! written as [`PendingFile`]s, each to its temporary file, and renamed only
+//! once all were written: a failure leaves every destination as it was.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
 
 use crate::error::IoError;
+
+/// A temporary file whose lock can be taken is removed only when it was
+/// last modified longer ago than this (a writer killed mid-write leaves it
+/// behind; a live writer holds its lock and keeps it whatever its age).
+pub const STALE_AGE: Duration = Duration::from_secs(3600);
+
+/// A file written to its temporary file, not yet renamed over its
+/// destination: [`PendingFile::commit`] renames it; dropping it removes the
+/// temporary file and leaves the destination as it was.
+#[derive(Debug)]
+pub struct PendingFile {
+    /// The destination as given (for messages).
+    shown: String,
+    /// The file replaced (a symbolic link's target).
+    destination: PathBuf,
+    temp: PathBuf,
+    /// Holds the writer's lock until the rename.
+    lock: Option<File>,
+}
+
+impl PendingFile {
+    /// Writes `write`'s content to a new temporary file next to `path`.
+    pub fn write<F>(path: impl AsRef<Path>, write: F) -> Result<PendingFile, IoError>
+    where
+        F: FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+    {
+        let (mut pending, file) = PendingFile::create(path.as_ref(), false)?;
+        let result = file
+            .try_clone()
+            .and_then(|clone| fill(clone, write))
+            .and_then(|()| pending.keep_permissions());
+        pending.lock = Some(file);
+        result.map_err(|source| pending.error(source))?;
+        Ok(pending)
+    }
+
+    /// Renames the temporary file over the destination.
+    pub fn commit(mut self) -> Result<(), IoError> {
+        let result = fs::rename(&self.temp, &self.destination);
+        result.map_err(|source| self.error(source))?;
+        self.lock = None;
+        self.temp = PathBuf::new();
+        Ok(())
+    }
+
+    /// The destination checked and resolved, stale temporary files removed,
+    /// and a new locked temporary file.
+    fn create(path: &Path, keep_extension: bool) -> Result<(PendingFile, File), IoError> {
+        let shown = path.display().to_string();
+        let error = |source| IoError::Write {
+            file: shown.clone(),
+            source,
+        };
+        let destination = destination_of(path).map_err(error)?;
+        remove_stale_temps(&destination);
+        let (temp, file) = create_temp(&destination, keep_extension).map_err(error)?;
+        let pending = PendingFile {
+            shown: shown.clone(),
+            destination,
+            temp,
+            lock: None,
+        };
+        Ok((pending, file))
+    }
+
+    /// Gives the temporary file the permission bits of the file it replaces.
+    fn keep_permissions(&self) -> io::Result<()> {
+        match fs::metadata(&self.destination) {
+            Ok(meta) => fs::set_permissions(&self.temp, meta.permissions()),
+            Err(_) => Ok(()),
+        }
+    }
+
+    fn error(&self, source: io::Error) -> IoError {
+        IoError::Write {
+            file: self.shown.clone(),
+            source,
+        }
+    }
+}
+
+impl Drop for PendingFile {
+    fn drop(&mut self) {
+        if !self.temp.as_os_str().is_empty() {
+            // Best effort: the temporary file may already be gone.
+            let _ = fs::remove_file(&self.temp);
+        }
+    }
+}
 
 /// Writes a file atomically: `write` fills a buffered temporary file next to
 /// `path`, which then replaces `path`.
@@ -33,20 +138,7 @@ pub fn write_atomic<F>(path: impl AsRef<Path>, write: F) -> Result<(), IoError>
 where
     F: FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 {
-    let path = path.as_ref();
-    let error = |source| IoError::Write {
-        file: path.display().to_string(),
-        source,
-    };
-    remove_stale_temps(path);
-    let (temp_path, file) = create_temp(path, false).map_err(error)?;
-    let result = fill(file, write).and_then(|()| fs::rename(&temp_path, path));
-    if let Err(source) = result {
-        // Best effort: the temporary file may already be gone.
-        let _ = fs::remove_file(&temp_path);
-        return Err(error(source));
-    }
-    Ok(())
+    PendingFile::write(path, write)?.commit()
 }
 
 /// Writes a file atomically with a writer that opens the file itself (a
@@ -59,23 +151,14 @@ where
     F: FnOnce(&Path) -> Result<(), E>,
     E: std::fmt::Display,
 {
-    let path = path.as_ref();
-    let error = |source| IoError::Write {
-        file: path.display().to_string(),
-        source,
-    };
-    remove_stale_temps(path);
-    let (temp_path, file) = create_temp(path, true).map_err(error)?;
-    drop(file);
-    let result = write(&temp_path)
+    let (mut pending, file) = PendingFile::create(path.as_ref(), true)?;
+    // The lock stays held (this descriptor open) while `write` writes.
+    pending.lock = Some(file);
+    let result = write(&pending.temp)
         .map_err(|e| io::Error::other(e.to_string()))
-        .and_then(|()| fs::rename(&temp_path, path));
-    if let Err(source) = result {
-        // Best effort: the temporary file may already be gone.
-        let _ = fs::remove_file(&temp_path);
-        return Err(error(source));
-    }
-    Ok(())
+        .and_then(|()| pending.keep_permissions());
+    result.map_err(|source| pending.error(source))?;
+    pending.commit()
 }
 
 /// Writes `bytes` to `path` atomically. On Linux the temporary file's
@@ -102,9 +185,30 @@ fn reserve(file: &File, len: u64) {
 #[cfg(not(target_os = "linux"))]
 fn reserve(_file: &File, _len: u64) {}
 
+/// The file a write to `path` replaces: `path`, or the target of the
+/// symbolic link `path` (followed to the end). A folder is refused.
+fn destination_of(path: &Path) -> io::Result<PathBuf> {
+    let folder = || io::Error::new(io::ErrorKind::IsADirectory, "is a folder; give a file name");
+    let text = path.as_os_str().as_encoded_bytes();
+    if text.ends_with(b"/") || path.is_dir() {
+        return Err(folder());
+    }
+    let mut destination = path.to_path_buf();
+    for _ in 0..40 {
+        match fs::symlink_metadata(&destination) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                let target = fs::read_link(&destination)?;
+                destination = folder_of(&destination).join(target);
+            }
+            _ => return Ok(destination),
+        }
+    }
+    Err(io::Error::other("too many levels of symbolic links"))
+}
+
 /// A new, exclusively created temporary file in the destination's
-/// directory; with `keep_extension`, its name ends in the destination's
-/// extension too.
+/// directory, locked (exclusive `flock`); with `keep_extension`, its name
+/// ends in the destination's extension too.
 fn create_temp(path: &Path, keep_extension: bool) -> io::Result<(PathBuf, File)> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let name = path.file_name().ok_or_else(|| {
@@ -113,10 +217,7 @@ fn create_temp(path: &Path, keep_extension: bool) -> io::Result<(PathBuf, File)>
             "the destination is not a file name",
         )
     })?;
-    let dir = match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir,
-        _ => Path::new("."),
-    };
+    let dir = folder_of(path);
     loop {
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
         let mut temp_name = std::ffi::OsString::from(".");
@@ -132,7 +233,11 @@ fn create_temp(path: &Path, keep_extension: bool) -> io::Result<(PathBuf, File)>
             .create_new(true)
             .open(&temp_path)
         {
-            Ok(file) => return Ok((temp_path, file)),
+            Ok(file) => {
+                // A file system without locks: the age alone protects it.
+                let _ = file.try_lock();
+                return Ok((temp_path, file));
+            }
             Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
             Err(e) => return Err(e),
         }
@@ -147,55 +252,56 @@ fn folder_of(path: &Path) -> &Path {
     }
 }
 
-/// The process id in a name of psdcal's temporary files
-/// (`.<name>.<pid>.<n>.tmp`, optionally followed by `.<ext>`), if the name
-/// is one.
-fn temp_owner(file_name: &str) -> Option<u32> {
-    let inner = file_name.strip_prefix('.')?;
+/// Whether a file name is one of psdcal's temporary files
+/// (`.<name>.<pid>.<n>.tmp`, optionally followed by `.<ext>`).
+fn is_temp_name(file_name: &str) -> bool {
+    let Some(inner) = file_name.strip_prefix('.') else {
+        return false;
+    };
     let inner = match inner.rsplit_once(".tmp.") {
         Some((head, ext)) if !ext.is_empty() && !ext.contains('.') => head,
-        _ => inner.strip_suffix(".tmp")?,
+        _ => match inner.strip_suffix(".tmp") {
+            Some(head) => head,
+            None => return false,
+        },
     };
     let mut parts = inner.rsplitn(3, '.');
-    let n = parts.next()?;
-    let pid = parts.next()?;
-    let name = parts.next()?;
-    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
-    (!name.is_empty() && digits(n) && digits(pid))
-        .then(|| pid.parse().ok())
-        .flatten()
+    let digits =
+        |s: Option<&str>| s.is_some_and(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()));
+    let (n, pid, name) = (parts.next(), parts.next(), parts.next());
+    digits(n) && digits(pid) && name.is_some_and(|name| !name.is_empty())
 }
 
-/// Whether the process that owns a temporary file is gone.
-fn owner_is_gone(pid: u32, entry: &fs::DirEntry) -> bool {
-    if pid == std::process::id() {
-        return false;
-    }
-    let proc = Path::new("/proc");
-    if proc.join("self").exists() {
-        return !proc.join(pid.to_string()).exists();
-    }
-    const DAY: std::time::Duration = std::time::Duration::from_secs(24 * 3600);
-    entry
+/// Whether a temporary file is provably stale: no writer holds its lock
+/// (taken here, and kept until the file is removed) and it was last
+/// modified more than [`STALE_AGE`] ago. The lock is returned with the
+/// answer so that it is held while the file is removed.
+fn stale(path: &Path) -> Option<File> {
+    let file = File::open(path).ok()?;
+    file.try_lock().ok()?;
+    let age = file
         .metadata()
         .and_then(|m| m.modified())
-        .ok()
-        .and_then(|t| t.elapsed().ok())
-        .is_some_and(|age| age > DAY)
+        .ok()?
+        .elapsed()
+        .ok()?;
+    (age > STALE_AGE).then_some(file)
 }
 
 /// Removes the temporary files left in `path`'s folder by psdcal processes
-/// that were killed while writing (best effort).
+/// that were killed while writing (best effort; see the module
+/// documentation for when a file is stale).
 fn remove_stale_temps(path: &Path) {
     let Ok(entries) = fs::read_dir(folder_of(path)) else {
         return;
     };
     for entry in entries.flatten() {
         let name = entry.file_name();
-        let Some(pid) = name.to_str().and_then(temp_owner) else {
+        if !name.to_str().is_some_and(is_temp_name) || !entry.file_type().is_ok_and(|t| t.is_file())
+        {
             continue;
-        };
-        if entry.file_type().is_ok_and(|t| t.is_file()) && owner_is_gone(pid, &entry) {
+        }
+        if let Some(_lock) = stale(&entry.path()) {
             let _ = fs::remove_file(entry.path());
         }
     }
@@ -232,7 +338,7 @@ mod tests {
         write_atomic_at(&path, |tmp: &Path| {
             assert!(tmp.extension().is_some_and(|e| e == "png"), "{tmp:?}");
             let name = tmp.file_name().unwrap().to_str().unwrap();
-            assert_eq!(temp_owner(name), Some(std::process::id()));
+            assert!(is_temp_name(name), "{name}");
             fs::write(tmp, b"new")
         })
         .unwrap();
@@ -250,11 +356,11 @@ mod tests {
 
     #[test]
     fn temporary_names_with_an_extension_are_recognised_and_others_not() {
-        assert_eq!(temp_owner(".coverage.png.42.7.tmp.png"), Some(42));
-        assert_eq!(temp_owner(".out.csv.42.7.tmp"), Some(42));
-        assert_eq!(temp_owner(".foo.tmp.bar.42.7.tmp"), Some(42));
-        assert_eq!(temp_owner(".coverage.png.tmp.png"), None);
-        assert_eq!(temp_owner("coverage.png"), None);
+        assert!(is_temp_name(".coverage.png.42.7.tmp.png"));
+        assert!(is_temp_name(".out.csv.42.7.tmp"));
+        assert!(is_temp_name(".foo.tmp.bar.42.7.tmp"));
+        assert!(!is_temp_name(".coverage.png.tmp.png"));
+        assert!(!is_temp_name("coverage.png"));
     }
 
     #[test]
@@ -302,32 +408,117 @@ mod tests {
         );
     }
 
+    /// Sets a file's modification time `ago` in the past.
+    fn age(path: &Path, ago: Duration) {
+        let file = OpenOptions::new().write(true).open(path).unwrap();
+        let then = std::time::SystemTime::now() - ago;
+        file.set_modified(then).unwrap();
+    }
+
     #[test]
-    fn stale_temporary_files_of_dead_processes_are_removed() {
+    fn only_unlocked_old_temporary_files_are_removed_whatever_their_pid() {
         let dir = tempfile::tempdir().unwrap();
-        // A process id that cannot be running: beyond Linux's pid_max.
+        // Process ids that cannot run here (beyond Linux's pid_max): the
+        // files of writers in another container or on another host.
         let dead = dir.path().join(".aoa.csv.4294967295.0.tmp");
-        let mine = dir
-            .path()
-            .join(format!(".aoa.csv.{}.99.tmp", std::process::id()));
+        let live = dir.path().join(".aoa.csv.4294967294.0.tmp");
+        let fresh = dir.path().join(".aoa.csv.4294967293.0.tmp.png");
         let foreign = dir.path().join(".notes.tmp");
-        for p in [&dead, &mine, &foreign] {
+        for p in [&dead, &live, &fresh, &foreign] {
             fs::write(p, "partial").unwrap();
         }
-        write_atomic_bytes(dir.path().join("other.csv"), b"x").unwrap();
-        let mut expected = vec![
-            ".notes.tmp".to_string(),
-            format!(".aoa.csv.{}.99.tmp", std::process::id()),
-            "other.csv".to_string(),
-        ];
-        if !Path::new("/proc/self").exists() {
-            expected.push(".aoa.csv.4294967295.0.tmp".to_string());
+        for p in [&dead, &live, &foreign] {
+            age(p, 2 * STALE_AGE);
         }
-        expected.sort();
-        assert_eq!(entries(dir.path()), expected);
-        assert_eq!(temp_owner(".a.b.csv.12.3.tmp"), Some(12));
-        assert_eq!(temp_owner(".12.3.tmp"), None);
-        assert_eq!(temp_owner(".a.x2.3.tmp"), None);
+        // A live writer (here, another open file description) holds its lock.
+        let writer = OpenOptions::new().write(true).open(&live).unwrap();
+        writer.lock().unwrap();
+        write_atomic_bytes(dir.path().join("other.csv"), b"x").unwrap();
+        assert_eq!(
+            entries(dir.path()),
+            [
+                ".aoa.csv.4294967293.0.tmp.png",
+                ".aoa.csv.4294967294.0.tmp",
+                ".notes.tmp",
+                "other.csv"
+            ]
+        );
+        // Once the writer is gone its old file is stale.
+        drop(writer);
+        write_atomic_bytes(dir.path().join("other.csv"), b"y").unwrap();
+        assert_eq!(
+            entries(dir.path()),
+            [".aoa.csv.4294967293.0.tmp.png", ".notes.tmp", "other.csv"]
+        );
+        assert!(is_temp_name(".a.b.csv.12.3.tmp"));
+        assert!(!is_temp_name(".12.3.tmp"));
+        assert!(!is_temp_name(".a.x2.3.tmp"));
+    }
+
+    #[test]
+    fn a_temporary_file_is_locked_while_it_is_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.csv");
+        write_atomic(&path, |w| {
+            let temp = fs::read_dir(dir.path())
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .find(|p| p != &path)
+                .unwrap();
+            let other = File::open(&temp).unwrap();
+            assert!(other.try_lock().is_err(), "the writer's lock is held");
+            age(&temp, 2 * STALE_AGE);
+            // Another writer's cleanup leaves it.
+            write_atomic_bytes(dir.path().join("b.csv"), b"b").unwrap();
+            assert!(temp.exists());
+            w.write_all(b"a")
+        })
+        .unwrap();
+        assert_eq!(entries(dir.path()), ["b.csv", "out.csv"]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn permissions_are_kept_and_links_written_through() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("target.json");
+        fs::write(&target, "old").unwrap();
+        fs::set_permissions(&target, fs::Permissions::from_mode(0o600)).unwrap();
+        let link = dir.path().join("link.json");
+        std::os::unix::fs::symlink("target.json", &link).unwrap();
+        write_atomic_bytes(&link, b"new").unwrap();
+        assert!(fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(fs::read(&target).unwrap(), b"new");
+        let mode = fs::metadata(&target).unwrap().permissions().mode();
+        assert_eq!(mode & 0o777, 0o600);
+        write_atomic_at(&target, |tmp: &Path| fs::write(tmp, b"png")).unwrap();
+        let mode = fs::metadata(&target).unwrap().permissions().mode();
+        assert_eq!(mode & 0o777, 0o600);
+    }
+
+    #[test]
+    fn pending_files_are_renamed_together_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("a.json");
+        let b = dir.path().join("b.csv");
+        fs::write(&a, "old a").unwrap();
+        fs::write(&b, "old b").unwrap();
+        let first = PendingFile::write(&a, |w| w.write_all(b"new a")).unwrap();
+        let second = PendingFile::write(&b, |_| Err(io::Error::other("disk full")));
+        assert!(second.is_err());
+        drop(first);
+        assert_eq!(fs::read(&a).unwrap(), b"old a");
+        assert_eq!(entries(dir.path()), ["a.json", "b.csv"]);
+        let first = PendingFile::write(&a, |w| w.write_all(b"new a")).unwrap();
+        let second = PendingFile::write(&b, |w| w.write_all(b"new b")).unwrap();
+        first.commit().unwrap();
+        second.commit().unwrap();
+        assert_eq!(fs::read(&b).unwrap(), b"new b");
+        assert_eq!(entries(dir.path()), ["a.json", "b.csv"]);
     }
 
     #[test]
@@ -345,7 +536,16 @@ mod tests {
         let target = dir.path().join("sub");
         fs::create_dir(&target).unwrap();
         fs::write(target.join("keep"), "k").unwrap();
-        assert!(write_atomic_bytes(&target, b"x").is_err());
+        let e = write_atomic_bytes(&target, b"x").unwrap_err();
+        assert!(
+            e.to_string().ends_with("is a folder; give a file name"),
+            "{e}"
+        );
+        let e = write_atomic_bytes(dir.path().join("new/"), b"x").unwrap_err();
+        assert!(
+            e.to_string().ends_with("is a folder; give a file name"),
+            "{e}"
+        );
         assert_eq!(entries(dir.path()), ["sub"]);
         assert_eq!(entries(&target), ["keep"]);
     }

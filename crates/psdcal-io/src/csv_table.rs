@@ -31,7 +31,11 @@ use crate::location::Location;
 /// The readers of a CSV table type that has `fn from_table(CsvTable) ->
 /// Result<Self, IoError>` and a `EXPECTED_COLUMNS` in scope: from a path, a
 /// reader or text, with the default [`ReadLimits`] or given ones. `$file`
-/// names the file in the docs.
+/// names the file in the docs. With `streamed`, the type has
+/// `fn from_stream<R: BufRead>(CsvStream<R>) -> Result<Self, IoError>`
+/// instead, which converts each record as it is read
+/// ([`CsvStream::map_rows`]): no record is kept as text, so memory follows
+/// the rows' values, not the file's fields.
 macro_rules! csv_table_readers {
     ($file:literal) => {
         #[doc = concat!("Reads ", $file, " from a file.")]
@@ -76,6 +80,53 @@ macro_rules! csv_table_readers {
                 source,
                 text.as_bytes(),
                 EXPECTED_COLUMNS,
+            )?)
+        }
+    };
+    (streamed $file:literal) => {
+        #[doc = concat!("Reads ", $file, " from a file.")]
+        pub fn read(path: impl AsRef<std::path::Path>) -> Result<Self, IoError> {
+            Self::read_with(path, ReadLimits::default())
+        }
+
+        /// [`Self::read`] within `limits` (docs/formats.md, "Limits").
+        pub fn read_with(
+            path: impl AsRef<std::path::Path>,
+            limits: ReadLimits,
+        ) -> Result<Self, IoError> {
+            Self::from_stream($crate::csv_table::CsvStream::open(
+                path.as_ref(),
+                EXPECTED_COLUMNS,
+                Some(limits.max_file_bytes),
+            )?)
+        }
+
+        #[doc = concat!("Reads ", $file, " from a reader; `source` names it in messages.")]
+        pub fn from_reader(source: &str, reader: impl std::io::Read) -> Result<Self, IoError> {
+            Self::from_reader_with(source, reader, ReadLimits::default())
+        }
+
+        /// [`Self::from_reader`] within `limits` (docs/formats.md, "Limits").
+        pub fn from_reader_with(
+            source: &str,
+            reader: impl std::io::Read,
+            limits: ReadLimits,
+        ) -> Result<Self, IoError> {
+            Self::from_stream($crate::csv_table::CsvStream::new(
+                source,
+                std::io::BufReader::new(reader),
+                EXPECTED_COLUMNS,
+                Some(limits.max_file_bytes),
+            )?)
+        }
+
+        #[doc = concat!("Parses ", $file, " text; `source` names it in messages.")]
+        pub fn from_str(source: &str, text: &str) -> Result<Self, IoError> {
+            Self::from_stream($crate::csv_table::CsvStream::new(
+                source,
+                text.as_bytes(),
+                EXPECTED_COLUMNS,
+                None,
             )?)
         }
     };
@@ -246,6 +297,16 @@ impl CsvTable {
 
     /// A non-empty identifier (LED, image) from a field; `what` names it.
     pub fn identifier(&self, row: &CsvRow, col: &Col, what: &str) -> Result<String, IoError> {
+        self.identifier_text(row, col, what).map(str::to_string)
+    }
+
+    /// [`Self::identifier`] without copying it.
+    pub fn identifier_text<'r>(
+        &self,
+        row: &'r CsvRow,
+        col: &Col,
+        what: &str,
+    ) -> Result<&'r str, IoError> {
         let text = self.text(row, col);
         if text.is_empty() {
             return Err(IoError::Value {
@@ -254,7 +315,7 @@ impl CsvTable {
                 message: format!("expected {what}, found an empty field"),
             });
         }
-        Ok(text.to_string())
+        Ok(text)
     }
 }
 
@@ -345,6 +406,20 @@ impl<R: BufRead> CsvStream<R> {
     /// (`csv_numeric`) and leaves the others to [`next_row`](Self::next_row).
     pub fn lines(&mut self) -> &mut LineReader<R> {
         &mut self.lines
+    }
+
+    /// Every remaining record converted by `convert` as soon as it is read
+    /// (its text dropped at once); the header and the values.
+    pub fn map_rows<T>(
+        mut self,
+        mut convert: impl FnMut(&CsvTable, &CsvRow) -> Result<T, IoError>,
+    ) -> Result<(CsvTable, Vec<T>), IoError> {
+        let mut values = Vec::new();
+        while let Some(row) = self.next_row()? {
+            values.push(convert(&self.head, &row)?);
+        }
+        values.shrink_to_fit();
+        Ok((self.head, values))
     }
 
     /// Every remaining record, as a table.

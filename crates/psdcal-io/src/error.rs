@@ -89,6 +89,16 @@ pub enum IoError {
         /// The limit and how to raise it.
         message: String,
     },
+    /// An output would replace a file in its folder that psdcal did not
+    /// write there (or that changed since; docs/formats.md, "Output
+    /// folders").
+    #[error("{file}: {message}")]
+    NotOurs {
+        /// The file that would be replaced.
+        file: String,
+        /// Why it is kept.
+        message: String,
+    },
     /// An output would replace an input of the same run (the same file,
     /// also through links), or two outputs are the same file.
     #[error("{file}: {message}")]
@@ -213,6 +223,7 @@ impl IoError {
             | IoError::Json { file, .. }
             | IoError::NewerVersion { file, .. }
             | IoError::Field { file, .. }
+            | IoError::NotOurs { file, .. }
             | IoError::OutputIsInput { file, .. } => Some(file),
             IoError::Encoding { at, .. }
             | IoError::Structure { at, .. }
@@ -234,6 +245,7 @@ impl IoError {
             | IoError::Write { .. }
             | IoError::Field { .. }
             | IoError::OutputIsInput { .. }
+            | IoError::NotOurs { .. }
             | IoError::Stream { .. } => None,
             IoError::Json { line, .. } | IoError::NewerVersion { line, .. } => Some(*line),
             IoError::Encoding { at, .. }

@@ -131,7 +131,7 @@ fn check_gains(source: &str, text: &str) -> Result<GainsFile, IoError> {
             at: Location::file(source),
             message: format!(
                 "expected format \"{GAINS_FORMAT}\", found \"{}\"",
-                file.format
+                crate::limits::excerpt(&file.format).escape_debug()
             ),
         });
     }

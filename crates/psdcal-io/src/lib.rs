@@ -52,8 +52,10 @@ mod export;
 mod gains_file;
 mod limits;
 mod location;
+mod network_files;
 mod number_text;
 mod observations;
+mod output_folder;
 mod points;
 mod poses;
 mod positioning;
@@ -61,6 +63,7 @@ mod psd_map_file;
 mod raw;
 mod raw_csv;
 mod raw_frame;
+mod raw_rig;
 mod rig;
 mod rig_observations;
 mod same_file;
@@ -78,7 +81,7 @@ mod truth;
 mod validate;
 mod warning;
 
-pub use atomic::{write_atomic, write_atomic_at, write_atomic_bytes};
+pub use atomic::{write_atomic, write_atomic_at, write_atomic_bytes, PendingFile, STALE_AGE};
 pub use calibration::{
     read_calibration, read_calibration_with, write_calibration, AspectRecord, BootstrapRecord,
     Calibration, CostKind, Covariance, Diagnostic, FitSummary, GainsRecord, ImageFit, InputFile,
@@ -100,8 +103,12 @@ pub use limits::{
     MAX_LINE_BYTES,
 };
 pub use location::Location;
+pub use network_files::{
+    LedPositions, NetworkPointRow, NetworkPoints, NetworkSensorRow, NetworkSensors,
+};
 pub use number_text::{number_text, shown_number};
-pub use observations::{Observation, Observations};
+pub use observations::{Observation, ObservationText, Observations};
+pub use output_folder::{OutputFolder, MANIFEST};
 pub use points::{AddedColumn, PointInput, PointRow, PointStream, Points};
 pub use poses::{write_poses, PoseRow, Poses};
 pub use positioning::{EstimateRow, MatchedEstimate, PositionEstimates, PositionTruth, TruthRow};
@@ -111,7 +118,8 @@ pub use psd_map_file::{
     MapResidualsRecord, PsdMapFile, PSD_MAP_FORMAT, PSD_MAP_VERSION,
 };
 pub use raw::{
-    npy_header, write_csv_frames, write_npy_frames, RawFormat, RawReader, RAW_CSV_HEADER,
+    npy_header, npy_header_columns, write_csv_frames, write_npy_frames, RawFormat, RawReader,
+    RAW_CSV_HEADER,
 };
 pub use raw_frame::{Frame, RATE_TOLERANCE};
 pub use rig::{
@@ -132,6 +140,7 @@ pub use truth::{
     TRUTH_FORMAT, TRUTH_VERSION,
 };
 pub use validate::{
-    validate_data_set, Image, ValidatedDataSet, ValidationOptions, MIN_IMAGES, MIN_POINTS_PER_IMAGE,
+    validate_data_set, DataSetValidator, Image, ValidatedDataSet, ValidationOptions, MIN_IMAGES,
+    MIN_POINTS_PER_IMAGE,
 };
 pub use warning::Warning;

@@ -11,7 +11,7 @@
 //! numbers); checks against the template (unknown LEDs, duplicates, points
 //! off the sensor) are [`crate::validate_data_set`]'s.
 
-use crate::csv_table::CsvTable;
+use crate::csv_table::{Col, CsvRow, CsvStream, CsvTable};
 use crate::error::IoError;
 use crate::limits::ReadLimits;
 
@@ -42,31 +42,101 @@ pub struct Observations {
     pub rows: Vec<Observation>,
 }
 
-impl Observations {
-    csv_table_readers!("observations.csv");
+/// One row of observations.csv as read, before its identifiers are
+/// copied: what [`crate::DataSetValidator`] checks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObservationText<'a> {
+    /// Image identifier.
+    pub image: &'a str,
+    /// LED identifier.
+    pub led: &'a str,
+    /// Measured impact point, mm, sensor frame.
+    pub x_mm: f64,
+    /// Measured impact point, mm, sensor frame.
+    pub y_mm: f64,
+    /// Physical line of the row, 1-based.
+    pub line_no: usize,
+}
 
-    fn from_table(table: CsvTable) -> Result<Self, IoError> {
-        let image_col = table.column("image")?;
-        let led_col = table.column("led")?;
-        let x_col = table.column("x_mm")?;
-        let y_col = table.column("y_mm")?;
-        table.require_rows()?;
-        let rows = table
-            .rows
-            .iter()
-            .map(|row| {
-                Ok(Observation {
-                    image: table.identifier(row, &image_col, "an image identifier")?,
-                    led: table.identifier(row, &led_col, "an LED identifier")?,
-                    x_mm: table.number(row, &x_col)?,
-                    y_mm: table.number(row, &y_col)?,
-                    line_no: row.line,
-                })
+impl Observations {
+    csv_table_readers!(streamed "observations.csv");
+
+    fn from_stream<R: std::io::BufRead>(stream: CsvStream<R>) -> Result<Self, IoError> {
+        let columns = Columns::of(&stream.head)?;
+        let (table, rows) = stream.map_rows(|table, row| {
+            let row = columns.row(table, row)?;
+            Ok(Observation {
+                image: row.image.to_string(),
+                led: row.led.to_string(),
+                x_mm: row.x_mm,
+                y_mm: row.y_mm,
+                line_no: row.line_no,
             })
-            .collect::<Result<_, IoError>>()?;
+        })?;
+        if rows.is_empty() {
+            table.require_rows()?;
+        }
         Ok(Self {
             source: table.source,
             rows,
+        })
+    }
+
+    /// Reads observations.csv from `reader` row by row, handing each row to
+    /// `each` as it is read and keeping none: memory stays constant
+    /// whatever the file's size (within `limits`). Returns the number of
+    /// rows.
+    pub fn for_each_row(
+        source: &str,
+        reader: impl std::io::Read,
+        limits: ReadLimits,
+        mut each: impl FnMut(&ObservationText<'_>) -> Result<(), IoError>,
+    ) -> Result<usize, IoError> {
+        let mut stream = CsvStream::new(
+            source,
+            std::io::BufReader::new(reader),
+            EXPECTED_COLUMNS,
+            Some(limits.max_file_bytes),
+        )?;
+        let columns = Columns::of(&stream.head)?;
+        let mut rows = 0;
+        while let Some(row) = stream.next_row()? {
+            each(&columns.row(&stream.head, &row)?)?;
+            rows += 1;
+        }
+        if rows == 0 {
+            stream.head.require_rows()?;
+        }
+        Ok(rows)
+    }
+}
+
+/// The columns of observations.csv in a file's header.
+struct Columns {
+    image: Col,
+    led: Col,
+    x: Col,
+    y: Col,
+}
+
+impl Columns {
+    fn of(head: &CsvTable) -> Result<Self, IoError> {
+        Ok(Self {
+            image: head.column("image")?,
+            led: head.column("led")?,
+            x: head.column("x_mm")?,
+            y: head.column("y_mm")?,
+        })
+    }
+
+    /// One record's values, checked on their own.
+    fn row<'r>(&self, table: &CsvTable, row: &'r CsvRow) -> Result<ObservationText<'r>, IoError> {
+        Ok(ObservationText {
+            image: table.identifier_text(row, &self.image, "an image identifier")?,
+            led: table.identifier_text(row, &self.led, "an LED identifier")?,
+            x_mm: table.number(row, &self.x)?,
+            y_mm: table.number(row, &self.y)?,
+            line_no: row.line,
         })
     }
 }

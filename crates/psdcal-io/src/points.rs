@@ -257,22 +257,7 @@ impl PointStream<&'static [u8]> {
 
 impl<R: BufRead> PointStream<R> {
     fn with(head: CsvTable, rows: Option<CsvStream<R>>) -> Result<Self, IoError> {
-        let x = head.find_column("x_mm")?;
-        let y = head.find_column("y_mm")?;
-        let amplitudes = (x.is_none() || y.is_none()) && head.find_column("vx1")?.is_some();
-        let columns = if amplitudes {
-            vec![
-                head.column("vx1")?,
-                head.column("vx2")?,
-                head.column("vy1")?,
-                head.column("vy2")?,
-            ]
-        } else {
-            vec![
-                x.ok_or_else(|| head.missing_column("x_mm"))?,
-                y.ok_or_else(|| head.missing_column("y_mm"))?,
-            ]
-        };
+        let (columns, amplitudes) = point_columns(&head)?;
         Ok(Self {
             head,
             rows,
@@ -329,41 +314,76 @@ impl<R: BufRead> PointStream<R> {
     }
 
     fn input(&self, row: &CsvRow) -> Result<PointInput, IoError> {
-        let mut values = [0.0; 4];
-        for (k, col) in self.columns.iter().enumerate() {
-            let text = self.head.text(row, col);
-            match parse_number(text) {
-                Ok(v) => values[k] = v,
-                Err(message) if is_non_finite(text) => {
-                    return Ok(PointInput::NonFinite {
-                        column: col.to_ref(),
-                        message,
-                    })
-                }
-                Err(message) => {
-                    return Err(IoError::Value {
-                        at: self.head.at(row.line),
-                        column: col.to_ref(),
-                        message,
-                    })
-                }
-            }
-        }
-        Ok(if self.amplitudes {
-            PointInput::Amplitudes(Amplitudes {
-                vx1: values[0],
-                vx2: values[1],
-                vy1: values[2],
-                vy2: values[3],
-            })
-        } else {
-            PointInput::Position(Vector2::new(values[0], values[1]))
-        })
+        point_input(&self.head, row, &self.columns, self.amplitudes)
     }
+}
+
+/// The columns of a row's point: `x_mm, y_mm`, or, when either is missing
+/// and `vx1` is there, `vx1, vx2, vy1, vy2` (then `true`, amplitudes).
+pub(crate) fn point_columns(head: &CsvTable) -> Result<(Vec<Col>, bool), IoError> {
+    let x = head.find_column("x_mm")?;
+    let y = head.find_column("y_mm")?;
+    let amplitudes = (x.is_none() || y.is_none()) && head.find_column("vx1")?.is_some();
+    let columns = if amplitudes {
+        vec![
+            head.column("vx1")?,
+            head.column("vx2")?,
+            head.column("vy1")?,
+            head.column("vy2")?,
+        ]
+    } else {
+        vec![
+            x.ok_or_else(|| head.missing_column("x_mm"))?,
+            y.ok_or_else(|| head.missing_column("y_mm"))?,
+        ]
+    };
+    Ok((columns, amplitudes))
 }
 
 /// Whether a cell that is not a finite number is empty or a number that is
 /// not finite (NaN, an infinity, beyond the `f64` range), rather than text.
+/// The point or amplitudes of a row from its `columns` (`x_mm, y_mm`, or
+/// `vx1 … vy2` with `amplitudes`): a field that is not a number is an error;
+/// an empty or non-finite one gives [`PointInput::NonFinite`] (the row is
+/// answered with a status, the others go on).
+pub(crate) fn point_input(
+    head: &CsvTable,
+    row: &CsvRow,
+    columns: &[Col],
+    amplitudes: bool,
+) -> Result<PointInput, IoError> {
+    let mut values = [0.0; 4];
+    for (k, col) in columns.iter().enumerate() {
+        let text = head.text(row, col);
+        match parse_number(text) {
+            Ok(v) => values[k] = v,
+            Err(message) if is_non_finite(text) => {
+                return Ok(PointInput::NonFinite {
+                    column: col.to_ref(),
+                    message,
+                })
+            }
+            Err(message) => {
+                return Err(IoError::Value {
+                    at: head.at(row.line),
+                    column: col.to_ref(),
+                    message,
+                })
+            }
+        }
+    }
+    Ok(if amplitudes {
+        PointInput::Amplitudes(Amplitudes {
+            vx1: values[0],
+            vx2: values[1],
+            vy1: values[2],
+            vy2: values[3],
+        })
+    } else {
+        PointInput::Position(Vector2::new(values[0], values[1]))
+    })
+}
+
 fn is_non_finite(text: &str) -> bool {
     let text = text.trim();
     text.is_empty() || text.parse::<f64>().is_ok()

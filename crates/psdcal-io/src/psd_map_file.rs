@@ -305,7 +305,10 @@ fn psd_map_from_text(source: &str, text: &str) -> Result<(PsdMapFile, LoadedPsdM
         other => {
             return Err(bad(format!(
                 "expected format \"{PSD_MAP_FORMAT}\", found {}",
-                other.map_or("none".to_string(), |f| format!("\"{f}\""))
+                other.map_or("none".to_string(), |f| format!(
+                    "\"{}\"",
+                    crate::limits::excerpt(f).escape_debug()
+                ))
             )))
         }
     }

@@ -292,9 +292,9 @@ fn check_rate(source: &str, rate_hz: Option<f64>) -> Result<(), IoError> {
 
 /// The element type of a .npy array.
 #[derive(Debug, Clone, Copy)]
-struct NpyType {
-    bytes: usize,
-    big_endian: bool,
+pub(crate) struct NpyType {
+    pub(crate) bytes: usize,
+    pub(crate) big_endian: bool,
 }
 
 /// raw.npy, row by row.
@@ -309,54 +309,7 @@ struct NpyFrames<R> {
 
 impl<R: Read> NpyFrames<R> {
     fn new(source: &str, mut reader: R) -> Result<Self, IoError> {
-        let bad = |message: String| IoError::Structure {
-            at: Location::file(source),
-            message,
-        };
-        let read_err = |e: std::io::Error| {
-            if e.kind() == std::io::ErrorKind::UnexpectedEof {
-                bad("the file ends inside the .npy header; expected a whole NumPy file".to_string())
-            } else {
-                IoError::Read {
-                    file: source.to_string(),
-                    source: e,
-                }
-            }
-        };
-        let mut magic = [0u8; 8];
-        read_full(&mut reader, &mut magic).map_err(read_err)?;
-        if &magic[..6] != b"\x93NUMPY" {
-            return Err(bad(
-                "not a NumPy .npy file (no \\x93NUMPY magic); expected an array saved with numpy.save"
-                    .to_string(),
-            ));
-        }
-        let header_len = match magic[6] {
-            1 => {
-                let mut len = [0u8; 2];
-                read_full(&mut reader, &mut len).map_err(read_err)?;
-                u16::from_le_bytes(len) as usize
-            }
-            2 | 3 => {
-                let mut len = [0u8; 4];
-                read_full(&mut reader, &mut len).map_err(read_err)?;
-                u32::from_le_bytes(len) as usize
-            }
-            v => {
-                return Err(bad(format!(
-                    "NumPy format version {v} is not supported; expected version 1, 2 or 3"
-                )))
-            }
-        };
-        if header_len > 1 << 16 {
-            return Err(bad(format!(
-                "a .npy header of {header_len} bytes; expected at most 65536"
-            )));
-        }
-        let mut header = vec![0u8; header_len];
-        read_full(&mut reader, &mut header).map_err(read_err)?;
-        let header = String::from_utf8_lossy(&header).to_string();
-        let (dtype, rows) = parse_npy_header(&header).map_err(bad)?;
+        let (dtype, rows) = read_npy_preamble(source, &mut reader, 4)?;
         Ok(Self {
             source: source.to_string(),
             reader,
@@ -454,6 +407,64 @@ fn decode_rows<const B: usize>(bytes: &[u8], out: &mut Vec<Frame>, value: impl F
     }));
 }
 
+/// Reads a .npy file's magic and header from `reader` (left at the
+/// array's first byte): the dtype and the row count of an array of
+/// `columns` columns.
+pub(crate) fn read_npy_preamble(
+    source: &str,
+    reader: &mut impl Read,
+    columns: u64,
+) -> Result<(NpyType, u64), IoError> {
+    let bad = |message: String| IoError::Structure {
+        at: Location::file(source),
+        message,
+    };
+    let read_err = |e: std::io::Error| {
+        if e.kind() == std::io::ErrorKind::UnexpectedEof {
+            bad("the file ends inside the .npy header; expected a whole NumPy file".to_string())
+        } else {
+            IoError::Read {
+                file: source.to_string(),
+                source: e,
+            }
+        }
+    };
+    let mut magic = [0u8; 8];
+    read_full(reader, &mut magic).map_err(read_err)?;
+    if &magic[..6] != b"\x93NUMPY" {
+        return Err(bad(
+            "not a NumPy .npy file (no \\x93NUMPY magic); expected an array saved with numpy.save"
+                .to_string(),
+        ));
+    }
+    let header_len = match magic[6] {
+        1 => {
+            let mut len = [0u8; 2];
+            read_full(reader, &mut len).map_err(read_err)?;
+            u16::from_le_bytes(len) as usize
+        }
+        2 | 3 => {
+            let mut len = [0u8; 4];
+            read_full(reader, &mut len).map_err(read_err)?;
+            u32::from_le_bytes(len) as usize
+        }
+        v => {
+            return Err(bad(format!(
+                "NumPy format version {v} is not supported; expected version 1, 2 or 3"
+            )))
+        }
+    };
+    if header_len > 1 << 16 {
+        return Err(bad(format!(
+            "a .npy header of {header_len} bytes; expected at most 65536"
+        )));
+    }
+    let mut header = vec![0u8; header_len];
+    read_full(reader, &mut header).map_err(read_err)?;
+    let header = String::from_utf8_lossy(&header).to_string();
+    parse_npy_header(&header, columns).map_err(bad)
+}
+
 /// Reads exactly `buf.len()` bytes; a short file is `UnexpectedEof`.
 fn read_full(reader: &mut impl Read, buf: &mut [u8]) -> std::io::Result<()> {
     reader.read_exact(buf)
@@ -473,9 +484,9 @@ fn read_up_to(reader: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> 
     Ok(got)
 }
 
-/// The dtype and the row count of a .npy header dictionary, e.g.
-/// `{'descr': '<f8', 'fortran_order': False, 'shape': (1000, 4), }`.
-fn parse_npy_header(header: &str) -> Result<(NpyType, u64), String> {
+/// The dtype and the row count of a .npy header dictionary of `columns`
+/// columns, e.g. `{'descr': '<f8', 'fortran_order': False, 'shape': (1000, 4), }`.
+pub(crate) fn parse_npy_header(header: &str, columns: u64) -> Result<(NpyType, u64), String> {
     let text = header.trim();
     let value = |key: &str| -> Result<&str, String> {
         let at = text
@@ -539,10 +550,15 @@ fn parse_npy_header(header: &str) -> Result<(NpyType, u64), String> {
         .collect();
     let parsed: Result<Vec<u64>, _> = dims.iter().map(|d| d.parse::<u64>()).collect();
     match parsed.as_deref() {
-        Ok([rows, 4]) => Ok((dtype, *rows)),
-        _ => Err(format!(
+        Ok([rows, c]) if *c == columns => Ok((dtype, *rows)),
+        _ if columns == 4 => Err(format!(
             "the array has shape ({}); expected (N, 4): one row per sample, columns vx1, vx2, \
              vy1, vy2",
+            shown(inner)
+        )),
+        _ => Err(format!(
+            "the array has shape ({}); expected (N, {columns}): one row per sample, each \
+             sensor's vx1, vx2, vy1, vy2 in the rig's order",
             shown(inner)
         )),
     }
@@ -551,7 +567,14 @@ fn parse_npy_header(header: &str) -> Result<(NpyType, u64), String> {
 /// The header of a little-endian float64 `.npy` array of shape `(rows, 4)`,
 /// C order (format version 1.0, padded to 64 bytes).
 pub fn npy_header(rows: u64) -> Vec<u8> {
-    let dict = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, 4), }}");
+    npy_header_columns(rows, 4)
+}
+
+/// The header of a little-endian float64 `.npy` array of shape
+/// `(rows, columns)`, C order (format version 1.0, padded to 64 bytes).
+pub fn npy_header_columns(rows: u64, columns: u64) -> Vec<u8> {
+    let dict =
+        format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({rows}, {columns}), }}");
     let mut header = dict.into_bytes();
     while (10 + header.len() + 1) % 64 != 0 {
         header.push(b' ');

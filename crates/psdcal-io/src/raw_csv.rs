@@ -80,14 +80,7 @@ impl<R: BufRead> CsvFrames<R> {
             message,
         };
         match (rate_hz, frames.time.is_some()) {
-            (None, false) => {
-                return Err(structure(
-                    header_line,
-                    "no t_s column and no --rate: expected a t_s column (seconds) or the \
-                     sample rate as --rate HZ"
-                        .to_string(),
-                ))
-            }
+            (None, false) => return Err(structure(header_line, NO_RATE.to_string())),
             (None, true) => {
                 // The rate from the first step.
                 let mut rows = Vec::new();
@@ -97,27 +90,13 @@ impl<R: BufRead> CsvFrames<R> {
                         rows.push((frame, frames.time_of(&row)?, row.line));
                     }
                 }
-                let [(f0, t0, _), (f1, t1, line1)] = rows.as_slice() else {
-                    return Err(structure(
-                        header_line,
-                        "fewer than two rows: the sample rate cannot come from t_s; expected \
-                         more rows or --rate HZ"
-                            .to_string(),
-                    ));
-                };
-                let step = t1 - t0;
-                if !(step > 0.0 && (1.0 / step).is_finite()) {
-                    return Err(structure(
-                        *line1,
-                        format!(
-                            "t_s does not increase ({t0} then {t1}); expected uniformly \
-                             increasing times"
-                        ),
-                    ));
-                }
-                frames.rate_hz = 1.0 / step;
-                frames.last_time = Some((*t1, *line1));
-                frames.pending = vec![*f1, *f0];
+                let times: Vec<(f64, usize)> = rows.iter().map(|r| (r.1, r.2)).collect();
+                let (rate, last) = rate_from_first_step(&times)
+                    .map_err(|(line, m)| structure(line.unwrap_or(header_line), m))?;
+                frames.rate_hz = rate;
+                frames.last_time = Some(last);
+                // Popped from the end: the first row last.
+                frames.pending = rows.iter().rev().map(|r| r.0).collect();
             }
             (Some(_), _) => {}
         }
@@ -225,4 +204,35 @@ impl<R: BufRead> CsvFrames<R> {
         self.fast_rows += n as u64;
         Ok(Some(n))
     }
+}
+
+/// A recording without `t_s` and without `--rate`.
+pub(crate) const NO_RATE: &str = "no t_s column and no --rate: expected a t_s column (seconds) \
+                                  or the sample rate as --rate HZ";
+
+/// A time `t_s` and its line.
+pub(crate) type TimedLine = (f64, usize);
+
+/// Why the sample rate cannot come from `t_s`: the line at fault (none:
+/// the header's) and the message.
+pub(crate) type RateFault = (Option<usize>, String);
+
+/// The sample rate from a recording's first two times, and the second.
+pub(crate) fn rate_from_first_step(times: &[TimedLine]) -> Result<(f64, TimedLine), RateFault> {
+    let [(t0, _), (t1, line1)] = times else {
+        return Err((
+            None,
+            "fewer than two rows: the sample rate cannot come from t_s; expected more rows or \
+             --rate HZ"
+                .to_string(),
+        ));
+    };
+    let step = t1 - t0;
+    if !(step > 0.0 && (1.0 / step).is_finite()) {
+        return Err((
+            Some(*line1),
+            format!("t_s does not increase ({t0} then {t1}); expected uniformly increasing times"),
+        ));
+    }
+    Ok((1.0 / step, (*t1, *line1)))
 }

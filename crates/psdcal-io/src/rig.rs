@@ -1,6 +1,6 @@
 //! rig.json: calibrated sensors with known poses in a world frame, for
-//! locating emitters by intersecting the rays of several sensors (README,
-//! "Rig files").
+//! locating emitters by intersecting the rays of several sensors
+//! (docs/positioning.md, "Rig files").
 //!
 //! ```text
 //! { "format": "psdcal-rig", "version": 1,
@@ -241,7 +241,7 @@ impl Fields<'_> {
         object.get(name).ok_or_else(|| IoError::Field {
             file: self.source.to_string(),
             field: join(prefix, name),
-            message: "missing; see the README section 'Rig files' for the format".into(),
+            message: "missing; see docs/positioning.md, 'Rig files', for the format".into(),
         })
     }
 

@@ -1,5 +1,5 @@
 //! rig_points.csv: what the sensors of a rig measured, one row per sensor
-//! per emitter (README, "Rig files").
+//! per emitter (docs/positioning.md, "Rig files").
 //!
 //! | column | meaning |
 //! | --- | --- |
@@ -15,13 +15,10 @@
 
 use std::collections::HashMap;
 
-use nalgebra::Vector2;
-use psdcal_model::Amplitudes;
-
 use crate::csv_table::CsvTable;
 use crate::error::IoError;
 use crate::limits::ReadLimits;
-use crate::points::PointInput;
+use crate::points::{point_columns, point_input, PointInput};
 use crate::rig::RigFile;
 
 const EXPECTED_COLUMNS: &str = "emitter, sensor, x_mm, y_mm (or vx1, vx2, vy1, vy2)";
@@ -56,46 +53,18 @@ impl RigObservations {
     fn from_table(table: CsvTable) -> Result<Self, IoError> {
         let emitter = table.column("emitter")?;
         let sensor = table.column("sensor")?;
-        let x = table.find_column("x_mm")?;
-        let y = table.find_column("y_mm")?;
-        let amplitudes = (x.is_none() || y.is_none()) && table.find_column("vx1")?.is_some();
+        let (columns, amplitudes) = point_columns(&table)?;
+        table.require_rows()?;
         let mut rows = Vec::with_capacity(table.rows.len());
-        if amplitudes {
-            let cols = [
-                table.column("vx1")?,
-                table.column("vx2")?,
-                table.column("vy1")?,
-                table.column("vy2")?,
-            ];
-            table.require_rows()?;
-            for row in &table.rows {
-                rows.push(RigObservation {
-                    line_no: row.line,
-                    emitter: table.identifier(row, &emitter, "an emitter identifier")?,
-                    sensor: table.identifier(row, &sensor, "a sensor identifier")?,
-                    input: PointInput::Amplitudes(Amplitudes {
-                        vx1: table.number(row, &cols[0])?,
-                        vx2: table.number(row, &cols[1])?,
-                        vy1: table.number(row, &cols[2])?,
-                        vy2: table.number(row, &cols[3])?,
-                    }),
-                });
-            }
-        } else {
-            let x = x.ok_or_else(|| table.missing_column("x_mm"))?;
-            let y = y.ok_or_else(|| table.missing_column("y_mm"))?;
-            table.require_rows()?;
-            for row in &table.rows {
-                rows.push(RigObservation {
-                    line_no: row.line,
-                    emitter: table.identifier(row, &emitter, "an emitter identifier")?,
-                    sensor: table.identifier(row, &sensor, "a sensor identifier")?,
-                    input: PointInput::Position(Vector2::new(
-                        table.number(row, &x)?,
-                        table.number(row, &y)?,
-                    )),
-                });
-            }
+        for row in &table.rows {
+            rows.push(RigObservation {
+                line_no: row.line,
+                emitter: table.identifier(row, &emitter, "an emitter identifier")?,
+                sensor: table.identifier(row, &sensor, "a sensor identifier")?,
+                // An empty or non-finite cell: that row's emitter is answered
+                // with a status naming the line, the others go on.
+                input: point_input(&table, row, &columns, amplitudes)?,
+            });
         }
         Ok(Self {
             source: table.source,
@@ -156,7 +125,29 @@ impl RigObservations {
 mod tests {
     use std::path::Path;
 
+    use nalgebra::Vector2;
+
     use super::*;
+
+    #[test]
+    fn a_non_finite_row_is_kept_as_such_and_the_others_read() {
+        let text = "emitter,sensor,x_mm,y_mm\ne1,a,1,2\ne2,a,NaN,2\ne3,a,3,\n";
+        let o = RigObservations::from_str("rig_points.csv", text).unwrap();
+        assert_eq!(o.rows.len(), 3);
+        assert_eq!(
+            o.rows[0].input,
+            PointInput::Position(Vector2::new(1.0, 2.0))
+        );
+        for (row, column) in o.rows[1..].iter().zip(["x_mm", "y_mm"]) {
+            assert!(
+                matches!(&row.input, PointInput::NonFinite { column: c, .. } if c.name == column),
+                "{row:?}"
+            );
+        }
+        // Text that is not a number is still an error naming the line.
+        let e = RigObservations::from_str("r.csv", "emitter,sensor,x_mm,y_mm\ne,a,abc,1\n");
+        assert!(e.unwrap_err().to_string().starts_with("r.csv:2:"));
+    }
 
     fn rig() -> RigFile {
         RigFile::from_json_str(

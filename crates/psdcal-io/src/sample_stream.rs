@@ -7,11 +7,15 @@
 //! `vx2`, `vy1`, `vy2`; a rig: `SENSOR/vx1` … for every sensor of
 //! rig.json; extra columns ignored), otherwise the fields are the sensors
 //! in rig.json's order, four each. A line that is not the needed finite
-//! numbers (or longer than 1 MiB, or not UTF-8) is [`Sample::Malformed`].
+//! numbers (or not UTF-8) is [`Sample::Malformed`]; a line longer than
+//! [`MAX_LINE_BYTES`] (1 MiB) is [`Sample::TooLong`], skipped without being
+//! held in memory (at most 1 MiB of it is), and reading goes on.
 //!
 //! Recording file: one sensor, raw.csv, raw.npy or raw.tdms
-//! ([`RawReader`]); a rig, raw.tdms with the channels `SENSOR/vx1` … (a group
-//! per sensor, named by its id) or the channels named, four per sensor in
+//! ([`RawReader`]); a rig, raw.csv with the columns `SENSOR/vx1` … and
+//! optionally `t_s`, raw.npy of `4 S` columns in rig.json's order
+//! (`raw_rig.rs`), or raw.tdms with the channels `SENSOR/vx1` … (a group per
+//! sensor, named by its id) or the channels named, four per sensor in
 //! rig.json's order.
 
 use std::io::{BufRead, Read};
@@ -19,7 +23,8 @@ use std::path::Path;
 
 use crate::error::{IoError, StreamFault};
 use crate::limits::MAX_LINE_BYTES;
-use crate::raw::RawReader;
+use crate::raw::{RawFormat, RawReader};
+use crate::raw_rig::RigFrames;
 use crate::tdms::{TdmsReader, TDMS_DEFAULT_CHANNELS};
 
 type Result<T> = std::result::Result<T, IoError>;
@@ -36,6 +41,29 @@ pub enum Sample {
     Values(Vec<f64>),
     /// A line that is not a sample.
     Malformed,
+    /// A line longer than [`MAX_LINE_BYTES`], skipped.
+    TooLong,
+}
+
+/// Skips the input up to and including the next newline (or to its end),
+/// holding no more of it than the reader's buffer.
+fn skip_line(input: &mut impl BufRead) -> std::io::Result<()> {
+    loop {
+        let buffer = input.fill_buf()?;
+        if buffer.is_empty() {
+            return Ok(());
+        }
+        match buffer.iter().position(|&b| b == b'\n') {
+            Some(end) => {
+                input.consume(end + 1);
+                return Ok(());
+            }
+            None => {
+                let n = buffer.len();
+                input.consume(n);
+            }
+        }
+    }
 }
 
 /// Rows read from a file at a time.
@@ -56,13 +84,31 @@ enum Source<R> {
         reader: Box<RawReader>,
         buffer: std::collections::VecDeque<[f64; 4]>,
     },
-    /// A rig's TDMS recording.
-    Tdms {
-        reader: Box<TdmsReader>,
+    /// A rig's raw.csv, raw.npy or raw.tdms.
+    Rig {
+        reader: Box<dyn RigRows>,
         width: usize,
         buffer: Vec<f64>,
         next: usize,
     },
+}
+
+/// A rig's recording read in blocks of rows (`4 S` values each).
+trait RigRows {
+    /// Appends up to `max` rows to `out`; returns how many (0 at the end).
+    fn read_rows(&mut self, out: &mut Vec<f64>, max: usize) -> Result<usize>;
+}
+
+impl RigRows for RigFrames {
+    fn read_rows(&mut self, out: &mut Vec<f64>, max: usize) -> Result<usize> {
+        RigFrames::read_rows(self, out, max)
+    }
+}
+
+impl RigRows for TdmsReader {
+    fn read_rows(&mut self, out: &mut Vec<f64>, max: usize) -> Result<usize> {
+        TdmsReader::read_rows(self, out, max)
+    }
 }
 
 impl<R: BufRead> Source<R> {
@@ -104,21 +150,28 @@ impl<R: BufRead> Source<R> {
         } else {
             channels.to_vec()
         };
-        let is_tdms = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("tdms"));
-        if !is_tdms || specs.len() != 4 * sensors.len() {
+        let format = RawFormat::of_path(path);
+        if matches!(format, Some(RawFormat::Csv | RawFormat::Npy)) && channels.is_empty() {
+            let (reader, rate) = RigFrames::open(path, sensors, rate_hz)?;
+            let source = Source::Rig {
+                reader: Box::new(reader),
+                width: 4 * sensors.len(),
+                buffer: Vec::new(),
+                next: 0,
+            };
+            return Ok((source, rate));
+        }
+        if format != Some(RawFormat::Tdms) || specs.len() != 4 * sensors.len() {
             return Err(fault(
                 StreamFault::Options,
                 format!(
-                "{}: a rig's recording is a .tdms file with four channels per sensor ({} named, \
-                 {} sensors); expected raw.tdms with groups named by the sensors, or the rows \
-                 on standard input",
-                path.display(),
-                specs.len(),
-                sensors.len()
-            ),
+                    "{}: a rig's recording is raw.csv (SENSOR/vx1 … columns), raw.npy or raw.tdms \
+                 (four channels per sensor; {} named, {} sensors, channels named only for \
+                 .tdms); expected one of these, or the rows on standard input",
+                    path.display(),
+                    specs.len(),
+                    sensors.len()
+                ),
             ));
         }
         let reader = TdmsReader::open(path, &specs, specs.len())?;
@@ -136,11 +189,9 @@ impl<R: BufRead> Source<R> {
                 ))
             }
         };
-        let width = specs.len();
-        let reader = Box::new(reader);
-        let source = Source::Tdms {
-            reader,
-            width,
+        let source = Source::Rig {
+            reader: Box::new(reader),
+            width: specs.len(),
             buffer: Vec::new(),
             next: 0,
         };
@@ -158,7 +209,7 @@ impl<R: BufRead> Source<R> {
                 }
                 Ok(buffer.pop_front().map(|f| Sample::Values(f.to_vec())))
             }
-            Source::Tdms {
+            Source::Rig {
                 reader,
                 width,
                 buffer,
@@ -194,10 +245,13 @@ impl<R: BufRead> Source<R> {
                     return Ok(None);
                 }
                 if line.len() > MAX_LINE_BYTES && line.last() != Some(&b'\n') {
-                    // Skip the rest of the line.
-                    let mut rest = Vec::new();
-                    let _ = input.read_until(b'\n', &mut rest);
-                    return Ok(Some(Sample::Malformed));
+                    skip_line(input).map_err(|source| IoError::Read {
+                        file: "standard input".to_string(),
+                        source,
+                    })?;
+                    line.clear();
+                    line.shrink_to(64 << 10);
+                    return Ok(Some(Sample::TooLong));
                 }
                 let Ok(text) = std::str::from_utf8(line) else {
                     return Ok(Some(Sample::Malformed));

@@ -16,7 +16,7 @@ use nalgebra::Vector2;
 use psdcal_model::psd::impact_point_with_gains;
 use psdcal_model::{Amplitudes, ChannelGains, PsdGeometry};
 
-use crate::csv_table::CsvTable;
+use crate::csv_table::CsvStream;
 use crate::error::IoError;
 use crate::limits::ReadLimits;
 use crate::location::Location;
@@ -68,47 +68,46 @@ pub struct Signals {
 }
 
 impl Signals {
-    csv_table_readers!("signals.csv");
+    csv_table_readers!(streamed "signals.csv");
 
-    fn from_table(table: CsvTable) -> Result<Self, IoError> {
-        let image_col = table.column("image")?;
-        let led_col = table.column("led")?;
+    fn from_stream<R: std::io::BufRead>(stream: CsvStream<R>) -> Result<Self, IoError> {
+        let head = &stream.head;
+        let image_col = head.column("image")?;
+        let led_col = head.column("led")?;
         let v_cols = [
-            table.column("vx1")?,
-            table.column("vx2")?,
-            table.column("vy1")?,
-            table.column("vy2")?,
+            head.column("vx1")?,
+            head.column("vx2")?,
+            head.column("vy1")?,
+            head.column("vy2")?,
         ];
-        let snr_col = table.find_column("snr_db")?;
-        table.require_rows()?;
-        let rows = table
-            .rows
-            .iter()
-            .map(|row| {
-                let image = table.identifier(row, &image_col, "an image identifier")?;
-                let led = table.identifier(row, &led_col, "an LED identifier")?;
-                let [vx1, vx2, vy1, vy2] = [
-                    table.number(row, &v_cols[0])?,
-                    table.number(row, &v_cols[1])?,
-                    table.number(row, &v_cols[2])?,
-                    table.number(row, &v_cols[3])?,
-                ];
-                let snr_db = match &snr_col {
-                    Some(col) => Some(table.number(row, col)?),
-                    None => None,
-                };
-                Ok(SignalRow {
-                    image,
-                    led,
-                    vx1,
-                    vx2,
-                    vy1,
-                    vy2,
-                    snr_db,
-                    line_no: row.line,
-                })
+        let snr_col = head.find_column("snr_db")?;
+        let (table, rows) = stream.map_rows(|table, row| {
+            let image = table.identifier(row, &image_col, "an image identifier")?;
+            let led = table.identifier(row, &led_col, "an LED identifier")?;
+            let [vx1, vx2, vy1, vy2] = [
+                table.number(row, &v_cols[0])?,
+                table.number(row, &v_cols[1])?,
+                table.number(row, &v_cols[2])?,
+                table.number(row, &v_cols[3])?,
+            ];
+            let snr_db = match &snr_col {
+                Some(col) => Some(table.number(row, col)?),
+                None => None,
+            };
+            Ok(SignalRow {
+                image,
+                led,
+                vx1,
+                vx2,
+                vy1,
+                vy2,
+                snr_db,
+                line_no: row.line,
             })
-            .collect::<Result<_, IoError>>()?;
+        })?;
+        if rows.is_empty() {
+            table.require_rows()?;
+        }
         Ok(Self {
             source: table.source,
             rows,

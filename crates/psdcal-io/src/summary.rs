@@ -3,13 +3,11 @@
 //! and why, and the coverage of the sensor ([`Coverage`]). It serialises to
 //! JSON with named fields in millimetres.
 
-use nalgebra::Vector2;
 use psdcal_model::PsdGeometry;
 use serde::Serialize;
 
 use crate::calibration::SensorSize;
 use crate::coverage::{Bounds, Coverage};
-use crate::observations::Observations;
 use crate::template::Template;
 use crate::validate::ValidatedDataSet;
 use crate::warning::Warning;
@@ -72,10 +70,12 @@ pub struct DataSetSummary {
 }
 
 impl DataSetSummary {
-    /// Summarises a validated data set.
+    /// Summarises a validated data set whose points file `points_file`
+    /// held `rows` rows.
     pub fn new(
         template: &Template,
-        observations: &Observations,
+        points_file: &str,
+        rows: usize,
         set: &ValidatedDataSet,
         geometry: &PsdGeometry,
     ) -> Self {
@@ -88,12 +88,11 @@ impl DataSetSummary {
                 bounds: Bounds::of(image.points.iter().map(|(_, p)| p)),
             })
             .collect();
-        let all: Vec<Vector2<f64>> = set
+        let all = set
             .images
             .iter()
-            .flat_map(|image| image.points.iter().map(|(_, p)| *p))
-            .collect();
-        let total_points = all.len();
+            .flat_map(|image| image.points.iter().map(|(_, p)| p));
+        let total_points = set.total_points();
         let dropped_images = set
             .warnings
             .iter()
@@ -112,17 +111,17 @@ impl DataSetSummary {
                     })
                     .collect(),
             },
-            observations_file: observations.source.clone(),
-            rows: observations.rows.len(),
+            observations_file: points_file.to_string(),
+            rows,
             sensor: SensorSize {
                 lx_mm: geometry.lx,
                 ly_mm: geometry.ly,
             },
             images,
             total_points,
-            dropped_points: observations.rows.len().saturating_sub(total_points),
+            dropped_points: rows.saturating_sub(total_points),
             dropped_images,
-            coverage: Coverage::of(&all, geometry, Coverage::DEFAULT_CELLS),
+            coverage: Coverage::of(all, geometry, Coverage::DEFAULT_CELLS),
             warnings: set.warnings.clone(),
         }
     }
@@ -131,6 +130,7 @@ impl DataSetSummary {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::observations::Observations;
     use crate::validate::{validate_data_set, ValidationOptions};
 
     #[test]
@@ -157,7 +157,13 @@ mod tests {
         }
         let obs = Observations::from_str("obs.csv", &text).unwrap();
         let set = validate_data_set(&template, &obs, &ValidationOptions::default()).unwrap();
-        let s = DataSetSummary::new(&template, &obs, &set, &PsdGeometry::default());
+        let s = DataSetSummary::new(
+            &template,
+            &obs.source,
+            obs.rows.len(),
+            &set,
+            &PsdGeometry::default(),
+        );
         assert_eq!(s.template.leds, 5);
         assert_eq!(
             s.template.lines,

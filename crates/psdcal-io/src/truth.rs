@@ -129,7 +129,7 @@ pub fn read_truth_with(path: impl AsRef<Path>, limits: ReadLimits) -> Result<Tru
             at: crate::Location::file(&source),
             message: format!(
                 "expected format \"{TRUTH_FORMAT}\", found \"{}\"",
-                truth.format
+                crate::limits::excerpt(&truth.format).escape_debug()
             ),
         });
     }

@@ -22,7 +22,7 @@ use psdcal_model::PsdGeometry;
 
 use crate::error::IoError;
 use crate::location::Location;
-use crate::observations::Observations;
+use crate::observations::{ObservationText, Observations};
 use crate::template::Template;
 use crate::warning::Warning;
 
@@ -62,119 +62,212 @@ impl ValidatedDataSet {
     }
 }
 
-/// An image being collected.
-struct ImageRows {
-    id: String,
-    first_line: usize,
-    points: Vec<(usize, Vector2<f64>)>,
-}
-
 /// Checks observations against a template and groups them by image.
 pub fn validate_data_set(
     template: &Template,
     observations: &Observations,
     options: &ValidationOptions,
 ) -> Result<ValidatedDataSet, IoError> {
-    let geometry = &options.geometry;
-    let mut warnings = template.warnings();
-    let led_index: HashMap<&str, usize> = template
-        .leds
-        .iter()
-        .enumerate()
-        .map(|(i, led)| (led.id.as_str(), i))
-        .collect();
-    let mut images: Vec<ImageRows> = Vec::new();
-    let mut image_index: HashMap<&str, usize> = HashMap::new();
-    // The line of each (image slot, LED index) row: indices hash faster
-    // than the two names, and the map grows with the rows only.
-    let mut first_line: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut validator = DataSetValidator::new(template, &observations.source, options);
     for row in &observations.rows {
-        let at = || Location::line(&observations.source, row.line_no);
-        let Some(&led) = led_index.get(row.led.as_str()) else {
+        validator.push(&ObservationText {
+            image: &row.image,
+            led: &row.led,
+            x_mm: row.x_mm,
+            y_mm: row.y_mm,
+            line_no: row.line_no,
+        })?;
+    }
+    validator.finish()
+}
+
+/// An image being collected.
+struct ImageRows {
+    id: String,
+    first_line: usize,
+    points: Vec<(usize, Vector2<f64>)>,
+    /// `(LED index, line)` of every row, on the sensor or not, for the
+    /// duplicate check (sorted once at the end: no map grows with the rows).
+    rows: Vec<(u32, u32)>,
+}
+
+/// [`validate_data_set`] one row at a time, as a file is read: memory
+/// follows the usable points (numbers), not the file's text.
+pub struct DataSetValidator<'t> {
+    template: &'t Template,
+    source: String,
+    options: ValidationOptions,
+    led_index: HashMap<&'t str, usize>,
+    images: Vec<ImageRows>,
+    image_index: HashMap<String, usize>,
+    warnings: Vec<Warning>,
+    rows: usize,
+}
+
+impl<'t> DataSetValidator<'t> {
+    /// A validator of the rows of `source` against `template`.
+    pub fn new(template: &'t Template, source: &str, options: &ValidationOptions) -> Self {
+        let led_index = template
+            .leds
+            .iter()
+            .enumerate()
+            .map(|(i, led)| (led.id.as_str(), i))
+            .collect();
+        Self {
+            template,
+            source: source.to_string(),
+            options: *options,
+            led_index,
+            images: Vec::new(),
+            image_index: HashMap::new(),
+            warnings: template.warnings(),
+            rows: 0,
+        }
+    }
+
+    /// The rows seen so far.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Checks one row: an unknown LED is an error (or the duplicate before
+    /// it, to report the first fault in file order); a point off the
+    /// sensor is dropped with a warning.
+    pub fn push(&mut self, row: &ObservationText<'_>) -> Result<(), IoError> {
+        self.rows += 1;
+        let Some(&led) = self.led_index.get(row.led) else {
+            self.check_duplicates()?;
             return Err(IoError::UnknownLed {
-                at: at(),
-                led: row.led.clone(),
-                template: template.source.clone(),
+                at: Location::line(&self.source, row.line_no),
+                led: row.led.to_string(),
+                template: self.template.source.clone(),
             });
         };
-        let slot = *image_index.entry(&row.image).or_insert_with(|| {
-            images.push(ImageRows {
-                id: row.image.clone(),
-                first_line: row.line_no,
-                points: Vec::new(),
-            });
-            images.len() - 1
-        });
-        if let Some(&first) = first_line.get(&(slot, led)) {
-            return Err(IoError::Duplicate {
-                at: at(),
-                first_line: first,
-                what: format!("image '{}', LED '{}'", row.image, row.led),
-            });
-        }
-        first_line.insert((slot, led), row.line_no);
+        let slot = self.slot(row);
+        let image = &mut self.images[slot];
+        image.rows.push((led_key(led), line_key(row.line_no)));
         let point = Vector2::new(row.x_mm, row.y_mm);
-        if !is_on_active_area(geometry, &point) {
-            warnings.push(Warning::PointOffSensor {
-                file: observations.source.clone(),
+        let geometry = &self.options.geometry;
+        if is_on_active_area(geometry, &point) {
+            image.points.push((led, point));
+        } else {
+            self.warnings.push(Warning::PointOffSensor {
+                file: self.source.clone(),
                 line: row.line_no,
-                image: row.image.clone(),
-                led: row.led.clone(),
+                image: row.image.to_string(),
+                led: row.led.to_string(),
                 x_mm: row.x_mm,
                 y_mm: row.y_mm,
                 lx_mm: geometry.lx,
                 ly_mm: geometry.ly,
             });
-            continue;
         }
-        if let Some(image) = images.get_mut(slot) {
-            image.points.push((led, point));
-        }
+        Ok(())
     }
-    let mut usable = Vec::with_capacity(images.len());
-    for image in images {
-        if image.points.len() < MIN_POINTS_PER_IMAGE {
-            warnings.push(Warning::TooFewPoints {
-                file: observations.source.clone(),
-                line: image.first_line,
-                image: image.id,
-                count: image.points.len(),
-                min: MIN_POINTS_PER_IMAGE,
-            });
-        } else {
-            usable.push(Image {
-                id: image.id,
-                points: image.points,
+
+    /// The usable images and the warnings, or the first fault.
+    pub fn finish(mut self) -> Result<ValidatedDataSet, IoError> {
+        self.check_duplicates()?;
+        let source = self.source;
+        let mut warnings = self.warnings;
+        let mut usable = Vec::with_capacity(self.images.len());
+        for image in self.images {
+            if image.points.len() < MIN_POINTS_PER_IMAGE {
+                warnings.push(Warning::TooFewPoints {
+                    file: source.clone(),
+                    line: image.first_line,
+                    image: image.id,
+                    count: image.points.len(),
+                    min: MIN_POINTS_PER_IMAGE,
+                });
+            } else {
+                usable.push(Image {
+                    id: image.id,
+                    points: image.points,
+                });
+            }
+        }
+        if !usable.is_empty() && usable.len() < MIN_IMAGES {
+            warnings.push(Warning::TooFewImages {
+                file: source.clone(),
+                count: usable.len(),
+                min: MIN_IMAGES,
             });
         }
+        if self.options.strict {
+            if let Some(warning) = warnings.first() {
+                return Err(IoError::Strict {
+                    warning: warning.clone(),
+                });
+            }
+        }
+        if usable.is_empty() {
+            return Err(IoError::Invalid {
+                at: Location::file(&source),
+                message: format!(
+                    "no usable image: expected at least one image with {MIN_POINTS_PER_IMAGE} \
+                     points on the sensor"
+                ),
+            });
+        }
+        Ok(ValidatedDataSet {
+            images: usable,
+            warnings,
+        })
     }
-    if !usable.is_empty() && usable.len() < MIN_IMAGES {
-        warnings.push(Warning::TooFewImages {
-            file: observations.source.clone(),
-            count: usable.len(),
-            min: MIN_IMAGES,
+
+    /// The image slot of a row, a new one for a new image.
+    fn slot(&mut self, row: &ObservationText<'_>) -> usize {
+        if let Some(&slot) = self.image_index.get(row.image) {
+            return slot;
+        }
+        self.images.push(ImageRows {
+            id: row.image.to_string(),
+            first_line: row.line_no,
+            points: Vec::new(),
+            rows: Vec::new(),
         });
+        self.image_index
+            .insert(row.image.to_string(), self.images.len() - 1);
+        self.images.len() - 1
     }
-    if options.strict {
-        if let Some(warning) = warnings.first() {
-            return Err(IoError::Strict {
-                warning: warning.clone(),
-            });
+
+    /// The first row (in file order) whose (image, LED) pair came before:
+    /// each image's rows sorted by (LED, line), a pair's second row is its
+    /// earliest repeat.
+    fn check_duplicates(&mut self) -> Result<(), IoError> {
+        let mut first: Option<(u32, u32, usize, u32)> = None; // (line, first line, image, led)
+        for (slot, image) in self.images.iter_mut().enumerate() {
+            image.rows.sort_unstable();
+            for pair in image.rows.windows(2) {
+                let ((led, line_a), (led_b, line_b)) = (pair[0], pair[1]);
+                if led == led_b && first.is_none_or(|(line, ..)| line_b < line) {
+                    first = Some((line_b, line_a, slot, led));
+                }
+            }
         }
+        let Some((line, first_line, slot, led)) = first else {
+            return Ok(());
+        };
+        let image = &self.images[slot].id;
+        let led = &self.template.leds[led as usize].id;
+        Err(IoError::Duplicate {
+            at: Location::line(&self.source, line as usize),
+            first_line: first_line as usize,
+            what: format!("image '{image}', LED '{led}'"),
+        })
     }
-    if usable.is_empty() {
-        return Err(IoError::Invalid {
-            at: Location::file(&observations.source),
-            message: format!(
-                "no usable image: expected at least one image with {MIN_POINTS_PER_IMAGE} points \
-                 on the sensor"
-            ),
-        });
-    }
-    Ok(ValidatedDataSet {
-        images: usable,
-        warnings,
-    })
+}
+
+/// An LED index as stored per row (templates hold far fewer than 2³² LEDs).
+fn led_key(led: usize) -> u32 {
+    u32::try_from(led).unwrap_or(u32::MAX)
+}
+
+/// A line number as stored per row: files past 2³² lines (tens of GB, far
+/// beyond the read limits) report the last representable line.
+fn line_key(line: usize) -> u32 {
+    u32::try_from(line).unwrap_or(u32::MAX)
 }
 
 #[cfg(test)]

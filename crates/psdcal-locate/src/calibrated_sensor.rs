@@ -15,9 +15,8 @@
 
 use nalgebra::{DMatrix, Matrix2, Matrix2x3, Matrix3, Vector2};
 use psdcal_model::psd::{impact_point_gain_jacobian, impact_point_with_gains, is_on_active_area};
-use psdcal_model::stages::Aspect;
 use psdcal_model::{
-    Amplitudes, ChannelGains, Model, Param, PsdGeometry, SensorModel, Stage, ValidRegion,
+    Amplitudes, ChannelGains, Model, PsdGeometry, RegionEnd, SensorModel, Stage, ValidRegion,
 };
 
 use crate::aoa::{alpha_wrt_ray, angle_of_arrival_with_jacobians, AngleOfArrival, AoaJacobians};
@@ -25,6 +24,7 @@ use crate::caution::Caution;
 use crate::error::{finite, LocateError};
 use crate::plane::{intersect_plane, Plane, PlaneIntersection};
 use crate::psd_map::{MapCorrection, SensorPsdMap};
+use crate::sensor_chains::{with_aspect_stage, ChainCache, SensorState};
 use crate::uncertainty::{point_noise_covariance, propagate, ParameterCovariance};
 
 /// What a sensor measured for one emitter.
@@ -106,23 +106,8 @@ pub struct CalibratedSensor {
     /// the aspect stage after the PSD's radial one in [`Self::chain`];
     /// `None` without one.
     pub aspect: Option<f64>,
-}
-
-/// `chain` with the aspect stage `a` after its PSD radial stage (before
-/// the lens, docs/model.md §3.3).
-fn with_aspect_stage(chain: &Model, a: f64) -> Model {
-    let at = chain
-        .stage_kinds()
-        .iter()
-        .position(|k| *k == "lens")
-        .unwrap_or(0);
-    match chain.with_stage(at, Box::new(Aspect::new())) {
-        Ok(mut with) => {
-            let _ = with.set(Aspect::NAME, a);
-            with
-        }
-        Err(_) => chain.clone(),
-    }
+    /// The chains `aoa` evaluates, built once per state of the fields above.
+    chains: ChainCache,
 }
 
 /// A measured point and, for amplitude input through gains, `∂m/∂g`.
@@ -221,6 +206,7 @@ impl CalibratedSensor {
             covariance: ParameterCovariance::none(),
             psd_map: None,
             aspect: None,
+            chains: ChainCache::default(),
         }
     }
 
@@ -260,13 +246,20 @@ impl CalibratedSensor {
                 wrt_block: Vec::new(),
             }),
             Some(map) if !map.contains(point) => {
-                let distance_mm = (point - self.valid_region.centre()).norm();
+                let d = point - self.valid_region.centre();
+                let distance_mm = d.norm();
+                let limit_mm = match map.stage.hull() {
+                    Some(h) if distance_mm > 0.0 => {
+                        h.exit_distance(&self.valid_region.centre(), &(d / distance_mm))
+                    }
+                    _ => distance_mm,
+                };
                 Err(LocateError::BeyondValidRegion {
                     x: point.x,
                     y: point.y,
                     distance_mm,
-                    limit_mm: distance_mm,
-                    fold: false,
+                    limit_mm,
+                    end: RegionEnd::DomainEdge,
                 })
             }
             Some(map) => Ok(map.correct(point)),
@@ -274,9 +267,13 @@ impl CalibratedSensor {
     }
 
     /// The same sensor with a given valid region (the one stored with its
-    /// calibration).
+    /// calibration), within the sensor's domain (its PSD map's scan hull).
     pub fn with_valid_region(mut self, region: ValidRegion) -> Self {
-        self.valid_region = region;
+        let domain = self
+            .psd_map
+            .as_ref()
+            .and_then(|_| self.chain().measured_domain().cloned());
+        self.valid_region = region.with_domain(domain);
         self
     }
 
@@ -379,9 +376,17 @@ impl CalibratedSensor {
         let measured = self.measured_point(measurement)?;
         self.check_valid_region(&measured.point)?;
         let corrected = self.map_corrected(&measured.point)?;
-        let lens_chain = self.lens_chain();
+        let state = SensorState {
+            model: &self.model,
+            geometry: &self.geometry,
+            gains: &self.gains,
+            psd_map: &self.psd_map,
+            covariance: &self.covariance,
+            aspect: &self.aspect,
+        };
+        let chains = self.chains.get(state, || self.chain());
         let (mut aoa, mut jacobians) =
-            angle_of_arrival_with_jacobians(&lens_chain, &corrected.point)?;
+            angle_of_arrival_with_jacobians(&chains.standard, &corrected.point)?;
         // ∂(a, b)/∂m' before the map's chain rule, for the map's columns.
         let ray_wrt_corrected = jacobians.ray_wrt_measured;
         aoa.measured = measured.point;
@@ -392,36 +397,38 @@ impl CalibratedSensor {
         } else {
             // ∂(a, b)/∂θ over the chain's flat parameters: the model's
             // columns, and the gains' for amplitudes through gains.
-            let chain = self.chain();
+            let chain = &chains.chain;
             let mut wrt_params = DMatrix::zeros(2, chain.len());
-            for (k, p) in Param::ALL.iter().enumerate() {
-                if let Some(c) = chain.index(p.name()) {
+            for (k, column) in chains.model_columns.iter().enumerate() {
+                if let Some(c) = *column {
                     wrt_params.set_column(c, &jacobians.ray_wrt_model.column(k));
                 }
             }
-            if let (Some(_), Some(c)) = (self.aspect, chain.index(Aspect::NAME)) {
-                let mut jac = lens_chain.jacobian_buffer();
-                lens_chain.ray_with_jacobians(&corrected.point, &mut jac);
-                let k = lens_chain.index(Aspect::NAME).unwrap_or(0);
+            if let Some((k, c)) = chains.aspect_columns {
+                let standard = &chains.standard;
+                let mut jac = standard.jacobian_buffer();
+                standard.ray_with_jacobians(&corrected.point, &mut jac);
                 wrt_params.set_column(c, &jac.column(k));
             }
-            if let (Some(g), Some(columns)) = (wrt_gains, chain.gain_columns()) {
+            if let (Some(g), Some(columns)) = (wrt_gains, chains.gain_columns) {
                 for (k, c) in columns.into_iter().enumerate() {
                     wrt_params.set_column(c, &g.column(k));
                 }
             }
-            if let Some(map) = &self.psd_map {
-                for (k, p) in map.stage.parameters().iter().enumerate() {
-                    if let Some(c) = chain.index(&p.name) {
-                        let column = Vector2::new(
-                            corrected.wrt_block[2 * k],
-                            corrected.wrt_block[2 * k + 1],
-                        );
-                        wrt_params.set_column(c, &(ray_wrt_corrected * column));
-                    }
+            for (k, column) in chains.map_columns.iter().enumerate() {
+                if let Some(c) = *column {
+                    let column =
+                        Vector2::new(corrected.wrt_block[2 * k], corrected.wrt_block[2 * k + 1]);
+                    wrt_params.set_column(c, &(ray_wrt_corrected * column));
                 }
             }
-            propagate(&self.covariance, &chain, &wrt_params)?
+            match &chains.covariance_columns {
+                Some(columns) => {
+                    let out = self.covariance.propagate_columns(&wrt_params, columns);
+                    Matrix2::new(out[(0, 0)], out[(0, 1)], out[(1, 0)], out[(1, 1)])
+                }
+                None => propagate(&self.covariance, chain, &wrt_params)?,
+            }
         };
         let ray_covariance_measurement =
             point_noise_covariance(&jacobians.ray_wrt_measured, options.point_sigma_mm);
@@ -496,6 +503,6 @@ pub(crate) fn check_region(region: &ValidRegion, point: &Vector2<f64>) -> Result
             y: point.y,
             distance_mm: o.distance_mm,
             limit_mm: o.limit_mm,
-            fold: o.fold,
+            end: o.end,
         })
 }

@@ -5,7 +5,7 @@
 //! write it in a `status` column for a row they cannot answer, instead of a
 //! NaN or a silently wrong number.
 
-use psdcal_model::ModelError;
+use psdcal_model::{ModelError, RegionEnd};
 use thiserror::Error;
 
 /// Everything that can go wrong computing angles of arrival, positions and
@@ -17,6 +17,14 @@ pub enum LocateError {
     #[error("non-finite input: {what}")]
     NonFinite {
         /// Which input.
+        what: &'static str,
+    },
+    /// An answer came out NaN or infinite (a calibration whose numbers
+    /// overflow there): the row gets no answer rather than a blank or
+    /// infinite cell under the status `ok`.
+    #[error("the answer is not finite: {what}")]
+    NonFiniteAnswer {
+        /// Which answer.
         what: &'static str,
     },
     /// An argument is outside its domain (a non-positive distance, a grid of
@@ -44,18 +52,26 @@ pub enum LocateError {
     },
     /// The measured point lies outside the calibration's valid region
     /// (docs/model.md §8.2): past the first fold of the correction along its
-    /// direction from the optical centre, or beyond the checked zone far off
-    /// the active area. Its status is `outside_valid_region`, as for
-    /// [`LocateError::OutsideValidRegion`].
+    /// direction from the optical centre, outside a PSD map's scan, or
+    /// beyond the checked zone far off the active area. Its status is
+    /// `outside_valid_region`, as for [`LocateError::OutsideValidRegion`].
     #[error(
-        "measured point ({x:?}, {y:?}) mm is outside the calibration's valid region: it is \
-         {distance_mm:.4} mm from the optical centre, and the region ends {limit_mm:.4} mm from \
-         it in this direction ({})",
-        if *.fold {
-            "where the distortion correction folds over, or a PSD map's scan ends: past there \
-             it has no unique answer"
-        } else {
-            "the edge of the checked zone, far off the active area"
+        "measured point ({x:?}, {y:?}) mm is outside the calibration's valid region: {}",
+        match end {
+            RegionEnd::DomainEdge => format!(
+                "it is outside the PSD map's scan (its hull), where the map is not known; \
+                 {distance_mm:.4} mm from the optical centre, the scan ending {limit_mm:.4} mm \
+                 from it in this direction"
+            ),
+            RegionEnd::Fold => format!(
+                "it is {distance_mm:.4} mm from the optical centre, and the distortion \
+                 correction folds over {limit_mm:.4} mm from it in this direction: past there \
+                 it has no unique answer"
+            ),
+            _ => format!(
+                "it is {distance_mm:.4} mm from the optical centre, past the edge of the \
+                 checked zone ({limit_mm:.4} mm in this direction), far off the active area"
+            ),
         }
     )]
     BeyondValidRegion {
@@ -67,8 +83,8 @@ pub enum LocateError {
         distance_mm: f64,
         /// How far the region reaches in that direction, mm.
         limit_mm: f64,
-        /// Whether the region ends there at a fold.
-        fold: bool,
+        /// Where the region ends there.
+        end: RegionEnd,
     },
     /// The ray is parallel to the plane (it never meets it).
     #[error("the ray is parallel to the plane (|cos| between ray and normal = {cos:.3e})")]
@@ -144,6 +160,7 @@ impl LocateError {
     pub fn status(&self) -> &'static str {
         match self {
             LocateError::NonFinite { .. } => "non_finite_input",
+            LocateError::NonFiniteAnswer { .. } => "non_finite_answer",
             LocateError::InvalidInput { .. } => "invalid_input",
             LocateError::Model(ModelError::NonPositiveTotal { .. }) => "no_light",
             LocateError::Model(_) => "model_error",

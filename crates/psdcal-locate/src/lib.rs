@@ -16,6 +16,8 @@
 //!   3-D covariance;
 //! - [`mod@triangulate`] and [`rig`]: the position from two or more sensors
 //!   with known poses in a world frame (least-squares ray intersection);
+//! - [`track_filter`]: a constant-velocity Kalman filter of the windows'
+//!   positions over time, with gating and re-initialisation;
 //! - [`sensitivity`] and [`maps`]: the paper's small-angle sensitivity
 //!   (P40)–(P42), the full-model error, and error maps over the sensor area;
 //! - [`calibration_diff`]: two calibrations of one sensor compared in
@@ -62,6 +64,8 @@ pub mod plane;
 pub mod psd_map;
 pub mod rig;
 pub mod sensitivity;
+mod sensor_chains;
+pub mod track_filter;
 pub mod triangulate;
 pub mod uncertainty;
 
@@ -90,6 +94,7 @@ pub use sensitivity::{
     aoa_deviation, paper_aoa_error, paper_aoa_error_at, paper_sensitivity_focal,
     paper_sensitivity_point, AoaDeviation, ParameterErrors,
 };
+pub use track_filter::{CvFilter, CvOptions, CvState, FilterStep, TrackFilter};
 pub use triangulate::{triangulate, Triangulation, WorldRay};
 pub use uncertainty::{
     point_noise_covariance, propagate, sigmas_and_correlation, CovarianceError, ParameterCovariance,

@@ -74,7 +74,23 @@ pub fn propagate(
             ),
         });
     }
-    let columns = covariance
+    let columns = covariance_columns(covariance, model)?;
+    let out = covariance.propagate_columns(wrt_params, &columns);
+    Ok(Matrix2::new(
+        out[(0, 0)],
+        out[(0, 1)],
+        out[(1, 0)],
+        out[(1, 1)],
+    ))
+}
+
+/// The column of `model` of each of `covariance`'s names (what
+/// [`propagate`] maps them by); an unknown name is `InvalidCovariance`.
+pub(crate) fn covariance_columns(
+    covariance: &ParameterCovariance,
+    model: &Model,
+) -> Result<Vec<Option<usize>>, LocateError> {
+    covariance
         .names()
         .iter()
         .map(|name| {
@@ -88,14 +104,7 @@ pub fn propagate(
                     ),
                 })
         })
-        .collect::<Result<Vec<_>, _>>()?;
-    let out = covariance.propagate_columns(wrt_params, &columns);
-    Ok(Matrix2::new(
-        out[(0, 0)],
-        out[(0, 1)],
-        out[(1, 0)],
-        out[(1, 1)],
-    ))
+        .collect()
 }
 
 /// `σ² J Jᵀ`: the covariance of a 2-vector with Jacobian `j` with respect to

@@ -28,7 +28,13 @@ const CORNER: Vector2<f64> = Vector2::new(-4.5, 4.5);
 
 fn is_past_fold(e: &LocateError) -> bool {
     e.status() == "outside_valid_region"
-        && matches!(e, LocateError::BeyondValidRegion { fold: true, .. })
+        && matches!(
+            e,
+            LocateError::BeyondValidRegion {
+                end: psdcal_model::RegionEnd::Fold,
+                ..
+            }
+        )
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! Writes the small example data set shipped in `data/example/`: the paper's
 //! lens 2 (docs/model.md §7) seen through nine noise-free poses of a 14-LED
-//! template with unaligned LEDs. `psdcal check` on it is the README's first
-//! command until the simulator lands.
+//! template with unaligned LEDs (docs/cli.md's `check` and `calibrate`
+//! examples run on it).
 //!
 //! Run from the repository root: `cargo run -p psdcal-model --example make_example_data`.
 

@@ -130,6 +130,32 @@ impl ConvexHull {
         })
     }
 
+    /// How far the ray `c + t u` (`t ≥ 0`, `u` a unit vector, `c` inside)
+    /// runs before it leaves the hull, mm: the smallest
+    /// `t = −n·(c − a) / (n·u)` over the edges `a → b` whose outward normal
+    /// `n = (b_y − a_y, a_x − b_x)` has `n·u > 0`; 0 when `c` is outside.
+    pub fn exit_distance(&self, c: &Vector2<f64>, u: &Vector2<f64>) -> f64 {
+        let n = self.vertices.len();
+        let mut exit = f64::INFINITY;
+        for i in 0..n {
+            let (a, b) = (&self.vertices[i], &self.vertices[(i + 1) % n]);
+            let normal = Vector2::new(b.y - a.y, a.x - b.x);
+            let inside = -normal.dot(&(c - a));
+            if inside < 0.0 {
+                return 0.0;
+            }
+            let along = normal.dot(u);
+            if along > 0.0 {
+                exit = exit.min(inside / along);
+            }
+        }
+        if exit.is_finite() {
+            exit
+        } else {
+            0.0
+        }
+    }
+
     /// The smallest box holding the hull: `(min, max)` corners, mm.
     pub fn bounds(&self) -> (Vector2<f64>, Vector2<f64>) {
         let mut lo = self.vertices[0];

@@ -56,4 +56,4 @@ pub use params::{Distortion, Intrinsics, Param, SensorModel, UnknownParam, N_PAR
 pub use pose::{Pose, RotationJacobian, N_POSE};
 pub use psd::{Amplitudes, ChannelGains, PsdGeometry};
 pub use stage::{ParameterInfo, Stage, StageJacobian};
-pub use valid_region::{OutsideRegion, ValidRegion};
+pub use valid_region::{OutsideRegion, RegionEnd, ValidRegion};

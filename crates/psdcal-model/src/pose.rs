@@ -153,6 +153,20 @@ impl Pose {
         (r, deriv)
     }
 
+    /// For `self` = `sensor_from_world`: the sensor's optical centre in the
+    /// world, `c = −Rᵀ t`, and `∂c/∂(rvec, t)` (3 × 6): `∂c/∂rvec_k =
+    /// −(∂R/∂rvec_k)ᵀ t`, `∂c/∂t = −Rᵀ`.
+    pub fn centre_with_jacobian(&self) -> (Vector3<f64>, SMatrix<f64, 3, 6>) {
+        let (r, dr) = self.rotation_with_derivatives();
+        let t = self.t;
+        let mut j = SMatrix::<f64, 3, 6>::zeros();
+        for (k, d) in dr.iter().enumerate() {
+            j.set_column(k, &(-(d.transpose() * t)));
+        }
+        j.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-r.transpose()));
+        (-(r.transpose() * t), j)
+    }
+
     /// The rotation and its derivatives, for reuse over many points.
     pub fn rotation_jacobian(&self) -> RotationJacobian {
         let (r, dr) = self.rotation_with_derivatives();

@@ -109,6 +109,14 @@ pub trait Stage: Send + Sync + fmt::Debug {
         false
     }
 
+    /// The stage's domain as a convex polygon in its input coordinates, when
+    /// it is one ([`Stage::contains_input`] is then exactly
+    /// [`ConvexHull::contains`](crate::ConvexHull::contains)); `None`
+    /// everywhere else.
+    fn domain(&self) -> Option<&crate::hull::ConvexHull> {
+        None
+    }
+
     /// Example parameter blocks on which the shared suite checks the stage:
     /// realistic values and harder ones, each a valid model over the
     /// 9 mm × 9 mm active area.

@@ -15,11 +15,14 @@
 //! r_i   = sup { t ≤ R_i : det J(c + s u_i) > 1e-12 for every s ∈ [0, t] }
 //! ```
 //!
-//! A point outside a stage's own domain ([`crate::Stage::contains_input`]:
-//! a PSD map's scan hull) counts as `det J ≤ 0`, so the region also ends
-//! where the map is not known (for a convex domain about `c` the rule below
-//! stays inside it: a chord between rays 4° apart is within 6e-4 of the
-//! smaller radius, inside the margin).
+//! When the model's measured points must also lie in a stage's own domain
+//! (a PSD map is known only on its scan's convex hull, docs/model.md §8.3),
+//! that domain `H` bounds the rays too, `R_i ← min(R_i, h_i)` with `h_i` the
+//! exact distance from `c` along `u_i` to the hull's edge, and every ray
+//! records how it ends: at a fold, at the domain's edge, or at the checked
+//! zone's edge. A domain that is not a polygon in measured coordinates (a
+//! later stage's) counts as `det J ≤ 0` outside it, so the bisection finds
+//! its edge, which is then reported as a fold.
 //!
 //! `r_i` is found by stepping along the ray from `c` and bisecting the first
 //! step whose end is not positive (or not finite) to 1e-12 relative; the
@@ -33,15 +36,20 @@
 //! the centre itself has an empty region (every `r_i = 0`).
 //!
 //! A point `p` at distance `ρ = |p − c|` in direction `θ ∈ [θ_i, θ_{i+1})` is
-//! inside when
+//! inside when it is in the domain `H` (exactly: [`ConvexHull::contains`])
+//! and
 //!
 //! ```text
-//! ρ < min(r_i, r_{i+1}) · (1 − 1e-3)
+//! ρ < min(r'_i, r'_{i+1}) · (1 − 1e-3),   r'_k = ∞ when ray k ends at H's edge, else r_k
 //! ```
 //!
 //! the smaller neighbouring radius with a relative margin of 1e-3, so that
 //! between rays (4° apart) the rule stays on the safe side of a smooth
-//! boundary. `whole_active_area` is true when every point of the active area
+//! boundary. A ray that ends at the domain's edge sets no radial limit: the
+//! domain itself is checked exactly, so a point inside a polygonal hull is
+//! never cut off by the chord between two rays (which would shave up to a
+//! few tenths of a millimetre off a hull's corners), and the hull's edge is
+//! never called a fold. `whole_active_area` is true when every point of the active area
 //! is inside by this rule (checked exactly: on each interval between rays the
 //! largest distance from `c` to the active area's far edge is reached at the
 //! interval's ends or at a corner direction).
@@ -50,6 +58,7 @@ use std::f64::consts::TAU;
 
 use nalgebra::Vector2;
 
+use crate::hull::ConvexHull;
 use crate::model::Model;
 use crate::params::SensorModel;
 use crate::psd::PsdGeometry;
@@ -74,13 +83,27 @@ pub const MIN_FOLD_DET: f64 = 1e-12;
 pub const REGION_MARGIN: f64 = 1e-3;
 
 /// Where the measured → ideal map is one-to-one: a radius per ray direction
-/// from the optical centre.
+/// from the optical centre, within the model's domain.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ValidRegion {
     centre: Vector2<f64>,
     radius: Vec<f64>,
+    ends: Vec<RegionEnd>,
     geometry: PsdGeometry,
+    domain: Option<ConvexHull>,
     whole_active_area: bool,
+}
+
+/// How a ray of the region ends, or why a point is outside.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum RegionEnd {
+    /// The correction folds over (its Jacobian's determinant reaches 0).
+    Fold,
+    /// The model's domain ends: a PSD map's scan hull.
+    DomainEdge,
+    /// The edge of the checked zone, far off the active area.
+    ZoneEdge,
 }
 
 /// Why a point is outside a region.
@@ -89,11 +112,17 @@ pub struct OutsideRegion {
     /// Distance of the point from the region's centre, mm.
     pub distance_mm: f64,
     /// How far the region reaches in the point's direction (after the
-    /// margin), mm.
+    /// margin; for [`RegionEnd::DomainEdge`], the domain's edge), mm.
     pub limit_mm: f64,
-    /// Whether the region ends there at a fold (`false`: at the edge of the
-    /// checked zone, far off the active area).
-    pub fold: bool,
+    /// Where the region ends there.
+    pub end: RegionEnd,
+}
+
+impl OutsideRegion {
+    /// Whether the region ends there at a fold.
+    pub fn fold(&self) -> bool {
+        self.end == RegionEnd::Fold
+    }
 }
 
 impl ValidRegion {
@@ -110,12 +139,13 @@ impl ValidRegion {
             && geometry.ly.is_finite()
             && geometry.lx > 0.0
             && geometry.ly > 0.0;
+        let domain = model.measured_domain().cloned();
         if !usable {
-            return Self::assemble(Vector2::zeros(), vec![0.0; REGION_RAYS], *geometry);
+            return Self::assemble(Vector2::zeros(), vec![0.0; REGION_RAYS], *geometry, domain);
         }
         let mut scratch = Vec::new();
-        // Outside a stage's own domain (a PSD map's scan hull) counts as a
-        // fold: the bisection then finds the domain's edge.
+        // Outside a domain that is not a polygon here (a later stage's)
+        // counts as a fold: the bisection then finds that domain's edge.
         let mut det = |p: &Vector2<f64>| {
             if model.in_domain(p) {
                 model.point_jacobian_with(p, &mut scratch).determinant()
@@ -128,7 +158,7 @@ impl ValidRegion {
         let radius = (0..REGION_RAYS)
             .map(|i| {
                 let u = direction(i, REGION_RAYS);
-                let reach = zone_reach(&centre, &u, geometry);
+                let reach = ray_reach(&centre, &u, geometry, domain.as_ref());
                 if identity {
                     reach
                 } else if !centre_ok {
@@ -138,7 +168,7 @@ impl ValidRegion {
                 }
             })
             .collect();
-        Self::assemble(centre, radius, *geometry)
+        Self::assemble(centre, radius, *geometry, domain)
     }
 
     /// The region of a standard model ([`Model::standard`]).
@@ -175,14 +205,43 @@ impl ValidRegion {
                 ));
             }
         }
-        Ok(Self::assemble(centre, radius, *geometry))
+        Ok(Self::assemble(centre, radius, *geometry, None))
     }
 
-    fn assemble(centre: Vector2<f64>, radius: Vec<f64>, geometry: PsdGeometry) -> Self {
+    /// The same region within `domain` (a stored region, whose rays do not
+    /// say how they end, given its model's [`Model::measured_domain`]): a
+    /// ray that ends on the domain's edge (to 1e-9 relative) ends there, not
+    /// at a fold, and points outside the domain are outside.
+    pub fn with_domain(self, domain: Option<ConvexHull>) -> Self {
+        Self::assemble(self.centre, self.radius, self.geometry, domain)
+    }
+
+    fn assemble(
+        centre: Vector2<f64>,
+        radius: Vec<f64>,
+        geometry: PsdGeometry,
+        domain: Option<ConvexHull>,
+    ) -> Self {
+        let n = radius.len();
+        let ends = (0..n)
+            .map(|i| {
+                let u = direction(i, n);
+                let zone = zone_reach(&centre, &u, &geometry);
+                let edge = domain.as_ref().map(|h| h.exit_distance(&centre, &u));
+                let on = |reach: f64| radius[i] >= reach * (1.0 - 1e-9);
+                match edge {
+                    Some(h) if h < zone && on(h) => RegionEnd::DomainEdge,
+                    _ if on(zone) => RegionEnd::ZoneEdge,
+                    _ => RegionEnd::Fold,
+                }
+            })
+            .collect();
         let mut region = Self {
             centre,
             radius,
+            ends,
             geometry,
+            domain,
             whole_active_area: false,
         };
         region.whole_active_area = region.covers_active_area();
@@ -209,16 +268,26 @@ impl ValidRegion {
         self.geometry
     }
 
+    /// The model's domain the region lies in (a PSD map's scan hull), when
+    /// limited.
+    pub fn domain(&self) -> Option<&ConvexHull> {
+        self.domain.as_ref()
+    }
+
+    /// How each ray ends.
+    pub fn ends(&self) -> &[RegionEnd] {
+        &self.ends
+    }
+
     /// Whether every point of the active area is inside.
     pub fn whole_active_area(&self) -> bool {
         self.whole_active_area
     }
 
-    /// Whether ray `i` ends at a fold (rather than at the zone's edge).
+    /// Whether ray `i` ends at a fold (rather than at the domain's or the
+    /// zone's edge).
     pub fn folds_on_ray(&self, i: usize) -> bool {
-        let n = self.rays();
-        let reach = zone_reach(&self.centre, &direction(i % n, n), &self.geometry);
-        self.radius[i % n] < reach * (1.0 - 1e-12)
+        self.ends[i % self.rays()] == RegionEnd::Fold
     }
 
     /// The smallest fold radius, mm (`None` when no ray folds).
@@ -248,6 +317,18 @@ impl ValidRegion {
     pub fn check(&self, point: &Vector2<f64>) -> Result<(), OutsideRegion> {
         let d = point - self.centre;
         let distance_mm = d.norm();
+        if let Some(domain) = self.domain.as_ref().filter(|h| !h.contains(point)) {
+            let limit_mm = if distance_mm > 0.0 {
+                domain.exit_distance(&self.centre, &(d / distance_mm))
+            } else {
+                0.0
+            };
+            return Err(OutsideRegion {
+                distance_mm,
+                limit_mm,
+                end: RegionEnd::DomainEdge,
+            });
+        }
         let n = self.rays();
         let theta = d.y.atan2(d.x).rem_euclid(TAU);
         let i = if theta.is_finite() {
@@ -255,22 +336,28 @@ impl ValidRegion {
         } else {
             0
         };
-        let j = (i + 1) % n;
-        let limit_mm = self.radius[i].min(self.radius[j]) * (1.0 - REGION_MARGIN);
+        let (limit_mm, ray) = self.sector_limit(i);
         if distance_mm < limit_mm {
             Ok(())
         } else {
-            let fold = self.folds_on_ray(if self.radius[i] <= self.radius[j] {
-                i
-            } else {
-                j
-            });
             Err(OutsideRegion {
                 distance_mm,
                 limit_mm,
-                fold,
+                end: self.ends[ray],
             })
         }
+    }
+
+    /// The radial limit between rays `i` and `i + 1` (after the margin; ∞
+    /// when both end at the domain's edge) and the ray that sets it.
+    fn sector_limit(&self, i: usize) -> (f64, usize) {
+        let j = (i + 1) % self.rays();
+        let bound = |k: usize| match self.ends[k] {
+            RegionEnd::DomainEdge => f64::INFINITY,
+            _ => self.radius[k],
+        };
+        let ray = if bound(i) <= bound(j) { i } else { j };
+        (bound(ray) * (1.0 - REGION_MARGIN), ray)
     }
 
     /// Whether every point of the active area passes [`Self::check`].
@@ -285,17 +372,23 @@ impl ValidRegion {
             let u = Vector2::new(theta.cos(), theta.sin());
             box_exit(&self.centre, &u, hx, hy)
         };
-        (0..n).all(|i| {
-            let (a, b) = (TAU * i as f64 / n as f64, TAU * (i + 1) as f64 / n as f64);
-            let limit = self.radius[i].min(self.radius[(i + 1) % n]) * (1.0 - REGION_MARGIN);
-            let mut worst = far(a).max(far(b));
-            for &c in &corners {
-                if c >= a && c <= b {
-                    worst = worst.max(far(c));
+        let in_domain = self.domain.as_ref().is_none_or(|h| {
+            [(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)]
+                .iter()
+                .all(|&(x, y)| h.contains(&Vector2::new(x, y)))
+        });
+        in_domain
+            && (0..n).all(|i| {
+                let (a, b) = (TAU * i as f64 / n as f64, TAU * (i + 1) as f64 / n as f64);
+                let limit = self.sector_limit(i).0;
+                let mut worst = far(a).max(far(b));
+                for &c in &corners {
+                    if c >= a && c <= b {
+                        worst = worst.max(far(c));
+                    }
                 }
-            }
-            worst < limit
-        })
+                worst < limit
+            })
     }
 }
 
@@ -330,6 +423,18 @@ fn box_exit(c: &Vector2<f64>, u: &Vector2<f64>, hx: f64, hy: f64) -> f64 {
     } else {
         0.0
     }
+}
+
+/// How far a ray may run: to the checked zone's edge, or the domain's when
+/// nearer.
+fn ray_reach(
+    c: &Vector2<f64>,
+    u: &Vector2<f64>,
+    geometry: &PsdGeometry,
+    domain: Option<&ConvexHull>,
+) -> f64 {
+    let zone = zone_reach(c, u, geometry);
+    domain.map_or(zone, |h| h.exit_distance(c, u).min(zone))
 }
 
 /// How far the checked zone reaches from `c` along `u`.

@@ -77,7 +77,7 @@ fn radial_fold_matches_the_closed_form() {
             let c = region.centre();
             assert!(region.contains(&(c + u * r_star * (1.0 - 1.01 * REGION_MARGIN))));
             let outside = region.check(&(c + u * r_star)).unwrap_err();
-            assert!(outside.fold);
+            assert!(outside.fold());
             assert!((outside.limit_mm - r_star * (1.0 - REGION_MARGIN)).abs() < 1e-9);
         }
     }
@@ -97,7 +97,7 @@ fn the_reproducers_corner_is_past_the_fold_although_det_is_positive_there() {
     assert!((ideal - Vector2::new(0.5, -0.7)).dot(&(corner - Vector2::new(0.5, -0.7))) < 0.0);
     let region = ValidRegion::of_sensor_model(&model, &PsdGeometry::default());
     let e = region.check(&corner).unwrap_err();
-    assert!(e.fold && e.distance_mm > e.limit_mm);
+    assert!(e.fold() && e.distance_mm > e.limit_mm);
 }
 
 #[test]
@@ -125,7 +125,7 @@ fn non_folding_models_cover_the_whole_active_area() {
         // Off the active area but in the zone: inside; beyond it: outside.
         assert!(region.contains(&Vector2::new(4.8, 0.0)));
         let far = region.check(&Vector2::new(1e300, 0.0)).unwrap_err();
-        assert!(!far.fold);
+        assert!(!far.fold());
     }
 }
 
@@ -174,7 +174,7 @@ fn inside_points_have_positive_determinants_all_the_way_from_the_centre() {
                     inside += 1;
                     assert!(min_det > 0.0, "{p:?} inside with det {min_det}");
                 }
-                Err(e) if e.fold => {
+                Err(e) if e.fold() => {
                     folded += 1;
                     // Refused: the fold lies within the margin (and the
                     // neighbouring ray's spacing) of the point's segment.
@@ -274,4 +274,105 @@ fn a_psd_map_hull_bounds_the_region() {
     assert!(region.check(&Vector2::new(0.0, 2.4)).is_err());
     assert!(model.in_domain(&Vector2::new(0.0, 2.2)));
     assert!(!model.in_domain(&Vector2::new(0.0, 2.4)));
+}
+
+/// Inside a PSD map's hull and before any fold, every point is inside the
+/// region: the hull's edge is checked exactly (not by the chord between two
+/// rays 4° apart, which cut up to 0.3 mm off a polygon's corners), the rays
+/// that end on it end at the domain's edge (not a fold), and a point outside
+/// the hull is outside because of the domain. The hull here is an irregular
+/// heptagon whose corners lie between rays; "inside" is decided by the
+/// half-plane test written out below, not by the hull's own code.
+#[test]
+fn points_inside_a_psd_maps_hull_are_never_refused_and_its_edge_is_no_fold() {
+    use psdcal_model::stages::{MapBasis, MapFrame, PsdMap};
+    use psdcal_model::{ConvexHull, RegionEnd};
+    let vertices: Vec<Vector2<f64>> = (0..7)
+        .map(|k| {
+            let t = std::f64::consts::TAU * (k as f64 + 0.37) / 7.0;
+            let r = 4.2 + 0.25 * (3.0 * k as f64).sin();
+            Vector2::new(0.2 + r * t.cos(), -0.1 + r * t.sin())
+        })
+        .collect();
+    let hull = ConvexHull::from_vertices(vertices.clone()).unwrap();
+    let map = PsdMap::new(
+        MapBasis::Polynomial { order: 2 },
+        MapFrame::centred(9.0, 9.0),
+        Some(hull),
+    )
+    .unwrap();
+    let model = Model::standard(&radial(1e-4, 0.0))
+        .with_stage(0, Box::new(map))
+        .unwrap();
+    let region = ValidRegion::of_model(&model, &PsdGeometry::default());
+    assert!(region.ends().iter().all(|e| *e == RegionEnd::DomainEdge));
+    assert_eq!(region.nearest_fold_mm(), None);
+    let inside_by_hand = |p: &Vector2<f64>, margin: f64| {
+        (0..7).all(|i| {
+            let (a, b) = (vertices[i], vertices[(i + 1) % 7]);
+            let e = b - a;
+            (e.x * (p.y - a.y) - e.y * (p.x - a.x)) / e.norm() > margin
+        })
+    };
+    let (mut inside, mut outside) = (0, 0);
+    for i in 0..=180 {
+        for j in 0..=180 {
+            let p = Vector2::new(-4.5 + 0.05 * i as f64, -4.5 + 0.05 * j as f64);
+            if inside_by_hand(&p, 1e-6) {
+                inside += 1;
+                assert!(region.contains(&p), "{p:?} is inside the hull");
+            } else if !inside_by_hand(&p, -1e-6) {
+                outside += 1;
+                let o = region.check(&p).unwrap_err();
+                assert_eq!(o.end, RegionEnd::DomainEdge, "{p:?}");
+                assert!(o.limit_mm < o.distance_mm);
+            }
+        }
+    }
+    assert!(inside > 10_000 && outside > 1_000, "{inside} {outside}");
+    // A region read back from its radii learns how its rays end from the
+    // model's domain.
+    let stored = ValidRegion::from_radii(
+        region.centre(),
+        region.radii().to_vec(),
+        &PsdGeometry::default(),
+    )
+    .unwrap()
+    .with_domain(model.measured_domain().cloned());
+    assert_eq!(stored, region);
+}
+
+/// The exit distance of a ray from a hull against a bisection of its inside
+/// test.
+#[test]
+fn hull_exit_distance_matches_a_bisection_of_the_inside_test() {
+    use psdcal_model::ConvexHull;
+    let pts: Vec<Vector2<f64>> = (0..40)
+        .map(|k| {
+            let t = 2.399963 * k as f64;
+            let r = 3.0 + (k % 5) as f64 * 0.3;
+            Vector2::new(r * t.cos(), 0.8 * r * t.sin())
+        })
+        .collect();
+    let hull = ConvexHull::of_points(&pts).unwrap();
+    let c = Vector2::new(0.3, -0.2);
+    for i in 0..37 {
+        let t = std::f64::consts::TAU * (i as f64 + 0.1) / 37.0;
+        let u = Vector2::new(t.cos(), t.sin());
+        let (mut lo, mut hi) = (0.0, 20.0);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if hull.contains(&(c + u * mid)) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let exit = hull.exit_distance(&c, &u);
+        assert!((exit - lo).abs() < 1e-8, "ray {i}: {exit} vs {lo}");
+    }
+    assert_eq!(
+        hull.exit_distance(&Vector2::new(50.0, 0.0), &Vector2::x()),
+        0.0
+    );
 }

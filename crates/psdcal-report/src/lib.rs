@@ -35,6 +35,7 @@ pub mod escape;
 pub mod evaluation;
 pub mod histogram;
 pub mod html;
+pub mod live;
 pub mod number;
 mod plot;
 pub mod poses;
@@ -56,6 +57,7 @@ pub use histogram::{
     bin_counts, counts_histogram_png, counts_histogram_svg, histogram_png, histogram_svg,
 };
 pub use html::{correlation_colour, inline_svg, Block, Page, Table};
+pub use live::live_page;
 pub use number::{num, unit_text, value_with_digits, value_with_sigma};
 pub use plot::{count_label, tick_label, Arrow, ArrowSet, Frame, PointSet};
 pub use poses::{poses_png, poses_svg, PoseOutline};

@@ -81,6 +81,11 @@ impl Windows {
         Some(Window { t0_s, estimates })
     }
 
+    /// A window's length, frames.
+    pub fn window_len(&self) -> usize {
+        self.len
+    }
+
     /// Frames pushed so far.
     pub fn samples(&self) -> u64 {
         self.samples

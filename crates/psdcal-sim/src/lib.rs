@@ -15,6 +15,8 @@ pub use psdcal_signal::butterworth;
 pub mod chain_config;
 mod error;
 pub mod insitu;
+pub mod moving;
+pub mod network_room;
 pub mod nonlinearity;
 pub mod raw;
 pub mod room;

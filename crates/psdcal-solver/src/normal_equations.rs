@@ -42,6 +42,9 @@ pub struct NormalEquations {
     pub w: Vec<DMatrix<f64>>,
     /// Per image: `g_i = Σ Bᵀ r`.
     pub g_b: Vec<Vector6<f64>>,
+    /// Whether terms came through [`Self::add_columns`]: each `W_i` then
+    /// has few non-zero rows, and [`Self::solve`] skips the others.
+    pub sparse_rows: bool,
 }
 
 /// One residual's contribution: `d` rows (`r.len()`), its Jacobian with
@@ -98,22 +101,7 @@ impl NormalEquations {
                 *slot += weight * dot(aj, ak);
             }
         }
-        if let Some((i, b)) = term.block {
-            let b = &b[..6 * d];
-            let w_i = self.w[i].as_mut_slice();
-            let v_i = self.v[i].as_mut_slice();
-            let g_i = &mut self.g_b[i];
-            for (c, bc) in b.chunks_exact(d).enumerate() {
-                g_i[c] += weight * dot(bc, r);
-                for (slot, bk) in v_i[6 * c..6 * c + 6].iter_mut().zip(b.chunks_exact(d)) {
-                    *slot += weight * dot(bc, bk);
-                }
-                // W_i is p × 6, column-major: entry (j, c) at c·p + j.
-                for (slot, aj) in w_i[c * p..c * p + p].iter_mut().zip(a.chunks_exact(d)) {
-                    *slot += weight * dot(aj, bc);
-                }
-            }
-        }
+        self.add_block(weight, term, a, None);
     }
 
     /// [`Self::add`] for a two-row residual (an image point), the common
@@ -223,6 +211,103 @@ impl NormalEquations {
         }
     }
 
+    /// A `d`-row term's share of its block (any `d`): `g_i += w Bᵀ r`,
+    /// `V_i += w BᵀB`, `W_i += w AᵀB`, with `a`'s column `j` the global
+    /// column `columns[j]` (or `j`).
+    fn add_block(
+        &mut self,
+        weight: f64,
+        term: &ResidualTerm<'_>,
+        a: &[f64],
+        columns: Option<&[usize]>,
+    ) {
+        let Some((i, b)) = term.block else {
+            return;
+        };
+        let (d, p, r) = (term.r.len(), self.g_a.len(), term.r);
+        let dot = |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(x, y)| x * y).sum() };
+        let b = &b[..6 * d];
+        let w_i = self.w[i].as_mut_slice();
+        let v_i = self.v[i].as_mut_slice();
+        let g_i = &mut self.g_b[i];
+        for (c, bc) in b.chunks_exact(d).enumerate() {
+            g_i[c] += weight * dot(bc, r);
+            for (slot, bk) in v_i[6 * c..6 * c + 6].iter_mut().zip(b.chunks_exact(d)) {
+                *slot += weight * dot(bc, bk);
+            }
+            // W_i is p × 6, column-major: entry (j, c) at c·p + j.
+            for (j, aj) in a.chunks_exact(d).enumerate() {
+                let column = columns.map_or(j, |cs| cs[j]);
+                w_i[c * p + column] += weight * dot(aj, bc);
+            }
+        }
+    }
+
+    /// [`Self::add`] for a term whose `a` (d × k, column-major) holds the
+    /// global columns `columns` only (the others are zero): the same sums
+    /// over the non-zero entries, `O(d k²)` instead of `O(d p²)`.
+    pub fn add_columns(&mut self, weight: f64, term: &ResidualTerm<'_>, columns: &[usize]) {
+        self.sparse_rows = true;
+        let d = term.r.len();
+        if d == 2 && columns.len() <= SPLIT_COLUMNS {
+            return self.add_columns_pair(weight, term, columns);
+        }
+        let p = self.g_a.len();
+        let a = &term.a[..d * columns.len()];
+        let r = term.r;
+        let dot = |x: &[f64], y: &[f64]| -> f64 { x.iter().zip(y).map(|(x, y)| x * y).sum() };
+        let u = self.u.as_mut_slice();
+        for (j, aj) in a.chunks_exact(d).enumerate() {
+            let cj = columns[j];
+            self.g_a[cj] += weight * dot(aj, r);
+            for (k, ak) in a.chunks_exact(d).enumerate() {
+                let ck = columns[k];
+                // Upper triangle only (row ≤ column), as `add` fills it.
+                if ck <= cj {
+                    u[p * cj + ck] += weight * dot(aj, ak);
+                }
+            }
+        }
+        self.add_block(weight, term, a, Some(columns));
+    }
+
+    /// [`Self::add_columns`] for a two-row residual, its rows copied apart.
+    fn add_columns_pair(&mut self, weight: f64, term: &ResidualTerm<'_>, columns: &[usize]) {
+        let p = self.g_a.len();
+        let k = columns.len();
+        let (r0, r1) = (term.r[0], term.r[1]);
+        let (mut a0, mut a1) = ([0.0; SPLIT_COLUMNS], [0.0; SPLIT_COLUMNS]);
+        for (j, aj) in term.a[..2 * k].chunks_exact(2).enumerate() {
+            a0[j] = aj[0];
+            a1[j] = aj[1];
+        }
+        let u = self.u.as_mut_slice();
+        for j in 0..k {
+            let cj = columns[j];
+            let (x0, x1) = (weight * a0[j], weight * a1[j]);
+            self.g_a[cj] += x0 * r0 + x1 * r1;
+            let column = &mut u[p * cj..p * cj + p];
+            for m in 0..k {
+                let cm = columns[m];
+                if cm <= cj {
+                    column[cm] += x0 * a0[m] + x1 * a1[m];
+                }
+            }
+        }
+        if let Some((i, b)) = term.block {
+            let b: [f64; 12] = b[..12].try_into().expect("a 2 × 6 block Jacobian");
+            self.add_pose_pair(i, weight, (r0, r1), &b);
+            let w_i = self.w[i].as_mut_slice();
+            for c in 0..6 {
+                let (y0, y1) = (weight * b[2 * c], weight * b[2 * c + 1]);
+                let column = &mut w_i[c * p..c * p + p];
+                for j in 0..k {
+                    column[columns[j]] += a0[j] * y0 + a1[j] * y1;
+                }
+            }
+        }
+    }
+
     /// Mirrors the upper triangle of `U` (accumulated by [`Self::add`]).
     pub fn finish(&mut self) {
         let p = self.u.nrows();
@@ -252,6 +337,7 @@ impl NormalEquations {
             v: vec![Matrix6::zeros(); n],
             w: vec![DMatrix::zeros(p, 6); n],
             g_b: vec![Vector6::zeros(); n],
+            sparse_rows: false,
         }
     }
 
@@ -265,19 +351,26 @@ impl NormalEquations {
         damp(&mut s, lambda);
         let mut rhs = -&self.g_a;
         let mut v_inv = Vec::with_capacity(self.v.len());
+        let mut factors = Vec::with_capacity(if self.sparse_rows { self.v.len() } else { 0 });
         for i in 0..self.v.len() {
             let mut vi = self.v[i];
             for k in 0..6 {
                 vi[(k, k)] *= 1.0 + lambda;
                 vi[(k, k)] += 1e-12 * lambda.max(1e-12) * (1.0 + vi[(k, k)]);
             }
-            let inv = vi.cholesky()?.inverse();
-            if p > 0 {
+            let chol = vi.cholesky()?;
+            let inv = chol.inverse();
+            if p > 0 && self.sparse_rows {
+                factors.push(chol.l().try_inverse()?);
+            } else if p > 0 {
                 let wv = &self.w[i] * inv;
                 s -= &wv * self.w[i].transpose();
                 rhs += &wv * self.g_b[i];
             }
             v_inv.push(inv);
+        }
+        if p > 0 && self.sparse_rows {
+            subtract_by_products(&mut s, &mut rhs, &self.w, &factors, &self.g_b);
         }
         let da = if p > 0 {
             solve_scaled(&s, &rhs)?
@@ -286,11 +379,15 @@ impl NormalEquations {
         };
         let db = (0..self.v.len())
             .map(|i| {
-                let wt_da: Vector6<f64> = if p > 0 {
-                    Vector6::from_iterator((self.w[i].transpose() * &da).iter().copied())
-                } else {
-                    Vector6::zeros()
-                };
+                // W_iᵀ δa, column by column of the column-major W_i.
+                let w = self.w[i].as_slice();
+                let wt_da = Vector6::from_fn(|c, _| {
+                    w[c * p..c * p + p]
+                        .iter()
+                        .zip(da.iter())
+                        .map(|(x, y)| x * y)
+                        .sum()
+                });
                 v_inv[i] * (-self.g_b[i] - wt_da)
             })
             .collect();
@@ -338,9 +435,22 @@ impl NormalEquations {
     /// a dozen `cpuid` instructions that cost 13 µs each under a hypervisor
     /// (measured here) — more than the whole product for the sizes of
     /// calibration.
+    ///
+    /// With [`Self::sparse_rows`], only each `W_i`'s non-zero rows are
+    /// visited (a network's frame touches the sensors that saw it).
     pub fn schur_complement(&self) -> Option<DMatrix<f64>> {
         let p = self.u.nrows();
         let mut s = self.u.clone();
+        if self.sparse_rows {
+            let factors = self
+                .v
+                .iter()
+                .map(|v| v.cholesky()?.l().try_inverse())
+                .collect::<Option<Vec<_>>>()?;
+            let zeros = vec![Vector6::zeros(); self.v.len()];
+            subtract_by_products(&mut s, &mut DVector::zeros(p), &self.w, &factors, &zeros);
+            return Some(s);
+        }
         let mut x = vec![0.0; 6 * p];
         for (w, v) in self.w.iter().zip(&self.v) {
             let inv = v.cholesky()?.inverse();
@@ -364,6 +474,58 @@ impl NormalEquations {
             }
         }
         Some(s)
+    }
+}
+
+/// Frames side by side in one product of [`subtract_by_products`].
+const CHUNK: usize = 64;
+
+/// `S −= Σ W_i V_i⁻¹ W_iᵀ`, `rhs += Σ W_i V_i⁻¹ g_i` given `L_i⁻¹`
+/// (`V_i = L_i L_iᵀ`): with `X_i = W_i L_i⁻ᵀ` (p × 6), `W_i V_i⁻¹ W_iᵀ =
+/// X_i X_iᵀ` and `W_i V_i⁻¹ g_i = X_i (L_i⁻¹ g_i)`; [`CHUNK`] of the `X_i`
+/// side by side make one matrix product (matrixmultiply's kernels: many
+/// frames, each touching most of the global block, as a network's do).
+/// `S` is mirrored from its upper triangle afterwards (exactly symmetric).
+/// Sums in a fixed order: the result does not depend on the machine's
+/// threads.
+fn subtract_by_products(
+    s: &mut DMatrix<f64>,
+    rhs: &mut DVector<f64>,
+    w: &[DMatrix<f64>],
+    l_inv: &[Matrix6<f64>],
+    g: &[Vector6<f64>],
+) {
+    let p = s.nrows();
+    let mut x = DMatrix::<f64>::zeros(p, 6 * CHUNK.min(w.len()));
+    for start in (0..w.len()).step_by(CHUNK) {
+        let end = (start + CHUNK).min(w.len());
+        for i in start..end {
+            let wi = w[i].as_slice();
+            let li = &l_inv[i];
+            let lg = li * g[i];
+            let first = 6 * (i - start);
+            for c in 0..6 {
+                // Column c of X_i: Σ_l W_i[:, l] L⁻¹[c, l] (L⁻¹ lower: l ≤ c).
+                let column = &mut x.as_mut_slice()[(first + c) * p..(first + c + 1) * p];
+                column.fill(0.0);
+                for l in 0..=c {
+                    let f = li[(c, l)];
+                    for (out, v) in column.iter_mut().zip(&wi[l * p..l * p + p]) {
+                        *out += f * v;
+                    }
+                }
+                for (r, v) in rhs.iter_mut().zip(column.iter()) {
+                    *r += v * lg[c];
+                }
+            }
+        }
+        let used = x.columns(0, 6 * (end - start));
+        s.gemm(-1.0, &used, &used.transpose(), 1.0);
+    }
+    for k in 0..p {
+        for j in 0..k {
+            s[(k, j)] = s[(j, k)];
+        }
     }
 }
 

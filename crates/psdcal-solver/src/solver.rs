@@ -48,6 +48,26 @@ pub enum RobustLoss {
 }
 
 impl RobustLoss {
+    /// The loss's scale.
+    pub fn scale(&self) -> f64 {
+        match *self {
+            RobustLoss::Huber { scale } | RobustLoss::Cauchy { scale } => scale,
+        }
+    }
+
+    /// The same loss with its scale multiplied by `factor` (a scale given in
+    /// units of the residuals' noise made absolute).
+    pub fn scaled(self, factor: f64) -> Self {
+        match self {
+            RobustLoss::Huber { scale } => RobustLoss::Huber {
+                scale: scale * factor,
+            },
+            RobustLoss::Cauchy { scale } => RobustLoss::Cauchy {
+                scale: scale * factor,
+            },
+        }
+    }
+
     /// `ρ(s)` for a squared residual norm `s`.
     pub fn rho(&self, s: f64) -> f64 {
         match *self {
@@ -184,6 +204,20 @@ pub trait Problem {
         visit: &mut dyn FnMut(&ResidualTerm<'_>),
     ) -> Result<(), Self::Error>;
 
+    /// [`Self::evaluate`] for problems whose residuals each touch a few of
+    /// many global parameters (a network's sensors): a term may come with
+    /// the global columns its `a` holds (`a` is then `d × columns.len()`,
+    /// column-major), `None` meaning all of them. The default visits
+    /// [`Self::evaluate`]'s dense terms.
+    fn evaluate_sparse(
+        &self,
+        state: &Self::State,
+        jacobians: bool,
+        visit: &mut dyn FnMut(&ResidualTerm<'_>, Option<&[usize]>),
+    ) -> Result<(), Self::Error> {
+        self.evaluate(state, jacobians, &mut |term| visit(term, None))
+    }
+
     /// The state moved by `step`, or `None` when it leaves the domain (the
     /// step is then rejected like one that raises the cost).
     fn apply_step(&self, state: &Self::State, step: &Step) -> Option<Self::State>;
@@ -241,10 +275,14 @@ fn normal_equations_and_cost<P: Problem>(
 ) -> Result<(NormalEquations, f64), P::Error> {
     let mut ne = NormalEquations::zeros(problem.global_len(), problem.block_count());
     let mut total = 0.0;
-    problem.evaluate(state, true, &mut |term| {
+    problem.evaluate_sparse(state, true, &mut |term, columns| {
         let s: f64 = term.r.iter().map(|r| r * r).sum();
         total += robust.map_or(s, |l| l.rho(s));
-        ne.add(robust.map_or(1.0, |l| l.weight(s)), term);
+        let weight = robust.map_or(1.0, |l| l.weight(s));
+        match columns {
+            None => ne.add(weight, term),
+            Some(columns) => ne.add_columns(weight, term, columns),
+        }
     })?;
     ne.finish();
     Ok((ne, total))

@@ -30,6 +30,7 @@ fn pipeline(c: &mut Criterion) {
         record_cycles: DEFAULT_RECORD_CYCLES,
         seed: 1,
         out: data.clone(),
+        force: false,
     })
     .expect("simulated data set");
     let files = DataSetFiles {

@@ -69,6 +69,8 @@ mod base;
 mod calibration;
 mod dataset;
 mod frontend;
+mod live;
+mod network;
 mod psd_map;
 mod reports;
 mod signals;
@@ -77,6 +79,10 @@ mod study;
 
 pub use base::option_text;
 pub use frontend::arrays;
+pub use network::calibrate_network::{calibrate_network_files, NetworkCalibrated, NetworkRequest};
+pub use network::network_input::{read_network, NetworkFiles, NetworkInput};
+pub use network::network_page::network_page;
+pub use network::simulate_network::{simulate_network, NetworkSimRequest};
 
 pub use answer::aoa::{aoa_table, measurement, AoaTable};
 pub use answer::correct::{correct, Corrected};
@@ -91,10 +97,13 @@ pub use answer::locate::{locate_table, LocateTable, LocateTarget};
 pub use answer::map::{map_table, MapModel, MapRequest, MapSource, MapSourceError, MapTable};
 pub use answer::point_rows::{answer_points, PointsAnswer, RowAnswer};
 pub use base::advice::{advice, error_text};
+#[cfg(feature = "clap")]
+pub use base::command_files::refuse_input_overwrite;
 pub use base::error::{Error, Result};
 pub use base::option_text::plane_at_distance;
 pub use base::options::CalibrationOptions;
 pub use base::provenance::{provenance, sha256_hex, utc_iso8601, InputHashes};
+pub use base::stdout::{is_closed_output, print_text, write_stdout, STANDARD_OUTPUT};
 pub use base::summary::Summary;
 pub use base::summary_text::summary_text;
 pub use base::table::{deg, num, StatusCount, Table, MAX_ROW_WARNINGS};
@@ -109,6 +118,7 @@ pub use calibration::residuals::{ImageResiduals, Residual, ResidualTable};
 pub use dataset::data_set::{
     source_path, DataSet, DataSetFiles, LoadOptions, MemoryPoints, PointSource,
 };
+pub use live::serve::{serve, ServeRequest, ServeSummary};
 pub use psd_map::from_scan::{
     parse_psd_map_model, psd_map_from_scan, PsdMapOutcome, PsdMapRequest, PSD_MAP_PAGE,
     RESIDUAL_MAP_CELLS, SCAN_SUMMARY_CELLS,
@@ -126,12 +136,16 @@ pub use signals::demodulate::{
     demodulate, DemodulateRequest, Demodulated, RecordOutcome, RecordStatus, MAX_RECORD_SAMPLES,
 };
 pub use signals::track::{track, TrackRequest, TrackSummary, TrackTarget};
+pub use signals::track_rig::LedFix;
 pub use simulation::demo::{demo, Demo, DemoParameter};
 pub use simulation::plan::{plan_poses, PlanRequest, Planned};
 pub use simulation::simulate::{
     chain_with_record, parse_record_cycles, record_cycles_flag, simulate_data, simulate_files,
     simulate_files_at_poses, transient_cycles, SimulateRequest, SimulatedData, SimulatedFiles,
     DEFAULT_RECORD_CYCLES, MAX_RECORD_CYCLES,
+};
+pub use simulation::simulate_moving::{
+    simulate_moving, MovingRequest, SimulatedMoving, DEFAULT_MOVING_NOISE_V, MOVING_SAMPLE_RATE_HZ,
 };
 pub use simulation::simulate_positioning::{
     simulate_positioning, PositioningRequest, SimulatedRig,
@@ -152,6 +166,7 @@ pub use psdcal_calib::CalibError;
 pub use psdcal_io::{Calibration, IoError, ReadLimits, Warning};
 pub use psdcal_locate::LocateError;
 pub use psdcal_locate::{CalibratedSensor, LocateOptions, Measurement, Plane, MAX_GRID};
+pub use psdcal_locate::{CvOptions, TrackFilter};
 pub use psdcal_model::{Diagnostic, DiagnosticCode, Severity};
 pub use psdcal_model::{Param, PsdGeometry};
 pub use psdcal_sim::room::RoomOptions;

@@ -164,3 +164,15 @@ fn a_data_set_of_files_and_rows_lists_only_its_files_with_their_hashes() {
     );
     assert_eq!(set.template, both.template);
 }
+
+#[test]
+fn the_calibration_folder_is_created_as_simulate_creates_its_own() {
+    let set = DataSet::from_files(&files(), &LoadOptions::default()).unwrap();
+    let calibrated = calibrate(&set, &CalibrationOptions::default()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out/new/calibration.json");
+    let residuals = dir.path().join("out/other/residuals.csv");
+    calibrated.write(&set, &out, Some(&residuals)).unwrap();
+    assert_eq!(LoadedSensor::read(&out).unwrap().record, calibrated.record);
+    assert!(residuals.exists());
+}

@@ -83,6 +83,7 @@ fn a_map_of_another_sensor_or_a_scan_that_misses_the_data_is_refused() {
         command: String::new(),
         report: None,
         limits: Default::default(),
+        force: false,
     })
     .unwrap();
     let half_map = dir.path().join("half.json");

@@ -59,6 +59,7 @@ fn request(scan: &Path, report: &Path) -> PsdMapRequest {
         command: "psdcal psd-map --report".into(),
         report: Some(report.to_path_buf()),
         limits: Default::default(),
+        force: false,
     }
 }
 

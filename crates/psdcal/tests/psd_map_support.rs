@@ -40,6 +40,7 @@ pub fn write_seed_files(dir: &Path, seed: u64) {
         record_cycles: DEFAULT_RECORD_CYCLES,
         seed,
         out: dir.join(format!("nl{seed}")),
+        force: false,
     })
     .unwrap();
     let scan = dir.join(format!("scan{seed}.csv"));
@@ -61,6 +62,7 @@ pub fn write_seed_files(dir: &Path, seed: u64) {
         command: String::new(),
         report: None,
         limits: Default::default(),
+        force: false,
     })
     .unwrap()
     .write(&dir.join(format!("psd_map{seed}.json")))

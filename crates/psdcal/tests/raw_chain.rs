@@ -30,6 +30,7 @@ fn request(dir: &Path, snr_db: Option<f64>, seed: u64) -> SimulateRequest {
         record_cycles: 65,
         seed,
         out: dir.to_path_buf(),
+        force: false,
     }
 }
 
@@ -245,6 +246,7 @@ fn track_gives_the_angles_of_demodulate() {
             raw: None,
             channels: Vec::new(),
             limits: Default::default(),
+            filter: Default::default(),
         },
         stream.as_bytes(),
         &mut out,
@@ -271,6 +273,7 @@ fn track_gives_the_angles_of_demodulate() {
             raw: Some(d.join("raw.tdms")),
             channels: Vec::new(),
             limits: Default::default(),
+            filter: Default::default(),
         },
         &b""[..],
         &mut from_file,

@@ -35,6 +35,7 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
         command: String::new(),
         report: None,
         limits: Default::default(),
+        force: false,
     })
     .unwrap();
     let map_path = dir.path().join("psd_map.json");
@@ -51,6 +52,7 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
         record_cycles: DEFAULT_RECORD_CYCLES,
         seed: 3,
         out: data.clone(),
+        force: false,
     })
     .unwrap();
     let files = DataSetFiles {
@@ -74,6 +76,7 @@ fn a_calibration_with_a_psd_map_reports_the_map_and_the_poses() {
         data: Some((data.join("template.csv"), data.join("observations.csv"))),
         out: dir.path().join("report"),
         limits: Default::default(),
+        force: false,
     };
     let loaded = LoadedSensor::read(&cal).unwrap();
     let content = report_content(&request, &loaded, Some(&set)).unwrap();
@@ -263,6 +266,7 @@ fn the_distortion_field_draws_the_valid_region_boundary() {
             data: None,
             out: dir.path().join("report"),
             limits: Default::default(),
+            force: false,
         };
         let loaded = LoadedSensor::read(&path).unwrap();
         let content = report_content(&request, &loaded, None).unwrap();

@@ -8,15 +8,17 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 /// The folders, lowest first: each may import from those before it.
-const LAYERS: [&str; 10] = [
+const LAYERS: [&str; 12] = [
     "base",
     "dataset",
     "psd_map",
     "calibration",
     "answer",
     "signals",
+    "live",
     "simulation",
     "reports",
+    "network",
     "study",
     "frontend",
 ];

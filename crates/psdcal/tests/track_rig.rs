@@ -47,6 +47,7 @@ fn scene(dir: &Path) -> Scene {
         room,
         seed: 5,
         out: dir.to_path_buf(),
+        force: false,
     })
     .unwrap();
     let rig = read_rig(dir.join("rig.json")).unwrap();
@@ -145,6 +146,7 @@ fn run(dir: &Path, text: &str) -> Vec<Vec<String>> {
             raw: None,
             channels: Vec::new(),
             limits: Default::default(),
+            filter: Default::default(),
         },
         text.as_bytes(),
         &mut out,
@@ -232,4 +234,111 @@ fn rig_positions_match_the_truth_and_their_covariance() {
         mean_error > 1e-4,
         "noise must move the positions: {mean_error}"
     );
+}
+
+/// `track`'s output text for the request's recording file `raw` (or the
+/// `stdin` text when `raw` is `None`).
+fn track_text(dir: &Path, raw: Option<&Path>, rate: Option<f64>, stdin: &str) -> String {
+    let mut out = Vec::new();
+    psdcal::track(
+        &TrackRequest {
+            target: TrackTarget::Rig(dir.join("rig.json")),
+            rate_hz: rate,
+            tones: dir.join("tones.csv"),
+            window_s: 0.05,
+            config: DemodConfig::default(),
+            raw: raw.map(Path::to_path_buf),
+            channels: Vec::new(),
+            limits: Default::default(),
+            filter: Default::default(),
+        },
+        stdin.as_bytes(),
+        &mut out,
+    )
+    .unwrap();
+    String::from_utf8(out).unwrap()
+}
+
+/// The rig's recording as raw.csv (with `t_s`, columns shuffled), raw.npy
+/// (`4 S` columns, rig.json's order) and raw.tdms (a group per sensor) gives
+/// the same rows as the same samples on standard input.
+#[test]
+fn every_raw_format_gives_the_rows_of_the_stream() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = scene(d);
+    let text = stream(&scene, 3000, 1e-4, 3);
+    let reference = {
+        run(d, &text); // writes tones.csv
+        track_text(d, None, Some(FS), &text)
+    };
+    assert_eq!(reference.lines().count(), 1 + 3 * 3);
+    let mut lines = text.lines();
+    let names: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    // raw.csv: t_s first, the sensors in reverse order; the rate from t_s.
+    let width = names.len();
+    let order: Vec<usize> = (0..width / 4)
+        .rev()
+        .flat_map(|s| (0..4).map(move |c| 4 * s + c))
+        .collect();
+    let mut csv = String::from("t_s");
+    for &i in &order {
+        csv += &format!(",{}", names[i]);
+    }
+    csv.push('\n');
+    for (n, r) in rows.iter().enumerate() {
+        csv += &psdcal_io::number_text(n as f64 / FS);
+        for &i in &order {
+            csv += &format!(",{:e}", r[i]);
+        }
+        csv.push('\n');
+    }
+    std::fs::write(d.join("raw.csv"), csv).unwrap();
+    assert_eq!(track_text(d, Some(&d.join("raw.csv")), None, ""), reference);
+    // raw.npy of 4 S columns.
+    let mut npy = psdcal_io::npy_header_columns(rows.len() as u64, width as u64);
+    for r in &rows {
+        for v in r {
+            npy.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    std::fs::write(d.join("raw.npy"), npy).unwrap();
+    assert_eq!(
+        track_text(d, Some(&d.join("raw.npy")), Some(FS), ""),
+        reference
+    );
+    // raw.tdms, a group per sensor, in two segments.
+    let mut writer = psdcal_io::TdmsFrameWriter::with_groups(FS, scene.ids.clone());
+    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
+    let mut tdms = Vec::new();
+    writer.write_rows(&mut tdms, &flat[..1000 * width]).unwrap();
+    writer.write_rows(&mut tdms, &flat[1000 * width..]).unwrap();
+    std::fs::write(d.join("raw.tdms"), tdms).unwrap();
+    assert_eq!(
+        track_text(d, Some(&d.join("raw.tdms")), None, ""),
+        reference
+    );
+    // A raw.npy of the wrong width is refused, naming the shape.
+    let bad = psdcal_io::npy_header_columns(1, 4);
+    std::fs::write(d.join("bad.npy"), [bad, vec![0; 32]].concat()).unwrap();
+    let err = psdcal::track(
+        &TrackRequest {
+            target: TrackTarget::Rig(d.join("rig.json")),
+            rate_hz: Some(FS),
+            tones: d.join("tones.csv"),
+            window_s: 0.05,
+            config: DemodConfig::default(),
+            raw: Some(d.join("bad.npy")),
+            channels: Vec::new(),
+            limits: Default::default(),
+            filter: Default::default(),
+        },
+        "".as_bytes(),
+        Vec::new(),
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("expected (N, 12)"), "{err}");
 }

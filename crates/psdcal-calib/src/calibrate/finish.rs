@@ -19,7 +19,7 @@
 //!   covariance with the estimate (`cross`, block rows × estimate columns)
 //!   and, when refined, its own.
 
-use psdcal_model::{ParameterCovariance, ValidRegion};
+use psdcal_model::{ParameterCovariance, RegionEnd, ValidRegion};
 
 use crate::calibrate::options::CalibrateOptions;
 use crate::calibrate::result::{BlockCovariance, CalibrationResult};
@@ -104,6 +104,14 @@ fn refuse_points_outside(region: &ValidRegion, points: &[DataPoint]) -> Result<(
     let Some((first, o)) = outside.first() else {
         return Ok(());
     };
+    if o.end == RegionEnd::DomainEdge {
+        // Points moved by the fitted gains off the first stage's domain.
+        return Err(CalibError::DataOutsideDomain {
+            outside: outside.len(),
+            points: points.len(),
+            first: **first,
+        });
+    }
     Err(CalibError::DataOutsideValidRegion {
         outside: outside.len(),
         points: points.len(),

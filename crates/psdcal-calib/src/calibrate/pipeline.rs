@@ -15,11 +15,13 @@ use crate::data::CalibrationData;
 use crate::diagnose::diagnostics::{diagnose_structure, diagnose_uncertainty};
 use crate::diagnose::fit_statistics::{fit_statistics, FitStatistics};
 use crate::diagnose::residual_structure::DiagnosticReport;
+use crate::problem::calibration_problem::FitState;
 use crate::problem::prior::Prior;
 use crate::refine::global::{refine_global, GlobalOptions, GlobalReport};
 use crate::refine::linearization::AtSolution;
 use crate::refine::options::RefineOptions;
 use crate::refine::refined::Refined;
+use crate::refine::robust_scale::{absolute, residual_noise, RESCALE_TOLERANCE};
 use crate::refine::solve::refine;
 use crate::select::choose::{choose, ModelChoice, ModelChoiceReport};
 use crate::select::influence::jackknife_raised;
@@ -79,7 +81,14 @@ fn calibrate_as_given(
     // The post-fit work's second thread starts now ([`crate::calibrate::helper`]).
     let mut helper = Helper::spawn();
     let init = initialize(data, &options.init)?;
-    let (refined, global, gain_start) = refine_from_start(data, options, &init)?;
+    let start = FitState {
+        model: init.model.clone(),
+        poses: init.poses.clone(),
+    };
+    let at_start = robust_at(data, options, &options.refine, &start)?;
+    let (refined, global, gain_start) = refine_from_start(data, &at_start, &init)?;
+    let (refined, at_solution) = rescale_robust(data, options, at_start, refined)?;
+    let options = &at_solution;
     check_converged(&refined)?;
     let (refined, global, chosen_options, model_choice) =
         choose_model(data, options, &init, refined, global)?;
@@ -181,6 +190,56 @@ fn choose_model(
         chosen_options,
         Some(chosen.report),
     ))
+}
+
+/// `options` with the robust loss (given in units of the residuals' noise)
+/// made absolute at the noise of `state` ([`crate::refine::robust_scale`]).
+fn robust_at(
+    data: &CalibrationData,
+    options: &CalibrateOptions,
+    refine_options: &RefineOptions,
+    state: &FitState,
+) -> Result<CalibrateOptions, CalibError> {
+    let Some(relative) = options.refine.robust else {
+        return Ok(options.clone());
+    };
+    let sigma = residual_noise(data, state, refine_options)?;
+    Ok(CalibrateOptions {
+        refine: absolute(&options.refine, relative, sigma),
+        ..options.clone()
+    })
+}
+
+/// The fit refined again when the noise at the solution differs from the
+/// start's by more than [`RESCALE_TOLERANCE`] (the loss's scale follows it).
+fn rescale_robust(
+    data: &CalibrationData,
+    options: &CalibrateOptions,
+    at_start: CalibrateOptions,
+    refined: Refined,
+) -> Result<(Refined, CalibrateOptions), CalibError> {
+    let (Some(_), Some(used)) = (options.refine.robust, at_start.refine.robust) else {
+        return Ok((refined, at_start));
+    };
+    let state = FitState {
+        model: refined.model.clone(),
+        poses: refined.poses.clone(),
+    };
+    let at_solution = robust_at(data, options, &at_start.refine, &state)?;
+    let sigma_ratio = at_solution
+        .refine
+        .robust
+        .map_or(0.0, |l| l.scale() / used.scale());
+    if (sigma_ratio - 1.0).abs() <= RESCALE_TOLERANCE {
+        return Ok((refined, at_start));
+    }
+    let again = refine(
+        data,
+        refined.model.clone(),
+        &refined.poses,
+        &at_solution.refine,
+    )?;
+    Ok((again, at_solution))
 }
 
 /// The refinement from the initialisation: with the gains freed, from the

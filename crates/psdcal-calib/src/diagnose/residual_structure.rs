@@ -69,6 +69,7 @@ use psdcal_solver::normal_equations::{ResidualTerm, Step};
 use psdcal_solver::solver::{self, Problem};
 use serde::Serialize;
 
+use super::candidate_terms::{candidate_terms, term_buffer, term_columns, CandidateTerm};
 use crate::problem::calibration_problem::{CalibrationProblem, FitState};
 use crate::CalibError;
 
@@ -132,6 +133,9 @@ pub struct DiagnosticReport {
     pub gain: Option<FieldTest>,
     /// Cubic field against the model plus the gain field.
     pub beyond_gain: Option<FieldTest>,
+    /// Each candidate term not fitted against the model
+    /// ([`super::candidate_terms`]).
+    pub terms: Vec<TermTest>,
     /// Condition number of the unit-diagonal information matrix.
     pub condition: Option<f64>,
 }
@@ -157,11 +161,17 @@ pub trait ImagePlaneFit: Problem<State = FitState, Error = CalibError> {
     /// (a gains stage may recompute it from amplitudes).
     fn measured_point(&self, model: &Model, i: usize, k: usize)
         -> Result<Vector2<f64>, CalibError>;
+    /// The flat model columns of the freed parameters.
+    fn freed_columns(&self) -> Vec<usize>;
 }
 
 impl ImagePlaneFit for CalibrationProblem<'_> {
     fn geometry(&self) -> &PsdGeometry {
         &self.data().geometry
+    }
+
+    fn freed_columns(&self) -> Vec<usize> {
+        self.columns().to_vec()
     }
 
     fn image_sizes(&self) -> Vec<usize> {
@@ -217,7 +227,10 @@ struct Linearised {
     p: usize,
     /// Whether the gain field's columns follow the cubic field's.
     gain: bool,
-    /// Schur complement over `[freed | cubic | gain]`, poses eliminated.
+    /// The candidate terms, whose columns follow the fields'.
+    terms: Vec<CandidateTerm>,
+    /// Schur complement over `[freed | cubic | gain | terms]`, poses
+    /// eliminated.
     s: DMatrix<f64>,
     /// The reduced gradient.
     g: DVector<f64>,
@@ -227,11 +240,14 @@ struct Linearised {
 
 impl Linearised {
     fn new<P: ImagePlaneFit>(problem: &P, state: &FitState, gain: bool) -> Option<Self> {
+        let terms = candidate_terms(&state.model, &problem.freed_columns());
+        let term_len: usize = terms.iter().map(|t| t.columns.len()).sum();
         let augmented = Augmented {
             inner: problem,
             sizes: problem.image_sizes(),
-            q: CUBIC_COLUMNS + if gain { GAIN_COLUMNS } else { 0 },
+            q: field_columns(gain) + term_len,
             gain,
+            terms: &terms,
             image_ss: std::cell::Cell::new(0.0),
         };
         let ne = solver::normal_equations(&augmented, state, None).ok()?;
@@ -243,13 +259,28 @@ impl Linearised {
             let gb = DVector::from_iterator(6, (v_inv * ne.g_b[i]).iter().copied());
             g -= &ne.w[i] * gb;
         }
+        let image_ss = augmented.image_ss.get();
         Some(Self {
             p,
             gain,
+            terms,
             s,
             g,
-            image_ss: augmented.image_ss.get(),
+            image_ss,
         })
+    }
+
+    /// `(Δ, rank)` over the freed parameters and candidate term `t`.
+    fn explained_by_term(&self, t: usize) -> (f64, usize) {
+        let start = self.p
+            + field_columns(self.gain)
+            + self.terms[..t]
+                .iter()
+                .map(|t| t.columns.len())
+                .sum::<usize>();
+        let mut cols: Vec<usize> = (0..self.p).collect();
+        cols.extend(start..start + self.terms[t].columns.len());
+        explained(&self.s, &self.g, &cols)
     }
 
     /// `(Δ, rank)` over the freed parameters and the chosen fields.
@@ -306,18 +337,59 @@ fn structure(
             ),
         ));
     }
+    let term_gains: Vec<f64> = (0..lin.terms.len())
+        .map(|t| lin.explained_by_term(t))
+        .map(|full| {
+            report.terms.push(TermTest {
+                term: String::new(),
+                test: field_test(ss, n, poses, base, full),
+            });
+            (full.0 - base.0).max(0.0)
+        })
+        .collect();
+    for (t, term) in report.terms.iter_mut().zip(&lin.terms) {
+        t.term = term.names.join(",");
+    }
     let misfit = if gain_explains {
         report.beyond_gain
     } else {
         report.cubic
     };
-    if let Some(t) = misfit.filter(FieldTest::significant) {
+    let cubic_gain = (cubic.0 - base.0).max(0.0);
+    let cause = named_cause(&report.terms, cubic_gain, &term_gains);
+    if let Some(t) = cause {
+        let term = &report.terms[t];
+        report.diagnostics.push(Diagnostic::warning(
+            DiagnosticCode::ModelMisfit,
+            format!(
+                "the residuals have a structure across the sensor shared by the images that \
+                 the term {} explains ({:.0} % of the residual, F = {:.1} on {} and {} degrees \
+                 of freedom): add {} to --fit",
+                term.term,
+                100.0 * term.test.explained,
+                term.test.f,
+                term.test.df1,
+                term.test.df2,
+                term.term
+            ),
+        ));
+    } else if let Some(t) = misfit.filter(FieldTest::significant) {
+        let tried = if report.terms.is_empty() {
+            "every term of the model is fitted".to_string()
+        } else {
+            format!(
+                "its terms not fitted explain little of it: {}",
+                shares(&report.terms)
+            )
+        };
         report.diagnostics.push(Diagnostic::warning(
             DiagnosticCode::ModelMisfit,
             format!(
                 "the residuals have a smooth structure across the sensor shared by the images \
-                 ({:.0} % of the residual, F = {:.1} on {} and {} degrees of freedom): the model \
-                 misses a systematic effect (PSD distortion l1, k3, tangential terms, gains)",
+                 ({:.0} % of the residual, F = {:.1} on {} and {} degrees of freedom) that the \
+                 model cannot follow ({tried}): distortion beyond the model's stages (a \
+                 wide-angle lens, a non-radial PSD non-linearity: measure a PSD map with \
+                 psdcal psd-map) or errors in the template's coordinates",
                 100.0 * t.explained,
                 t.f,
                 t.df1,
@@ -448,6 +520,12 @@ const CUBIC_COLUMNS: usize = 14;
 /// Columns of the gain field.
 const GAIN_COLUMNS: usize = 3;
 
+/// Columns of the fields: the cubic field's, and the gain field's when
+/// tested.
+fn field_columns(gain: bool) -> usize {
+    CUBIC_COLUMNS + if gain { GAIN_COLUMNS } else { 0 }
+}
+
 /// The fields' columns at predicted point `m`, column-major (2 × q): the
 /// cubic field, then (when `gain`) the gain field.
 fn field_values(geometry: &PsdGeometry, m: &Vector2<f64>, gain: bool, out: &mut [f64]) {
@@ -487,6 +565,8 @@ struct Augmented<'p, P> {
     q: usize,
     /// Whether the gain field's columns follow the cubic field's.
     gain: bool,
+    /// The candidate terms, whose columns follow the fields'.
+    terms: &'p [CandidateTerm],
     /// `Σ ‖r‖²` of the last evaluation.
     image_ss: std::cell::Cell<f64>,
 }
@@ -510,7 +590,9 @@ impl<P: ImagePlaneFit> Problem for Augmented<'_, P> {
         visit: &mut dyn FnMut(&ResidualTerm<'_>),
     ) -> Result<(), CalibError> {
         let p = self.inner.global_len();
-        let mut a = vec![0.0; 2 * (p + CUBIC_COLUMNS + GAIN_COLUMNS)];
+        let mut a = vec![0.0; 2 * (p + CUBIC_COLUMNS + GAIN_COLUMNS) + 2 * self.q];
+        let term_start = 2 * (p + field_columns(self.gain));
+        let mut term_jacobian = term_buffer(&state.model, self.terms);
         let (mut i, mut k) = (0, 0);
         let mut ss = 0.0;
         let mut failed = None;
@@ -524,7 +606,14 @@ impl<P: ImagePlaneFit> Problem for Augmented<'_, P> {
             if jacobians {
                 match self.inner.measured_point(&state.model, i, k) {
                     Ok(m) => {
-                        field_values(self.inner.geometry(), &(m + r), self.gain, &mut a[2 * p..])
+                        field_values(self.inner.geometry(), &(m + r), self.gain, &mut a[2 * p..]);
+                        term_columns(
+                            &state.model,
+                            &(m + r),
+                            self.terms,
+                            &mut term_jacobian,
+                            &mut a[term_start..],
+                        );
                     }
                     Err(e) => failed = Some(e),
                 }
@@ -550,6 +639,32 @@ impl<P: ImagePlaneFit> Problem for Augmented<'_, P> {
     fn apply_step(&self, _: &FitState, _: &Step) -> Option<FitState> {
         None
     }
+}
+
+/// How much one candidate term would explain.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TermTest {
+    /// The term's parameters, comma-separated (as `--fit` names them).
+    pub term: String,
+    /// Its F-test against the model as fitted.
+    pub test: FieldTest,
+}
+
+/// The candidate explaining most of the residual, when one is significant
+/// and explains at least half of what the cubic field does (`cubic_gain`,
+/// its decrease over the model): the cause to name.
+pub(crate) fn named_cause(terms: &[TermTest], cubic_gain: f64, gains: &[f64]) -> Option<usize> {
+    let best = (0..terms.len()).max_by(|&a, &b| gains[a].total_cmp(&gains[b]))?;
+    (terms[best].test.significant() && gains[best] >= 0.5 * cubic_gain).then_some(best)
+}
+
+/// "k3 12 %, p1,p2 3 %": each candidate's share of the residual.
+pub(crate) fn shares(terms: &[TermTest]) -> String {
+    terms
+        .iter()
+        .map(|t| format!("{} {:.0} %", t.term, 100.0 * t.test.explained))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 #[cfg(test)]

@@ -134,6 +134,13 @@ impl GlobalReport {
 /// for one parameter).
 pub const COMPETING_DELTA_CHI2: f64 = 9.0;
 
+/// Largest difference of `l1` (mm⁻²) between two stops of the solver at
+/// the same minimum.
+const SAME_MINIMUM_L1: f64 = 1e-5;
+
+/// Largest relative cost difference between two stops at the same minimum.
+const SAME_MINIMUM_COST: f64 = 1e-6;
+
 /// Relative cost excess of the winner over a profile point that the final
 /// check tolerates (the profile is refined to a cost tolerance of 1e-6).
 const FINAL_CHECK_MARGIN: f64 = 1e-5;
@@ -477,17 +484,19 @@ fn lower(a: Option<Refined>, b: Option<Refined>) -> Option<Refined> {
 }
 
 /// The distinct minima among `finals` (sorted by cost), each with how many
-/// fits reached it: the same minimum has the same `l1` (to 1e-4 of its scale;
-/// the valley is flat along `l1`, and two stops of the solver in it differ by
-/// more than rounding) and the same cost (to 1e-7 relative).
+/// fits reached it: the same minimum has the same `l1` (to 1e-5 mm⁻², a
+/// hundredth of the paper's PSD term: the valley is flat along `l1`, two
+/// stops of the solver in it differ by more than rounding, and distinct
+/// basins lie a grid step of 2e-3 apart) and the same cost (to 1e-6
+/// relative, the solver's cost tolerance).
 fn distinct_minima(finals: &[Refined]) -> Vec<LocalMinimum> {
     let mut minima: Vec<LocalMinimum> = Vec::new();
     for r in finals {
         let sensor = r.model.sensor_model();
         let (d, k) = (&sensor.distortion, &sensor.intrinsics);
         let same = minima.iter_mut().find(|m| {
-            (m.l1 - d.l1).abs() <= 1e-4 * m.l1.abs().max(1e-3)
-                && (m.cost - r.cost).abs() <= 1e-7 * m.cost.max(1e-300)
+            (m.l1 - d.l1).abs() <= SAME_MINIMUM_L1
+                && (m.cost - r.cost).abs() <= SAME_MINIMUM_COST * m.cost.max(1e-300)
         });
         match same {
             Some(m) => m.found += 1,

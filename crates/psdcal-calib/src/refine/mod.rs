@@ -25,6 +25,7 @@ pub mod global;
 pub(crate) mod linearization;
 pub(crate) mod options;
 pub(crate) mod refined;
+pub(crate) mod robust_scale;
 pub(crate) mod solve;
 
 pub use crate::problem::calibration_problem::{total_cost, CalibrationProblem, FitState};

@@ -235,7 +235,7 @@ pub fn initialize(
     }
     let start = starting_profile(&problem, options, route, &mut closed, (f, cx, cy))?;
     let focal_sensitivity = if route != InitRoute::ClosedForm {
-        focal_sensitivity(data, &problem, &start, (f, cx, cy))?
+        focal_sensitivity(data, &problem, options, &start, (f, cx, cy))?
     } else {
         f64::NAN
     };
@@ -639,17 +639,40 @@ fn starting_profile(
 /// Step 7: after a search, the check that `f` is determined at all: with every
 /// template pose parallel to the sensor the profile is flat (to rounding)
 /// in `f`. With noise, the covariance of the refined fit judges instead
-/// ([`mod@crate::calibrate`]). Returns the focal sensitivity.
+/// ([`mod@crate::calibrate`]). A neighbour lower than the start by more
+/// than the flat-profile tolerance means the search stopped at its
+/// interval's edge short of the minimum: the focal length lies outside the
+/// interval ([`CalibError::FocalOutsideSearch`], naming `--focal-guess` when
+/// it set the interval). Returns the focal sensitivity.
 fn focal_sensitivity(
     data: &CalibrationData,
     problem: &Problem,
+    options: &InitOptions,
     start: &Profile,
     (f, cx, cy): (f64, f64, f64),
 ) -> Result<f64, CalibError> {
-    let neighbour = problem
-        .cost_or_inf(0.5 * f, cx, cy, Precision::Fine)
-        .min(problem.cost_or_inf(2.0 * f, cx, cy, Precision::Fine));
+    let (half, double) = (
+        problem.cost_or_inf(0.5 * f, cx, cy, Precision::Fine),
+        problem.cost_or_inf(2.0 * f, cx, cy, Precision::Fine),
+    );
+    let (better_f, neighbour) = if double <= half {
+        (2.0 * f, double)
+    } else {
+        (0.5 * f, half)
+    };
     let increase = neighbour - start.cost;
+    if -increase > FLAT_PROFILE * start.cost + problem.floor {
+        let (lo, hi, _) = search_range(options);
+        return Err(CalibError::FocalOutsideSearch {
+            guess: options.focal_guess,
+            lo,
+            hi,
+            f,
+            cost: start.cost,
+            better_f,
+            better_cost: neighbour,
+        });
+    }
     let dof = (2 * data.point_count())
         .saturating_sub(6 * data.images.len() + 4)
         .max(1) as f64;

@@ -46,6 +46,10 @@ impl ImagePlaneFit for SurveyedProblem<'_> {
         &self.data().geometry
     }
 
+    fn freed_columns(&self) -> Vec<usize> {
+        self.columns().to_vec()
+    }
+
     fn image_sizes(&self) -> Vec<usize> {
         self.data().images.iter().map(|i| i.points.len()).collect()
     }

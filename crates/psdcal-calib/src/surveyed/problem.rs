@@ -57,6 +57,11 @@ impl<'a> SurveyedProblem<'a> {
         self.data
     }
 
+    /// The flat model columns of the freed parameters.
+    pub fn columns(&self) -> &[usize] {
+        &self.columns
+    }
+
     /// Residual, `∂r/∂θ_free` (2 × p, column-major into `a`), `∂r/∂pose`
     /// and `∂r/∂P` of observation `k` of image `i`.
     fn linearize(

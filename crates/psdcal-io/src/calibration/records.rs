@@ -190,7 +190,7 @@ impl<'de> Deserialize<'de> for StdDevs {
                     if value < 0.0 {
                         return Err(de::Error::custom(format!(
                             "std.{name} must be zero or positive, found {}",
-                            super::rules::shown(value)
+                            shown(value)
                         )));
                     }
                     entries.push((name, value));
@@ -279,7 +279,52 @@ impl Covariance {
     pub(super) fn check(&self) -> Result<(), String> {
         self.to_parameter_covariance().map(|_| ())
     }
+
+    /// Refuses a matrix that is not positive semi-definite: the smallest
+    /// eigenvalue of its correlation matrix `D^-1/2 C D^-1/2` (scale-free:
+    /// the parameters' units differ by many orders) must not be below
+    /// `-1e-6` (the rounding of a computed covariance); a zero variance
+    /// needs a zero row.
+    pub(super) fn check_positive_semidefinite(&self) -> Result<(), String> {
+        let n = self.parameters.len();
+        if n == 0 {
+            return Ok(());
+        }
+        let scale: Vec<f64> = (0..n).map(|i| self.matrix[i][i].sqrt()).collect();
+        for (i, row) in self.matrix.iter().enumerate() {
+            if let Some((j, v)) = row.iter().enumerate().find(|(_, v)| **v != 0.0) {
+                if scale[i] == 0.0 {
+                    return Err(format!(
+                        "covariance.matrix[{i}][{j}] is {} but '{}' has variance 0; expected a \
+                         positive semi-definite matrix",
+                        shown(*v),
+                        self.parameters[i]
+                    ));
+                }
+            }
+        }
+        let unit = |i: usize| if scale[i] > 0.0 { scale[i] } else { 1.0 };
+        let correlation =
+            nalgebra::DMatrix::from_fn(n, n, |i, j| self.matrix[i][j] / unit(i) / unit(j));
+        let smallest = correlation
+            .symmetric_eigenvalues()
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        if smallest.is_nan() || smallest < -PSD_TOLERANCE {
+            return Err(format!(
+                "covariance.matrix is not positive semi-definite (its correlation matrix has the \
+                 eigenvalue {}); expected a covariance as psdcal writes it (was it edited?)",
+                shown(smallest)
+            ));
+        }
+        Ok(())
+    }
 }
+
+/// The most negative eigenvalue of a covariance's correlation matrix
+/// accepted (rounding).
+const PSD_TOLERANCE: f64 = 1e-6;
 
 impl From<&ParameterCovariance> for Covariance {
     /// The record of a covariance: its names and (symmetric) rows.

@@ -21,6 +21,7 @@ impl Calibration {
         check_at_most("sensor.ly_mm", self.sensor.ly_mm, MAX_SENSOR_MM)?;
         let i = &self.intrinsics;
         check_positive("intrinsics.f_mm", i.f_mm)?;
+        check_at_least("intrinsics.f_mm", i.f_mm, MIN_FOCAL_MM)?;
         check_at_most("intrinsics.f_mm", i.f_mm, MAX_FOCAL_MM)?;
         for (name, value) in [
             ("intrinsics.cx_mm", i.cx_mm),
@@ -31,6 +32,7 @@ impl Calibration {
         }
         check_at_most("|intrinsics.cx_mm|", i.cx_mm.abs(), MAX_SENSOR_MM)?;
         check_at_most("|intrinsics.cy_mm|", i.cy_mm.abs(), MAX_SENSOR_MM)?;
+        check_skew(i.skew, i.f_mm)?;
         let d = &self.distortion;
         for (name, value) in [
             ("k1", d.k1),
@@ -92,12 +94,34 @@ impl Calibration {
             ));
         }
         self.covariance.check()?;
+        self.covariance.check_positive_semidefinite()?;
         if self.covariance.parameters != names {
             return Err(format!(
                 "covariance.parameters [{}] must list the names of 'std' in the same order: [{}]",
                 self.covariance.parameters.join(", "),
                 names.join(", ")
             ));
+        }
+        self.check_std_matches_covariance()
+    }
+
+    /// Each `std` entry is the square root of its covariance variance (to
+    /// 1e-6 relative: the file keeps both, and a hand edit of one alone
+    /// would make the printed σ and the propagated σ disagree).
+    fn check_std_matches_covariance(&self) -> Result<(), String> {
+        for (name, value) in &self.std.0 {
+            let Some(variance) = self.covariance.get(name, name) else {
+                continue;
+            };
+            let expected = variance.sqrt();
+            if (value - expected).abs() > STD_TOLERANCE * value.max(expected) {
+                return Err(format!(
+                    "std.{name} is {} but the square root of its covariance entry is {}; \
+                     expected them equal (was one of them edited?)",
+                    shown(*value),
+                    shown(expected)
+                ));
+            }
         }
         Ok(())
     }
@@ -146,7 +170,7 @@ pub(super) fn check_format(format: &str) -> Result<(), String> {
         Err(format!(
             "\"format\" is \"{}\"; expected \"{CALIBRATION_FORMAT}\" (this is not a psdcal \
              calibration file)",
-            format.escape_debug()
+            crate::limits::excerpt(format).escape_debug()
         ))
     }
 }
@@ -175,6 +199,40 @@ pub(super) fn check_finite(name: &str, value: f64) -> Result<(), String> {
 pub(super) const MAX_SENSOR_MM: f64 = 1000.0;
 /// The largest focal length accepted, mm.
 pub(super) const MAX_FOCAL_MM: f64 = 100_000.0;
+/// The smallest focal length accepted, mm (10 µm: a shorter one puts a
+/// millimetre-sized active area at grazing angles; a smaller value is a unit
+/// or typing error).
+pub(super) const MIN_FOCAL_MM: f64 = 0.01;
+/// The largest skew accepted, as a fraction of f: `|γ| < f`, the pixel axes
+/// more than 45° apart (a real sensor's skew is near 0).
+pub(super) const MAX_SKEW_OVER_F: f64 = 1.0;
+/// Relative agreement of a `std` entry with its covariance's variance.
+pub(super) const STD_TOLERANCE: f64 = 1e-6;
+
+fn check_skew(skew: f64, f: f64) -> Result<(), String> {
+    if skew.abs() < MAX_SKEW_OVER_F * f {
+        Ok(())
+    } else {
+        Err(format!(
+            "|intrinsics.skew| is {}, not below f ({} mm); expected a skew far below the focal \
+             length (a real sensor's is near 0)",
+            shown(skew.abs()),
+            shown(f)
+        ))
+    }
+}
+
+pub(super) fn check_at_least(name: &str, value: f64, min: f64) -> Result<(), String> {
+    if value >= min {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name} is {}, below the plausible {}; expected a value in mm (check the unit)",
+            shown(value),
+            shown(min)
+        ))
+    }
+}
 
 pub(super) fn check_at_most(name: &str, value: f64, max: f64) -> Result<(), String> {
     if value <= max {

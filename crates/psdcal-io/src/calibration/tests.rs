@@ -400,3 +400,77 @@ fn files_written_before_the_noise_model_read_as_uniform() {
         "channel-snr"
     );
 }
+
+#[test]
+fn physically_impossible_values_are_refused() {
+    // f = 1e-300 mm: below 10 µm.
+    let mut cal = sample();
+    cal.intrinsics.f_mm = 1e-300;
+    let e = cal.validate("c.json").unwrap_err().to_string();
+    assert!(
+        e.starts_with("c.json: intrinsics.f_mm is 1e-300, below"),
+        "{e}"
+    );
+    // |skew| ≥ f (1e300 answered alpha −90° and a zero ray).
+    for skew in [1e300, -8.5] {
+        let mut cal = sample();
+        cal.intrinsics.skew = skew;
+        let e = cal.validate("c.json").unwrap_err().to_string();
+        assert!(e.starts_with("c.json: |intrinsics.skew| is"), "{e}");
+    }
+    let mut cal = sample();
+    cal.intrinsics.skew = 0.01;
+    cal.validate("c.json").unwrap();
+}
+
+#[test]
+fn std_must_be_the_root_of_the_covariance_diagonal() {
+    // σ × 1e150 in `std` alone: the printed and the propagated σ disagree.
+    let mut cal = sample();
+    cal.std.0[0].1 *= 1e150;
+    let e = cal.validate("c.json").unwrap_err().to_string();
+    assert!(
+        e.starts_with("c.json: std.f is 1e147 but the square root"),
+        "{e}"
+    );
+    // Rounding of a written file is within the tolerance.
+    let mut cal = sample();
+    cal.std.0[0].1 *= 1.0 + 1e-9;
+    cal.validate("c.json").unwrap();
+}
+
+#[test]
+fn covariance_must_be_positive_semidefinite() {
+    // A correlation of 10 between f and cx: eigenvalue 1 − 10 of the 2×2
+    // block, whatever the scales.
+    let mut cal = sample();
+    let c = &mut cal.covariance.matrix;
+    let r = 10.0 * (c[0][0] * c[1][1]).sqrt();
+    c[0][1] = r;
+    c[1][0] = r;
+    let e = cal.validate("c.json").unwrap_err().to_string();
+    assert!(
+        e.contains("covariance.matrix is not positive semi-definite"),
+        "{e}"
+    );
+    // A zero variance with a non-zero covariance cannot be a covariance.
+    let mut cal = sample();
+    cal.covariance.matrix[0][0] = 0.0;
+    cal.std.0[0].1 = 0.0;
+    let e = cal.validate("c.json").unwrap_err().to_string();
+    assert!(e.contains("but 'f' has variance 0"), "{e}");
+    // A perfect correlation (rank-deficient, still a covariance) passes.
+    let mut cal = sample();
+    let c = &mut cal.covariance.matrix;
+    let r = (c[0][0] * c[1][1]).sqrt();
+    for (i, row) in c.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            if i != j {
+                *v = 0.0;
+            }
+        }
+    }
+    c[0][1] = r;
+    c[1][0] = r;
+    cal.validate("c.json").unwrap();
+}

@@ -32,7 +32,17 @@ fn sample() -> Calibration {
     cal.covariance = Covariance {
         parameters: names.iter().map(|s| s.to_string()).collect(),
         matrix: (0..n)
-            .map(|i| (0..n).map(|j| if i == j { 1e-6 } else { 1e-9 }).collect())
+            .map(|i| {
+                (0..n)
+                    .map(|j| {
+                        if i == j {
+                            1e-6 * (i as f64 + 1.0).powi(2)
+                        } else {
+                            1e-9
+                        }
+                    })
+                    .collect()
+            })
             .collect(),
     };
     cal.images = vec![ImageFit::new(

@@ -272,6 +272,19 @@ impl Model {
         true
     }
 
+    /// The model's domain in measured coordinates when it is a convex
+    /// polygon: the first stage's own ([`Stage::domain`](crate::stage::Stage::domain)),
+    /// when no later stage limits its input. `None` when nothing limits the
+    /// domain, or when a later stage does (its domain is then in that
+    /// stage's input coordinates, known only through [`Self::in_domain`]).
+    pub fn measured_domain(&self) -> Option<&crate::ConvexHull> {
+        let (first, later) = self.stages.split_first()?;
+        if later.iter().any(|s| s.has_domain()) {
+            return None;
+        }
+        first.domain()
+    }
+
     /// Whether some stage has a limited domain ([`Stage::has_domain`](crate::stage::Stage::has_domain)).
     pub fn has_domain(&self) -> bool {
         self.stages.iter().any(|s| s.has_domain())

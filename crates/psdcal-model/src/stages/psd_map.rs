@@ -461,6 +461,10 @@ impl Stage for PsdMap {
         self.hull.is_some()
     }
 
+    fn domain(&self) -> Option<&ConvexHull> {
+        self.hull.as_ref()
+    }
+
     fn example_parameters(&self) -> Vec<Vec<f64>> {
         let k_axis = self.terms();
         let indices = self.basis.indices();

@@ -32,6 +32,8 @@ pub struct DiffRequest {
     pub report: Option<PathBuf>,
     /// Bounds on the files read whole (docs/formats.md, "Limits").
     pub limits: psdcal_io::ReadLimits,
+    /// Replace files in the report folder that psdcal did not write there.
+    pub force: bool,
 }
 
 /// The comparison.
@@ -205,6 +207,10 @@ impl Diffed {
             path: dir.to_path_buf(),
             message: format!("cannot create the output folder {}: {e}", dir.display()),
         })?;
+        let names: Vec<String> = ["delta_map.svg", "z_map.svg", "diff.html"]
+            .map(String::from)
+            .to_vec();
+        let folder = psdcal_io::OutputFolder::claim(dir, &names, self.request.force)?;
         let d = &self.diff;
         let (lx, ly) = (self.geometry.lx, self.geometry.ly);
         let step = (
@@ -254,6 +260,6 @@ impl Diffed {
         let html = dir.join("diff.html");
         write_atomic_bytes(&html, page.render().as_bytes())?;
         self.files.push(html);
-        Ok(())
+        Ok(folder.finish()?)
     }
 }

@@ -342,9 +342,9 @@ impl Evaluation {
             }
             rows.push([
                 "truths inside the 95 % ellipsoid".into(),
-                p.stats.within_95.map_or("no covariance given".into(), |w| {
-                    format!("{:.1} % (95 % if the error bars are honest)", 100.0 * w)
-                }),
+                p.stats
+                    .within_95
+                    .map_or("no covariance given".into(), within_text),
             ]);
             out.push(("Position error".to_string(), rows));
         }
@@ -353,9 +353,9 @@ impl Evaluation {
             rows.extend(failures(&self.angle_failures, "°", 1f64.to_degrees()));
             rows.push([
                 "truths inside the 95 % ellipse".into(),
-                a.stats.within_95.map_or("no covariance given".into(), |w| {
-                    format!("{:.1} % (95 % if the error bars are honest)", 100.0 * w)
-                }),
+                a.stats
+                    .within_95
+                    .map_or("no covariance given".into(), within_text),
             ]);
             out.push(("Angle-of-arrival error".to_string(), rows));
         }
@@ -391,8 +391,9 @@ impl Evaluation {
     }
 
     /// Writes `evaluation.html` and its figures (SVG) into `dir` (created if
-    /// missing); returns the files written.
-    pub fn write_report(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+    /// missing), replacing only files psdcal wrote there unless `force`
+    /// ([`psdcal_io::OutputFolder`]); returns the files written.
+    pub fn write_report(&self, dir: &Path, force: bool) -> Result<Vec<PathBuf>> {
         std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
             path: dir.to_path_buf(),
             message: format!("cannot create the output folder {}: {e}", dir.display()),
@@ -433,6 +434,10 @@ impl Evaluation {
             distance_from: self.distance_from.clone(),
         };
         let (page, svgs) = evaluation_page(&report)?;
+        let names: Vec<String> = std::iter::once("evaluation.html".to_string())
+            .chain(svgs.iter().map(|(name, _)| format!("{name}.svg")))
+            .collect();
+        let folder = psdcal_io::OutputFolder::claim(dir, &names, force)?;
         let html = dir.join("evaluation.html");
         write_atomic_bytes(&html, page.render().as_bytes())?;
         let mut files = vec![html];
@@ -441,6 +446,19 @@ impl Evaluation {
             write_atomic_bytes(&path, svg.as_bytes())?;
             files.push(path);
         }
+        folder.finish()?;
         Ok(files)
     }
+}
+
+/// The fraction of truths inside their 95 % region, in words: every emitter
+/// located with one calibration shares its error, so one rig's fraction is
+/// one draw (near 100 % or far below are both normal); 95 % is what many
+/// calibrations give on average (docs/positioning.md).
+fn within_text(fraction: f64) -> String {
+    format!(
+        "{:.1} % (one shared calibration error: near 100 % or far below is normal for one rig; \
+         95 % on average over many calibrations)",
+        100.0 * fraction
+    )
 }

@@ -106,7 +106,9 @@ fn covariance_columns(frame: &str) -> [String; 7] {
     ]
 }
 
-fn covariance_fields(c: &Matrix3<f64>) -> [String; 7] {
+/// A position covariance (mm²) as its CSV fields: σx, σy, σz (mm), the
+/// covariances xy, xz, yz (mm²), the position σ √trace (mm).
+pub(crate) fn covariance_fields(c: &Matrix3<f64>) -> [String; 7] {
     let sd = |v: f64| num(v.max(0.0).sqrt());
     [
         sd(c[(0, 0)]),

@@ -7,8 +7,9 @@
 //! added columns, then `status`. A row the command answers gets `ok` or its
 //! cautions; a row it cannot answer gets empty values and the
 //! [`LocateError::status`] code of its error (`non_finite_input` for an
-//! empty or non-finite cell, `no_light`, `outside_valid_region`, …), and the
-//! batch goes on.
+//! empty or non-finite cell, `no_light`, `outside_valid_region`,
+//! `non_finite_answer` when a computed value is not finite, …), and the
+//! batch goes on: no row is `ok` with an empty cell.
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -91,6 +92,20 @@ impl PointsAnswer {
 /// why it has no answer.
 pub type RowAnswer = std::result::Result<(Vec<String>, Vec<Caution>), LocateError>;
 
+/// An answered row with a blank value (a number that came out NaN or
+/// infinite) is no answer: never `ok` with an empty cell.
+fn refuse_blank(
+    answer: (Vec<String>, Vec<Caution>),
+) -> std::result::Result<(Vec<String>, Vec<Caution>), LocateError> {
+    if answer.0.iter().any(String::is_empty) {
+        Err(LocateError::NonFiniteAnswer {
+            what: "a value of the row",
+        })
+    } else {
+        Ok(answer)
+    }
+}
+
 /// Streams `points` to `out` (standard output when `None`): `added` gives
 /// the added columns from whether the input has amplitudes (ending with
 /// `status`); `answer` computes one row.
@@ -154,7 +169,8 @@ pub fn answer_points(
                 PointInput::Position(p) => answer(&Measurement::Point(*p)),
                 PointInput::Amplitudes(a) => answer(&Measurement::Amplitudes(*a)),
                 _ => Err(LocateError::NonFinite { what: "input cell" }),
-            };
+            }
+            .and_then(refuse_blank);
             let mut fields = row.fields;
             match result {
                 Ok((values, cautions)) => {
@@ -179,15 +195,7 @@ pub fn answer_points(
     };
     let written = match out {
         Some(path) => write_atomic(path, |w| write(w)),
-        None => {
-            let mut stdout = io::stdout().lock();
-            write(&mut stdout)
-                .and_then(|()| stdout.flush())
-                .map_err(|source| IoError::Write {
-                    file: "standard output".to_string(),
-                    source,
-                })
-        }
+        None => crate::base::stdout::write_stdout(write),
     };
     if let Some(e) = failure {
         return Err(e);

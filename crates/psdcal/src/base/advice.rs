@@ -49,6 +49,7 @@ fn advice_of(error: &(dyn StdError + 'static)) -> Option<&'static str> {
         return match e {
             Error::Io(e) => Some(io_advice(e)),
             Error::Calibrate(e) | Error::Estimate(e) => Some(calib_advice(e)),
+            Error::CalibrateData { source, .. } => Some(calib_advice(source)),
             Error::Locate(e) => Some(locate_advice(e)),
             Error::MisplacedLed { .. } => Some("correct that LED's row and calibrate again"),
             Error::Input(_) | Error::Options(_) => {
@@ -85,6 +86,13 @@ fn calib_advice(calib: &CalibError) -> &'static str {
             "vary the template's tilt and position between images, or fix the parameters the data \
              cannot determine"
         }
+        CalibError::FocalOutsideSearch { guess: Some(_), .. } => {
+            "give a --focal-guess nearer the lens's focal length in mm (or none: the search then \
+             covers 1–1000 mm)"
+        }
+        CalibError::FocalOutsideSearch { guess: None, .. } => {
+            "give --focal-guess with the lens's focal length in mm"
+        }
         CalibError::InvalidInput { .. } => "change the options or the data as the message says",
         CalibError::Model(_) => "check the data and the fixed values (--set)",
         CalibError::NotConverged { .. } => {
@@ -100,6 +108,9 @@ fn io_advice(io: &IoError) -> &'static str {
             "correct that field of the rig file (format: docs/formats.md, 'rig.json')"
         }
         IoError::Read { .. } => "check the path and that the file is readable",
+        IoError::Write { file, .. } if file == crate::base::stdout::STANDARD_OUTPUT => {
+            "check where standard output goes (a full disk, or a closed pipe)"
+        }
         IoError::Write { .. } => "check that the destination folder exists and is writable",
         IoError::Encoding { .. } => "save the file as UTF-8 text (CSV or JSON)",
         IoError::Structure { .. } => "fix the file's header or rows (formats: docs/formats.md)",
@@ -115,6 +126,7 @@ fn io_advice(io: &IoError) -> &'static str {
             "give a smaller file, or raise the limit with --max-input-mb (docs/formats.md, 'Limits')"
         }
         IoError::OutputIsInput { .. } => "write the output to another file",
+        IoError::NotOurs { .. } => "give --force to replace it, or --out another folder",
         IoError::NewerVersion { .. } => "upgrade psdcal to read this file",
         IoError::Strict { .. } => "fix the data, or run without --strict to drop it with a warning",
         _ => "see 'psdcal --help'",

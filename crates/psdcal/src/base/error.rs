@@ -22,6 +22,16 @@ pub enum Error {
     /// The calibration itself failed (no convergence, degenerate data).
     #[error("calibration failed")]
     Calibrate(#[source] CalibError),
+    /// The calibration of a data set read from files failed: the files
+    /// named, then the cause.
+    #[error("calibration failed: data {data}")]
+    CalibrateData {
+        /// The data set's files (template, points, gains), comma-separated.
+        data: String,
+        /// Why.
+        #[source]
+        source: CalibError,
+    },
     /// Another estimation failed (e.g. the electrical gains).
     #[error(transparent)]
     Estimate(#[from] CalibError),
@@ -34,6 +44,9 @@ pub enum Error {
     /// A simulation could not run.
     #[error(transparent)]
     Simulation(#[from] SimError),
+    /// A network calibration could not be done.
+    #[error(transparent)]
+    Network(#[from] psdcal_network::NetworkError),
     /// A plot or page could not be drawn.
     #[error(transparent)]
     Report(#[from] ReportError),

@@ -1,4 +1,4 @@
-//! The text forms of options (`--fit f,cx,cy,k1,k2`, `--robust huber:0.1`,
+//! The text forms of options (`--fit f,cx,cy,k1,k2`, `--robust huber:2.5`,
 //! `--uncertainty bootstrap:200:7`, `--set l1=-1.3e-3`, lengths in mm): one
 //! parser each, shared by every front end (the command line, the Python
 //! package), so that the same text means the same everywhere and is refused
@@ -39,13 +39,22 @@ pub fn parse_fit(text: &str) -> Result<FitList, String> {
     Ok(FitList(out, gains))
 }
 
-/// `--robust huber:0.1` or `cauchy:0.1`.
-/// `--robust LOSS:SCALE`: `huber:SCALE` or `cauchy:SCALE`, SCALE in mm.
+/// `--robust LOSS:SCALE`: `huber:SCALE` or `cauchy:SCALE`, SCALE in units of
+/// the residuals' noise σ (estimated from the data; at least 1).
 pub fn parse_robust(text: &str) -> Result<RobustLoss, String> {
     let (kind, scale) = text
         .split_once(':')
-        .ok_or_else(|| format!("expected LOSS:SCALE such as huber:0.1, found '{text}'"))?;
-    let scale = positive_mm(scale)?;
+        .ok_or_else(|| format!("expected LOSS:SCALE such as huber:2.5, found '{text}'"))?;
+    let scale: f64 = scale
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a number for the scale, found '{scale}'"))?;
+    if !(scale.is_finite() && scale >= 1.0) {
+        return Err(format!(
+            "the scale {scale} is in units of the residuals' noise σ (estimated from the data): \
+             give 1 or more (2–3 is typical); under 1 most good points would count as outliers"
+        ));
+    }
     match kind.trim().to_ascii_lowercase().as_str() {
         "huber" => Ok(RobustLoss::Huber { scale }),
         "cauchy" => Ok(RobustLoss::Cauchy { scale }),

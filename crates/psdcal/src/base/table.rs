@@ -6,10 +6,11 @@ use std::collections::BTreeMap;
 use std::io::{self, Write};
 use std::path::Path;
 
-use psdcal_io::{write_atomic, IoError};
+use psdcal_io::write_atomic;
 use psdcal_locate::{status_of, Caution, LocateError};
 
 use crate::base::error::Result;
+use crate::base::stdout::write_stdout;
 
 /// A CSV table.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -35,18 +36,7 @@ impl Table {
     pub fn write_to(&self, out: Option<&Path>) -> Result<()> {
         match out {
             Some(path) => Ok(write_atomic(path, |w| self.write_csv(w))?),
-            None => {
-                let mut stdout = io::stdout().lock();
-                self.write_csv(&mut stdout)
-                    .and_then(|()| stdout.flush())
-                    .map_err(|source| {
-                        IoError::Write {
-                            file: "standard output".to_string(),
-                            source,
-                        }
-                        .into()
-                    })
-            }
+            None => Ok(write_stdout(|out| self.write_csv(out))?),
         }
     }
 }

@@ -1,12 +1,13 @@
 //! Calibrating a data set: the result, its calibration.json record, the
 //! residuals and the printable report, and writing them.
 
+use std::io::Write;
 use std::path::Path;
 use std::sync::OnceLock;
 
 use psdcal_calib::CalibError;
 use psdcal_calib::{CalibrationData, CalibrationResult, DataPoint};
-use psdcal_io::{write_calibration, Calibration, ValidRegionRecord};
+use psdcal_io::{Calibration, PendingFile, ValidRegionRecord};
 
 use crate::base::error::{Error, Result};
 use crate::base::options::CalibrationOptions;
@@ -155,7 +156,7 @@ fn calibration_error(
                 points,
                 first: point_text(&first),
             },
-            None => Error::Calibrate(e),
+            None => of_data(set, e),
         },
         CalibError::DataOutsideValidRegion {
             outside,
@@ -173,7 +174,7 @@ fn calibration_error(
                 point_text(&first)
             ),
         },
-        e => Error::Calibrate(e),
+        e => of_data(set, e),
     }
 }
 
@@ -199,14 +200,21 @@ impl Calibrated {
         }
     }
 
-    /// Writes calibration.json and, if asked for, residuals.csv
-    /// (atomically).
+    /// Writes calibration.json and, if asked for, residuals.csv, creating
+    /// their folders: both are written to temporary files first and
+    /// renamed only once both were written (residuals.csv first), so a
+    /// failure (a full disk) leaves the existing files as they were.
     pub fn write(&self, set: &DataSet, out: &Path, residuals: Option<&Path>) -> Result<()> {
-        write_calibration(out, &self.record)?;
-        if let Some(path) = residuals {
-            self.residuals(set).write_csv(path, &set.template)?;
+        for path in std::iter::once(out).chain(residuals) {
+            create_parent(path)?;
         }
-        Ok(())
+        let text = self.record.to_json_string(&out.display().to_string())?;
+        let calibration = PendingFile::write(out, |w| w.write_all(text.as_bytes()))?;
+        if let Some(path) = residuals {
+            let table = self.residuals(set);
+            PendingFile::write(path, |w| table.write_rows(w, &set.template))?.commit()?;
+        }
+        Ok(calibration.commit()?)
     }
 
     /// The warnings of [`Self::summary`] alone (the fit's warnings, then
@@ -232,5 +240,31 @@ impl Calibrated {
             .wrote(std::iter::once(out).chain(residuals))
             .warn(&self.report.warnings)
             .warn(diagnostics))
+    }
+}
+
+/// A calibration error naming the data set's files (when it was read from
+/// files).
+fn of_data(set: &DataSet, e: CalibError) -> Error {
+    let files: Vec<&str> = set.inputs.0.iter().map(|f| f.path.as_str()).collect();
+    if files.is_empty() {
+        return Error::Calibrate(e);
+    }
+    Error::CalibrateData {
+        data: files.join(", "),
+        source: e,
+    }
+}
+
+/// Creates the folder a file is written in, if missing.
+fn create_parent(path: &Path) -> Result<()> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => {
+            std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
+                path: dir.to_path_buf(),
+                message: format!("cannot create the output folder {}: {e}", dir.display()),
+            })
+        }
+        _ => Ok(()),
     }
 }

@@ -12,8 +12,7 @@ use std::path::Path;
 use nalgebra::DMatrix;
 use psdcal_calib::BlockCovariance;
 use psdcal_io::{
-    psd_map_from_reader_with, Calibration, LoadedPsdMap, PsdMapFile, PsdMapStageCovariance,
-    PsdMapStageRecord,
+    psd_map_from_reader_with, LoadedPsdMap, PsdMapFile, PsdMapStageCovariance, PsdMapStageRecord,
 };
 use psdcal_locate::{CalibratedSensor, SensorPsdMap};
 use psdcal_model::{Model, ParameterCovariance, PsdGeometry, Stage};
@@ -108,7 +107,6 @@ pub(crate) fn stage_record(map: &MapInput, block: &BlockCovariance) -> PsdMapSta
 /// covariance of the estimated parameters and the map's coefficients
 /// `[[C_θ, C_mθᵀ], [C_mθ, C_m]]`; `estimated` is the record's covariance.
 pub(crate) fn sensor_with_map(
-    calibration: &Calibration,
     map: &PsdMapStageRecord,
     sensor: CalibratedSensor,
     estimated: ParameterCovariance,
@@ -118,11 +116,9 @@ pub(crate) fn sensor_with_map(
     let cm = map.map_covariance(&stage)?;
     let cross = DMatrix::from_fn(cm.len(), nt, |i, j| map.covariance.cross[i][j]);
     let joint = estimated.joint(&cm, &cross).map_err(|e| e.to_string())?;
-    let mut sensor = sensor
+    // `with_psd_map` recomputes the valid region for the whole chain (a
+    // stored one is never trusted).
+    Ok(sensor
         .with_covariance(joint)
-        .with_psd_map(SensorPsdMap { stage, block });
-    if calibration.valid_region.is_some() {
-        sensor = sensor.with_valid_region(calibration.valid_region());
-    }
-    Ok(sensor)
+        .with_psd_map(SensorPsdMap { stage, block }))
 }

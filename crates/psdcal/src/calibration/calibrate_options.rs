@@ -1,5 +1,5 @@
 //! A calibration's options given by name as text (`fit = "f,cx,cy"`,
-//! `robust = "huber:0.1"`, `lx = "9"`): the command line's `calibrate`
+//! `robust = "huber:2.5"`, `lx = "9"`): the command line's `calibrate`
 //! options without their `--` (`-` or `_` between words), each parsed by
 //! [`crate::base::option_text`]'s parser of that option, so that a front end
 //! without clap (the Python package's keywords) accepts and refuses the same
@@ -121,7 +121,7 @@ mod tests {
         let s = calibrate_settings(&pairs(&[
             ("fit", &["f,cx,cy,k1"]),
             ("cost", &["image"]),
-            ("robust", &["huber:0.1"]),
+            ("robust", &["huber:2.5"]),
             ("set", &["l1=-1.3e-3", "k2=0"]),
             ("focal-guess", &["8"]),
             ("lx", &["10"]),
@@ -132,7 +132,7 @@ mod tests {
         assert_eq!(s.options.cost, psdcal_model::CostKind::Image);
         assert_eq!(
             s.options.robust,
-            Some(psdcal_calib::RobustLoss::Huber { scale: 0.1 })
+            Some(psdcal_calib::RobustLoss::Huber { scale: 2.5 })
         );
         assert_eq!(s.options.fixed, [(Param::L1, -1.3e-3), (Param::K2, 0.0)]);
         assert_eq!(s.options.focal_guess, Some(8.0));

@@ -21,6 +21,7 @@ use psdcal_model::{Amplitudes, Param, SensorModel};
 
 use crate::base::options::CalibrationOptions;
 use crate::calibration::fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
+use crate::calibration::loaded_checks::check_loaded;
 use crate::dataset::data_set::DataSet;
 
 /// The calibration's input from a validated data set; with
@@ -303,22 +304,20 @@ pub fn sensor(calibration: &Calibration, file: &Path) -> Result<CalibratedSensor
     }
     if let Some(map) = &calibration.psd_map {
         let mut sensor = crate::calibration::calibrate_map::sensor_with_map(
-            calibration,
-            map,
-            sensor,
-            covariance,
+            map, sensor, covariance,
         )
         .map_err(|message| IoError::Invalid {
             at: Location::file(&file.display().to_string()),
             message,
         })?;
         sensor.gains = calibration.gains();
+        check_loaded(calibration, &sensor, file)?;
         return Ok(sensor);
     }
+    // The valid region is the one `CalibratedSensor::new` computed from the
+    // parameters: a stored one is never trusted (a hand edit keeps it).
     let mut sensor = sensor.with_covariance(covariance);
-    if calibration.valid_region.is_some() {
-        sensor = sensor.with_valid_region(calibration.valid_region());
-    }
     sensor.gains = calibration.gains();
+    check_loaded(calibration, &sensor, file)?;
     Ok(sensor)
 }

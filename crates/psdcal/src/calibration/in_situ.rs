@@ -60,14 +60,7 @@ pub struct SensorPose {
 
 /// `c = −Rᵀ t` and `∂c/∂(rvec, t)` (module documentation).
 pub fn position_with_jacobian(sensor_from_world: &Pose) -> (Vector3<f64>, SMatrix<f64, 3, 6>) {
-    let (r, dr) = sensor_from_world.rotation_with_derivatives();
-    let t = sensor_from_world.t;
-    let mut j = SMatrix::<f64, 3, 6>::zeros();
-    for (k, d) in dr.iter().enumerate() {
-        j.set_column(k, &(-(d.transpose() * t)));
-    }
-    j.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-r.transpose()));
-    (-(r.transpose() * t), j)
+    sensor_from_world.centre_with_jacobian()
 }
 
 /// The surveyed data of a validated data set (its template must have `Z_mm`).

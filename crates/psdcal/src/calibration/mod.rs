@@ -7,4 +7,5 @@ pub(crate) mod convert;
 pub(crate) mod fit_report;
 pub(crate) mod gains;
 pub(crate) mod in_situ;
+pub(crate) mod loaded_checks;
 pub(crate) mod residuals;

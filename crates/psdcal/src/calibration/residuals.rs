@@ -110,32 +110,34 @@ impl ResidualTable {
     /// Writes residuals.csv atomically: `image, led, x_mm, y_mm, X_mm, Y_mm,
     /// template_dx_mm, template_dy_mm, image_dx_mm, image_dy_mm`.
     pub fn write_csv(&self, path: &Path, template: &Template) -> Result<()> {
-        write_atomic(path, |w| {
-            writeln!(
-                w,
-                "image,led,x_mm,y_mm,X_mm,Y_mm,template_dx_mm,template_dy_mm,image_dx_mm,image_dy_mm"
-            )?;
-            for image in &self.images {
-                for r in image.residuals.iter().flatten() {
-                    let fmt = |v: Option<f64>| v.map(|v| format!("{v:e}")).unwrap_or_default();
-                    writeln!(
-                        w,
-                        "{},{},{:e},{:e},{},{},{},{},{},{}",
-                        psdcal_io::csv_field(&image.id),
-                        psdcal_io::csv_field(&template.leds[r.led].id),
-                        r.measured.x,
-                        r.measured.y,
-                        r.template.x,
-                        r.template.y,
-                        fmt(r.on_template.map(|d| d.x)),
-                        fmt(r.on_template.map(|d| d.y)),
-                        fmt(r.on_sensor.map(|d| d.x)),
-                        fmt(r.on_sensor.map(|d| d.y)),
-                    )?;
-                }
+        Ok(write_atomic(path, |w| self.write_rows(w, template))?)
+    }
+
+    /// Writes the table's CSV text (header and rows) to `w`.
+    pub fn write_rows(&self, w: &mut impl Write, template: &Template) -> std::io::Result<()> {
+        writeln!(
+            w,
+            "image,led,x_mm,y_mm,X_mm,Y_mm,template_dx_mm,template_dy_mm,image_dx_mm,image_dy_mm"
+        )?;
+        for image in &self.images {
+            for r in image.residuals.iter().flatten() {
+                let fmt = |v: Option<f64>| v.map(|v| format!("{v:e}")).unwrap_or_default();
+                writeln!(
+                    w,
+                    "{},{},{:e},{:e},{},{},{},{},{},{}",
+                    psdcal_io::csv_field(&image.id),
+                    psdcal_io::csv_field(&template.leds[r.led].id),
+                    r.measured.x,
+                    r.measured.y,
+                    r.template.x,
+                    r.template.y,
+                    fmt(r.on_template.map(|d| d.x)),
+                    fmt(r.on_template.map(|d| d.y)),
+                    fmt(r.on_sensor.map(|d| d.x)),
+                    fmt(r.on_sensor.map(|d| d.y)),
+                )?;
             }
-            Ok(())
-        })?;
+        }
         Ok(())
     }
 }

@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use psdcal_io::{
-    validate_data_set, DataSetSummary, GainsFile, Observations, Signals, Template,
-    ValidatedDataSet, ValidationOptions, Warning,
+    validate_data_set, DataSetSummary, DataSetValidator, GainsFile, Observations, Signals,
+    Template, ValidatedDataSet, ValidationOptions, Warning,
 };
 use psdcal_model::{ChannelGains, PsdGeometry};
 
@@ -61,8 +61,13 @@ pub struct DataSet {
     /// The template.
     pub template: Template,
     /// Every observation read (impact points; from amplitudes when the
-    /// source was signals).
+    /// source was signals). Empty for an observations.csv read by
+    /// [`Self::from_files`]: its rows are validated as they are read and
+    /// only the usable points kept (`validated`), so memory follows the
+    /// points, not the file's text.
     pub observations: Observations,
+    /// The number of rows of the points file (or in memory).
+    pub rows: usize,
     /// The amplitudes, when the source was signals.
     pub signals: Option<Signals>,
     /// Known gains divided out of the amplitudes (from a gains file).
@@ -91,9 +96,9 @@ impl DataSet {
             None => None,
         };
         let points = match &files.points {
-            PointSource::Observations(path) => MemoryPoints::Observations(
-                inputs.read(path, |s, r| Observations::from_reader_with(s, r, limits))?,
-            ),
+            PointSource::Observations(path) => {
+                return Self::streamed(template, path, options, inputs);
+            }
             PointSource::Signals(path) => MemoryPoints::Signals(
                 inputs.read(path, |s, r| Signals::from_reader_with(s, r, limits))?,
                 known.map(|g| g.gains()),
@@ -102,6 +107,35 @@ impl DataSet {
         let mut set = Self::from_memory(template, points, options)?;
         set.inputs = inputs;
         Ok(set)
+    }
+
+    /// observations.csv checked row by row as it is read
+    /// ([`DataSetValidator`]): no row is kept as text.
+    fn streamed(
+        template: Template,
+        path: &Path,
+        options: &LoadOptions,
+        mut inputs: InputHashes,
+    ) -> Result<Self> {
+        let source = path.display().to_string();
+        let mut validator = DataSetValidator::new(&template, &source, &validation(options));
+        let rows = inputs.read(path, |s, r| {
+            Observations::for_each_row(s, r, options.limits, |row| validator.push(row))
+        })?;
+        let validated = validator.finish()?;
+        Ok(Self {
+            template,
+            observations: Observations {
+                source,
+                rows: Vec::new(),
+            },
+            rows,
+            signals: None,
+            known_gains: None,
+            validated,
+            options: *options,
+            inputs,
+        })
     }
 
     /// Validates a data set given in memory.
@@ -118,16 +152,10 @@ impl DataSet {
                 (o, Some(s), gains)
             }
         };
-        let validated = validate_data_set(
-            &template,
-            &observations,
-            &ValidationOptions {
-                geometry: options.geometry,
-                strict: options.strict,
-            },
-        )?;
+        let validated = validate_data_set(&template, &observations, &validation(options))?;
         Ok(Self {
             template,
+            rows: observations.rows.len(),
             observations,
             signals,
             known_gains,
@@ -146,7 +174,8 @@ impl DataSet {
     pub fn summary(&self) -> DataSetSummary {
         DataSetSummary::new(
             &self.template,
-            &self.observations,
+            &self.observations.source,
+            self.rows,
             &self.validated,
             &self.options.geometry,
         )
@@ -162,5 +191,13 @@ impl DataSet {
 pub fn source_path(source: &PointSource) -> &Path {
     match source {
         PointSource::Observations(p) | PointSource::Signals(p) => p,
+    }
+}
+
+/// How a data set's points are checked against its template.
+fn validation(options: &LoadOptions) -> ValidationOptions {
+    ValidationOptions {
+        geometry: options.geometry,
+        strict: options.strict,
     }
 }

@@ -15,12 +15,16 @@
 //!   `vx1, vx2, vy1, vy2` (electrode amplitudes).
 //!
 //! A message names the array and the row as `<array>:<n>` with `n` counting
-//! rows from 1 (a file's line). The per-point answers ([`aoa_rows`],
-//! [`correct_rows`], [`locate_rows`]) compute each row as `psdcal aoa`,
+//! rows from 1 (a file's line). The per-point answers ([`aoa_into`],
+//! [`correct_into`], [`locate_into`]) compute each row as `psdcal aoa`,
 //! `correct` and `locate` do (docs/model.md §5) and refuse the batch at the
-//! first row they cannot answer, naming it and the row's status.
+//! first row they cannot answer, naming it and the row's status. They
+//! answer a range of rows into flat output vectors, so that a front end
+//! can work in chunks (releasing Python's GIL and checking for Ctrl-C
+//! between them) with nothing kept per row but the numbers returned.
 
 use std::collections::HashMap;
+use std::ops::Range;
 use std::path::PathBuf;
 
 use nalgebra::Vector2;
@@ -305,19 +309,23 @@ pub fn measurements_from_rows(rows: &Rows) -> Result<Vec<Measurement>> {
     Ok(out)
 }
 
-/// Answers every row with `answer`, or names the first row it cannot
-/// answer (its status code and the reason).
-fn each_row<T>(
+/// Answers the rows `range` of `points` with `answer`, handing each answer
+/// to `keep`; at the first row it cannot answer, the error names that row
+/// (counted in all of `points`) and how many rows from there to the end
+/// cannot be answered. The callers stream: nothing per row is kept but
+/// what `keep` stores.
+fn each_row_in<T>(
     name: &str,
     points: &[Measurement],
+    range: Range<usize>,
     mut answer: impl FnMut(&Measurement) -> std::result::Result<T, LocateError>,
-) -> Result<Vec<T>> {
-    let mut out = Vec::with_capacity(points.len());
-    for (i, m) in points.iter().enumerate() {
-        match answer(m) {
-            Ok(v) => out.push(v),
+    mut keep: impl FnMut(T),
+) -> Result<()> {
+    for i in range {
+        match answer(&points[i]) {
+            Ok(v) => keep(v),
             Err(e) => {
-                let failing = points.iter().skip(i).filter(|m| answer(m).is_err()).count();
+                let failing = points[i..].iter().filter(|m| answer(m).is_err()).count();
                 return Err(Error::Input(format!(
                     "{name}:{}: {} ({e}); {failing} of {} rows cannot be answered",
                     i + 1,
@@ -327,12 +335,12 @@ fn each_row<T>(
             }
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// The options of a per-point answer: the point noise (as `--point-sigma`,
 /// a length from 0 mm).
-fn locate_options(point_sigma_mm: Option<f64>) -> Result<LocateOptions> {
+pub fn locate_options(point_sigma_mm: Option<f64>) -> Result<LocateOptions> {
     let point_sigma_mm = match point_sigma_mm {
         Some(v) => crate::base::option_text::non_negative_mm(&v.to_string())
             .map_err(|e| Error::Options(format!("point_sigma_mm: {e}")))?,
@@ -344,106 +352,79 @@ fn locate_options(point_sigma_mm: Option<f64>) -> Result<LocateOptions> {
     })
 }
 
-/// Angles of arrival of point rows, as `psdcal aoa` computes them.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AoaRows {
-    /// `(alpha_x, alpha_y)` per row, degrees.
-    pub alpha_deg: Vec<[f64; 2]>,
-    /// Their standard deviations (calibration and, with a point σ, the
-    /// point noise), degrees.
-    pub sigma_deg: Vec<[f64; 2]>,
-    /// Their correlation.
-    pub rho: Vec<f64>,
-    /// The ideal (corrected) points, mm.
-    pub ideal_mm: Vec<[f64; 2]>,
-}
-
-/// The angles of arrival of `points` (named `name` in messages) with
-/// `sensor`; `point_sigma_mm` adds the point noise (as `--point-sigma`).
-pub fn aoa_rows(
+/// The angles of arrival of the rows `range` of `points`, as `psdcal aoa`
+/// computes them, appended to `alpha_deg` (`alpha_x, alpha_y` per row,
+/// degrees) and `sigma_deg` (their standard deviations: the calibration's
+/// and, with a point σ in `options`, the point noise's). Called on chunks
+/// of rows, it fills arrays of any length with nothing else per row.
+pub fn aoa_into(
     sensor: &CalibratedSensor,
     name: &str,
     points: &[Measurement],
-    point_sigma_mm: Option<f64>,
-) -> Result<AoaRows> {
-    let options = locate_options(point_sigma_mm)?;
-    let estimates = each_row(name, points, |m| sensor.aoa(m, &options))?;
-    let mut out = AoaRows {
-        alpha_deg: Vec::with_capacity(points.len()),
-        sigma_deg: Vec::with_capacity(points.len()),
-        rho: Vec::with_capacity(points.len()),
-        ideal_mm: Vec::with_capacity(points.len()),
-    };
-    for est in &estimates {
-        let (sx, sy, rho) = sigmas_and_correlation(&est.alpha_covariance());
-        let a = &est.aoa;
-        out.alpha_deg
-            .push([a.alpha.x.to_degrees(), a.alpha.y.to_degrees()]);
-        out.sigma_deg.push([sx.to_degrees(), sy.to_degrees()]);
-        out.rho.push(rho);
-        out.ideal_mm.push([a.ideal.x, a.ideal.y]);
-    }
-    Ok(out)
+    range: Range<usize>,
+    options: &LocateOptions,
+    alpha_deg: &mut Vec<f64>,
+    sigma_deg: &mut Vec<f64>,
+) -> Result<()> {
+    each_row_in(
+        name,
+        points,
+        range,
+        |m| sensor.aoa(m, options),
+        |est| {
+            let (sx, sy, _) = sigmas_and_correlation(&est.alpha_covariance());
+            let a = &est.aoa;
+            alpha_deg.extend([a.alpha.x.to_degrees(), a.alpha.y.to_degrees()]);
+            sigma_deg.extend([sx.to_degrees(), sy.to_degrees()]);
+        },
+    )
 }
 
-/// The ideal (corrected) points of `points`, mm, as `psdcal correct`
-/// computes them.
-pub fn correct_rows(
+/// The ideal (corrected) points of the rows `range` of `points`, mm, as
+/// `psdcal correct` computes them, appended to `ideal_mm` (`x, y` per row).
+pub fn correct_into(
     sensor: &CalibratedSensor,
     name: &str,
     points: &[Measurement],
-) -> Result<Vec<[f64; 2]>> {
-    each_row(name, points, |m| {
-        correct_point(sensor, m).map(|c| [c.ideal.x, c.ideal.y])
-    })
+    range: Range<usize>,
+    ideal_mm: &mut Vec<f64>,
+) -> Result<()> {
+    each_row_in(
+        name,
+        points,
+        range,
+        |m| correct_point(sensor, m),
+        |c| ideal_mm.extend([c.ideal.x, c.ideal.y]),
+    )
 }
 
-/// Positions on a plane of point rows, as `psdcal locate` computes them.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LocateRows {
-    /// The positions, sensor frame, mm.
-    pub position_mm: Vec<[f64; 3]>,
-    /// Their 3 × 3 covariances, row-major, mm².
-    pub covariance_mm2: Vec<[f64; 9]>,
-}
-
-/// The emitters of `points` located on `plane` (sensor frame) with
-/// `sensor`; `point_sigma_mm` adds the point noise.
-pub fn locate_rows(
+/// The emitters of the rows `range` of `points` located on `plane` (sensor
+/// frame), as `psdcal locate` computes them: positions appended to
+/// `position_mm` (`x, y, z` per row, mm), and with `covariance_mm2` their
+/// 3 × 3 covariances (row-major, mm²).
+pub fn locate_into(
     sensor: &CalibratedSensor,
     name: &str,
     points: &[Measurement],
-    plane: &Plane,
-    point_sigma_mm: Option<f64>,
-) -> Result<LocateRows> {
-    let options = locate_options(point_sigma_mm)?;
-    let located = each_row(name, points, |m| sensor.locate_on_plane(m, plane, &options))?;
-    Ok(LocateRows {
-        position_mm: located
-            .iter()
-            .map(|l| {
-                let p = l.intersection.position;
-                [p.x, p.y, p.z]
-            })
-            .collect(),
-        covariance_mm2: located
-            .iter()
-            .map(|l| {
+    range: Range<usize>,
+    (plane, options): (&Plane, &LocateOptions),
+    position_mm: &mut Vec<f64>,
+    mut covariance_mm2: Option<&mut Vec<f64>>,
+) -> Result<()> {
+    each_row_in(
+        name,
+        points,
+        range,
+        |m| sensor.locate_on_plane(m, plane, options),
+        |l| {
+            let p = l.intersection.position;
+            position_mm.extend([p.x, p.y, p.z]);
+            if let Some(out) = covariance_mm2.as_deref_mut() {
                 let c = l.covariance();
-                [
-                    c[(0, 0)],
-                    c[(0, 1)],
-                    c[(0, 2)],
-                    c[(1, 0)],
-                    c[(1, 1)],
-                    c[(1, 2)],
-                    c[(2, 0)],
-                    c[(2, 1)],
-                    c[(2, 2)],
-                ]
-            })
-            .collect(),
-    })
+                out.extend((0..3).flat_map(|i| (0..3).map(move |j| c[(i, j)])));
+            }
+        },
+    )
 }
 
 /// Every parameter of a calibrated sensor's model, by name, in the model's

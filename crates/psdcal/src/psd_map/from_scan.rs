@@ -56,6 +56,8 @@ pub struct PsdMapRequest {
     pub report: Option<PathBuf>,
     /// Bounds on the files read whole (docs/formats.md, "Limits").
     pub limits: psdcal_io::ReadLimits,
+    /// Replace files in the report folder that psdcal did not write there.
+    pub force: bool,
 }
 
 /// A fitted map as a file and its summary.
@@ -71,6 +73,8 @@ pub struct PsdMapOutcome {
     pub scan: PathBuf,
     /// Folder for the report, if asked.
     pub report: Option<PathBuf>,
+    /// Replace files in the report folder that psdcal did not write there.
+    pub force: bool,
 }
 
 /// The report page's file name in the report folder.
@@ -217,6 +221,7 @@ pub(crate) fn psd_map_of(
         text,
         scan: request.scan.clone(),
         report: request.report.clone(),
+        force: request.force,
     })
 }
 

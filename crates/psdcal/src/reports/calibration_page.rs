@@ -32,6 +32,9 @@ pub struct ReportRequest {
     pub out: PathBuf,
     /// Bounds on the files read whole (docs/formats.md, "Limits").
     pub limits: psdcal_io::ReadLimits,
+    /// Replace files in `out` that psdcal did not write there
+    /// (docs/formats.md, "Output folders").
+    pub force: bool,
 }
 
 /// What a report wrote.
@@ -90,7 +93,18 @@ pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
         .plots
         .iter()
         .map(Plot::svg)
-        .collect::<Result<_, _>>()?;
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            Error::Input(format!(
+                "{}: the report cannot be drawn from this calibration: its parameters give \
+                 values that are not finite numbers; check its values or calibrate again",
+                request.calibration.display()
+            ))
+        })?;
+    let names: Vec<String> = std::iter::once(PathBuf::from(REPORT_PAGE))
+        .chain(plot_files(Path::new(""), &content.plots))
+        .map(|p| p.display().to_string())
+        .collect();
     // The folder is created only once the page can be drawn: a failure
     // leaves nothing behind.
     std::fs::create_dir_all(&request.out).map_err(|e| Error::OutputFolder {
@@ -100,11 +114,13 @@ pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
             request.out.display()
         ),
     })?;
+    let folder = psdcal_io::OutputFolder::claim(&request.out, &names, request.force)?;
     let page = calibration_page(&content, &svgs);
-    let html = request.out.join("report.html");
+    let html = request.out.join(REPORT_PAGE);
     write_atomic_bytes(&html, page.render().as_bytes())?;
     let mut files = vec![html.clone()];
     files.extend(write_plots(&request.out, &content.plots, &svgs)?);
+    folder.finish()?;
     Ok(ReportFiles {
         html,
         plots: content.plots.iter().map(|p| p.name).collect(),
@@ -112,6 +128,9 @@ pub fn write_report(request: &ReportRequest) -> Result<ReportFiles> {
         warnings: data.map(|d| d.validated.warnings).unwrap_or_default(),
     })
 }
+
+/// The report's page in its folder.
+const REPORT_PAGE: &str = "report.html";
 
 /// Writes each plot into `dir` as `NAME.svg` (its SVG text from `svgs`,
 /// in order) and `NAME.png`, both atomically; the files written.

@@ -61,6 +61,7 @@ impl PsdMapOutcome {
 
 /// A report ready to be written: every figure drawn, the files checked.
 pub(crate) struct PreparedReport {
+    folder: psdcal_io::OutputFolder,
     dir: PathBuf,
     page: String,
     plots: Vec<Plot>,
@@ -74,6 +75,7 @@ impl PreparedReport {
         psdcal_io::write_atomic_bytes(&html, self.page.as_bytes())?;
         let mut files = vec![html];
         files.extend(write_plots(&self.dir, &self.plots, &self.svgs)?);
+        self.folder.finish()?;
         Ok(files)
     }
 }
@@ -101,7 +103,13 @@ pub(crate) fn prepare(outcome: &PsdMapOutcome, dir: &Path, out: &Path) -> Result
         path: dir.to_path_buf(),
         message: format!("cannot create the report folder {}: {e}", dir.display()),
     })?;
+    let names: Vec<String> = std::iter::once(PathBuf::from(PSD_MAP_PAGE))
+        .chain(plot_files(Path::new(""), &content.plots))
+        .map(|p| p.display().to_string())
+        .collect();
+    let folder = psdcal_io::OutputFolder::claim(dir, &names, outcome.force)?;
     Ok(PreparedReport {
+        folder,
         dir: dir.to_path_buf(),
         page,
         plots: content.plots,

@@ -15,7 +15,10 @@
 //! window's first sample, counted from the first sample of the stream.
 //!
 //! A line that is not a sample gives a row with the status `malformed_line`
-//! and is not counted as a sample; the stream goes on. Statuses per LED:
+//! (`line_too_long` for a line over 1 MiB, skipped without being held in
+//! memory) and is not counted as a sample; the stream goes on. The samples
+//! of a last, incomplete window are not answered; the summary says how many
+//! ([`TrackSummary::warnings`]). Statuses per LED:
 //! `ok`, `dark`, `saturated`, `too_short`, `tone_collision`, or the
 //! location code of an angle or position that cannot be computed (e.g.
 //! `outside_valid_region`, `too_few_sensors`).
@@ -24,7 +27,7 @@ use std::io::{BufRead, Write};
 use std::path::PathBuf;
 
 use psdcal_io::{IoError, Sample, SampleSource, StreamFault, Tones};
-use psdcal_locate::{LocateOptions, Measurement};
+use psdcal_locate::{LocateOptions, Measurement, TrackFilter};
 use psdcal_model::Amplitudes;
 use psdcal_signal::tones::check_separable;
 use psdcal_signal::{DemodConfig, RecordEstimate, SignalError, Window, Windows};
@@ -32,7 +35,7 @@ use psdcal_signal::{DemodConfig, RecordEstimate, SignalError, Window, Windows};
 use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 use crate::base::table::{deg, num};
-use crate::signals::track_rig::TrackRig;
+use crate::signals::track_rig::{row_text, LedFilters, TrackRig};
 
 /// Whose angles or positions `track` computes.
 #[derive(Debug, Clone, PartialEq)]
@@ -62,6 +65,8 @@ pub struct TrackRequest {
     pub channels: Vec<String>,
     /// Bounds on the files read whole (docs/formats.md, "Limits").
     pub limits: psdcal_io::ReadLimits,
+    /// The tracking filter of a rig's positions.
+    pub filter: TrackFilter,
 }
 
 /// What `track` saw.
@@ -71,14 +76,41 @@ pub struct TrackSummary {
     pub samples: u64,
     /// Windows answered.
     pub windows: u64,
-    /// Malformed lines.
+    /// Malformed lines (too long ones included).
     pub malformed: u64,
+    /// Samples of the last, incomplete window (not answered).
+    pub unanswered: u64,
+    /// The window's length, samples.
+    pub window: u64,
+}
+
+impl TrackSummary {
+    /// One line: samples, windows, malformed lines.
+    pub fn text(&self) -> String {
+        format!(
+            "track: {} samples, {} windows, {} malformed lines",
+            self.samples, self.windows, self.malformed
+        )
+    }
+
+    /// What the stream left unanswered: the samples of a last window that
+    /// the input ended before filling.
+    pub fn warnings(&self) -> Vec<String> {
+        if self.unanswered == 0 {
+            return Vec::new();
+        }
+        vec![format!(
+            "the input ended {} samples into a window of {}: those samples were not answered \
+             (a window is answered once full)",
+            self.unanswered, self.window
+        )]
+    }
 }
 
 const HEADER: &str = "t_s,led,alpha_x_deg,alpha_y_deg,snr_db,status";
 
 /// The sensor or rig answering each window.
-enum Answerer {
+pub(crate) enum Answerer {
     Sensor(Box<LoadedSensor>),
     Rig(Box<TrackRig>),
 }
@@ -94,6 +126,102 @@ pub fn track(
     input: impl BufRead,
     mut output: impl Write,
 ) -> Result<TrackSummary> {
+    let Prepared {
+        answerer,
+        tones,
+        mut source,
+        fs,
+        mut windows,
+    } = prepare(request, input)?;
+    let mut summary = TrackSummary {
+        window: windows.window_len() as u64,
+        ..TrackSummary::default()
+    };
+    // A reader that went away (`| head`) is an error too: the caller tells
+    // it apart (`is_closed_output`) to end quietly with its own status.
+    macro_rules! emit {
+        ($result:expr) => {
+            match $result {
+                Ok(()) => {}
+                Err(source) => {
+                    return Err(Error::Io(psdcal_io::IoError::Write {
+                        file: crate::base::stdout::STANDARD_OUTPUT.to_string(),
+                        source,
+                    }))
+                }
+            }
+        };
+    }
+    let mut filters = LedFilters::new(&request.filter, tones.tones.len());
+    let header = match &answerer {
+        Answerer::Sensor(_) => HEADER.to_string(),
+        Answerer::Rig(_) if filters.active() => format!(
+            "{}{}",
+            crate::signals::track_rig::HEADER,
+            crate::signals::track_rig::VELOCITY_HEADER
+        ),
+        Answerer::Rig(_) => crate::signals::track_rig::HEADER.to_string(),
+    };
+    emit!(writeln!(output, "{header}").and_then(|()| output.flush()));
+    let empty_fields = header.matches(',').count() - 1;
+    let options = LocateOptions::default();
+    while let Some(sample) = source.next_sample().map_err(stream_error)? {
+        let values = match sample {
+            Sample::Values(values) => values,
+            other => {
+                summary.malformed += 1;
+                let t = (summary.samples as f64) / fs;
+                let commas = ",".repeat(empty_fields);
+                let status = unreadable_status(&other);
+                emit!(writeln!(output, "{},{commas}{status}", num(t)).and_then(|()| output.flush()));
+                continue;
+            }
+        };
+        summary.samples += 1;
+        if let Some(Window { t0_s, estimates }) = windows.push(&values) {
+            let rows = match &answerer {
+                Answerer::Sensor(sensor) => {
+                    sensor_rows(sensor, &tones, &estimates[0], t0_s, &options)
+                }
+                Answerer::Rig(rig) => {
+                    let mut fixes = rig.fixes(&tones, &estimates);
+                    filters.apply(t0_s, &mut fixes);
+                    let velocity = filters.active();
+                    fixes.iter().map(|f| row_text(t0_s, f, velocity)).collect()
+                }
+            };
+            for row in rows {
+                emit!(writeln!(output, "{row}"));
+            }
+            emit!(output.flush());
+            summary.windows += 1;
+        }
+    }
+    summary.unanswered = windows.pending() as u64;
+    Ok(summary)
+}
+
+/// The status of a line that is not a sample: `line_too_long` or
+/// `malformed_line`.
+fn unreadable_status(sample: &Sample) -> &'static str {
+    match sample {
+        Sample::TooLong => "line_too_long",
+        _ => "malformed_line",
+    }
+}
+
+/// What a stream needs, checked before the first sample.
+pub(crate) struct Prepared<R> {
+    pub answerer: Answerer,
+    pub tones: Tones,
+    pub source: SampleSource<R>,
+    pub fs: f64,
+    pub windows: Windows,
+}
+
+/// Reads the calibration or rig and the tones, opens the samples and checks
+/// the rate, window, tones and filter.
+pub(crate) fn prepare<R: BufRead>(request: &TrackRequest, input: R) -> Result<Prepared<R>> {
     let limits = request.limits;
     let answerer = match &request.target {
         TrackTarget::Sensor(path) => {
@@ -106,7 +234,7 @@ pub fn track(
         Answerer::Rig(rig) => rig.ids(),
     };
     let tones = Tones::read_with(&request.tones, limits)?;
-    let (mut source, fs) = match &request.raw {
+    let (source, fs) = match &request.raw {
         Some(path) => SampleSource::file(path, &sensors, &request.channels, request.rate_hz)
             .map_err(stream_error)?,
         None => {
@@ -140,56 +268,19 @@ pub fn track(
         .config
         .validate()
         .map_err(|e| Error::Options(e.to_string()))?;
-    let mut summary = TrackSummary::default();
-    // A reader that went away (`| head`) ends the stream quietly.
-    macro_rules! emit {
-        ($result:expr) => {
-            match $result {
-                Ok(()) => {}
-                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => return Ok(summary),
-                Err(source) => {
-                    return Err(Error::Io(psdcal_io::IoError::Write {
-                        file: "standard output".to_string(),
-                        source,
-                    }))
-                }
-            }
-        };
+    if request.filter != TrackFilter::None && matches!(answerer, Answerer::Sensor(_)) {
+        return Err(Error::Options(
+            "--filter filters a rig's positions; expected --rig FILE with it".to_string(),
+        ));
     }
-    let header = match &answerer {
-        Answerer::Sensor(_) => HEADER.to_string(),
-        Answerer::Rig(_) => crate::signals::track_rig::HEADER.to_string(),
-    };
-    emit!(writeln!(output, "{header}").and_then(|()| output.flush()));
-    let empty_fields = header.matches(',').count() - 1;
-    let mut windows = Windows::new(sensors.len(), window, fs, freqs, request.config);
-    let options = LocateOptions::default();
-    while let Some(sample) = source.next_sample().map_err(stream_error)? {
-        let Sample::Values(values) = sample else {
-            summary.malformed += 1;
-            let t = (summary.samples as f64) / fs;
-            let commas = ",".repeat(empty_fields);
-            emit!(
-                writeln!(output, "{},{commas}malformed_line", num(t)).and_then(|()| output.flush())
-            );
-            continue;
-        };
-        summary.samples += 1;
-        if let Some(Window { t0_s, estimates }) = windows.push(&values) {
-            let rows = match &answerer {
-                Answerer::Sensor(sensor) => {
-                    sensor_rows(sensor, &tones, &estimates[0], t0_s, &options)
-                }
-                Answerer::Rig(rig) => rig.rows(&tones, &estimates, t0_s),
-            };
-            for row in rows {
-                emit!(writeln!(output, "{row}"));
-            }
-            emit!(output.flush());
-            summary.windows += 1;
-        }
-    }
-    Ok(summary)
+    let windows = Windows::new(sensors.len(), window, fs, freqs, request.config);
+    Ok(Prepared {
+        answerer,
+        tones,
+        source,
+        fs,
+        windows,
+    })
 }
 
 /// One sensor's rows of a window: angles per LED.
@@ -233,7 +324,7 @@ fn sensor_rows(
 
 /// A stream's refusal as the facade's error: the options' fault or the
 /// header's in the words the stream gave.
-fn stream_error(e: IoError) -> Error {
+pub(crate) fn stream_error(e: IoError) -> Error {
     match e {
         IoError::Stream {
             fault: StreamFault::Options,

@@ -3,6 +3,7 @@
 pub(crate) mod demo;
 pub(crate) mod plan;
 pub(crate) mod simulate;
+pub(crate) mod simulate_moving;
 pub(crate) mod simulate_positioning;
 pub(crate) mod simulate_raw;
 pub(crate) mod simulate_scan;

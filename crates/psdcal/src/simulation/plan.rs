@@ -59,6 +59,8 @@ pub struct PlanRequest {
     pub report: Option<PathBuf>,
     /// Bounds on the files read whole (docs/formats.md, "Limits").
     pub limits: psdcal_io::ReadLimits,
+    /// Replace files in the report folder that psdcal did not write there.
+    pub force: bool,
 }
 
 /// A plan with its printable forms.
@@ -197,7 +199,7 @@ pub fn plan_poses(request: &PlanRequest) -> Result<Planned> {
     );
     write_poses(&request.out, &comment, &rows)?;
     if let Some(dir) = &request.report {
-        write_heat_map(dir, &setup, &plan)?;
+        write_heat_map(dir, &setup, &plan, request.force)?;
     }
     Ok(Planned {
         text: text(request, &setup, &plan),
@@ -206,11 +208,13 @@ pub fn plan_poses(request: &PlanRequest) -> Result<Planned> {
     })
 }
 
-fn write_heat_map(dir: &Path, setup: &PlanSetup, plan: &Plan) -> Result<()> {
+fn write_heat_map(dir: &Path, setup: &PlanSetup, plan: &Plan, force: bool) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::OutputFolder {
         path: dir.to_path_buf(),
         message: format!("cannot create the report folder {}: {e}", dir.display()),
     })?;
+    let names = ["plan_sigma.svg".to_string(), "plan_sigma.png".to_string()];
+    let folder = psdcal_io::OutputFolder::claim(dir, &names, force)?;
     let p = &plan.prediction;
     let cells: Vec<HeatCell> = p
         .grid
@@ -237,7 +241,7 @@ fn write_heat_map(dir: &Path, setup: &PlanSetup, plan: &Plan) -> Result<()> {
     psdcal_io::write_atomic_at(dir.join("plan_sigma.png"), |tmp| {
         heat_map_png(&cells, size, &frame, "AoA σ (°)", tmp)
     })?;
-    Ok(())
+    Ok(folder.finish()?)
 }
 
 fn text(request: &PlanRequest, setup: &PlanSetup, plan: &Plan) -> String {

@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use psdcal_io::{
     write_observations, write_signals, write_template, write_truth, IntrinsicsRecord,
-    ObservationRow, SensorSize, SignalRowOut, SimulationSettings, TemplateLed, TrueGains, TruePose,
-    Truth, TRUTH_FORMAT, TRUTH_VERSION,
+    ObservationRow, OutputFolder, SensorSize, SignalRowOut, SimulationSettings, TemplateLed,
+    TrueGains, TruePose, Truth, TRUTH_FORMAT, TRUTH_VERSION,
 };
 use psdcal_model::Pose;
 use psdcal_sim::{
@@ -88,6 +88,10 @@ pub struct SimulateRequest {
     pub seed: u64,
     /// Output folder (created if missing).
     pub out: PathBuf,
+    /// Replace files in `out` that psdcal did not write there (otherwise
+    /// refused before anything is written; docs/formats.md, "Output
+    /// folders").
+    pub force: bool,
 }
 
 /// What was written.
@@ -135,7 +139,9 @@ impl SimulatedFiles {
 
 /// Simulates and writes the data set.
 pub fn simulate_files(request: &SimulateRequest) -> Result<SimulatedFiles> {
-    simulate_and_write(request).map(|(files, _)| files)
+    let (files, _, folder) = simulate_and_write(request, &[])?;
+    folder.finish()?;
+    Ok(files)
 }
 
 /// A simulated data set in memory: the rows of template.csv,
@@ -215,10 +221,13 @@ fn simulate_in_memory(
 
 /// [`simulate_files`], also returning the simulation (for the raw
 /// recording of the same data set).
+/// `more` names the files the caller writes into the folder after the data
+/// set; the caller records them all ([`OutputFolder::finish`]).
 pub(crate) fn simulate_and_write(
     request: &SimulateRequest,
-) -> Result<(SimulatedFiles, Simulation)> {
-    simulate_and_write_at(request, None)
+    more: &[&str],
+) -> Result<(SimulatedFiles, Simulation, OutputFolder)> {
+    simulate_and_write_at(request, None, more)
 }
 
 /// Simulates the data set at the poses of a poses.csv (`psdcal simulate
@@ -240,18 +249,35 @@ pub fn simulate_files_at_poses(
         images: poses.len(),
         ..request.clone()
     };
-    simulate_and_write_at(&request, Some(&poses)).map(|(files, _)| files)
+    let (files, _, folder) = simulate_and_write_at(&request, Some(&poses), &[])?;
+    folder.finish()?;
+    Ok(files)
 }
+
+/// The files every simulation writes into its folder.
+const DATA_SET_FILES: [&str; 4] = [
+    "template.csv",
+    "observations.csv",
+    "signals.csv",
+    "truth.json",
+];
 
 fn simulate_and_write_at(
     request: &SimulateRequest,
     poses: Option<&[Pose]>,
-) -> Result<(SimulatedFiles, Simulation)> {
+    more: &[&str],
+) -> Result<(SimulatedFiles, Simulation, OutputFolder)> {
     let out = &request.out;
+    let names: Vec<String> = DATA_SET_FILES
+        .iter()
+        .chain(more)
+        .map(|n| n.to_string())
+        .collect();
     std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
         path: out.clone(),
         message: format!("cannot create the output folder {}: {e}", out.display()),
     })?;
+    let folder = OutputFolder::claim(out, &names, request.force)?;
     let (data, sim) = simulate_in_memory(request, poses)?;
     let what = &data.description;
     write_template(
@@ -275,7 +301,7 @@ fn simulate_and_write_at(
         images: sim.images.len(),
         points: data.observations.len(),
     };
-    Ok((files, sim))
+    Ok((files, sim, folder))
 }
 
 pub(crate) fn led_id(index: usize) -> String {

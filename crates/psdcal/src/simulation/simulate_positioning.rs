@@ -45,6 +45,9 @@ pub struct PositioningRequest {
     pub seed: u64,
     /// Output folder (created if missing).
     pub out: PathBuf,
+    /// Replace files in `out` that psdcal did not write there
+    /// (docs/formats.md, "Output folders").
+    pub force: bool,
 }
 
 /// What was written.
@@ -96,53 +99,101 @@ impl SimulatedRig {
     }
 }
 
+/// Simulates a sensor's calibration data set into `dir` (the paper's
+/// `lens`, template poses and signal chain at `snr_db`, seed `seed`) and
+/// calibrates it into `dir/calibration.json`.
+pub(crate) fn calibrated_sensor_files(
+    lens: Lens,
+    snr_db: Option<f64>,
+    images: usize,
+    record_cycles: usize,
+    seed: u64,
+    dir: &std::path::Path,
+) -> Result<()> {
+    simulate_files(&SimulateRequest {
+        lens,
+        snr_db,
+        imbalance: false,
+        psd_distortion: false,
+        psd_nonlinearity: false,
+        images,
+        template: TemplateKind::Scatter14,
+        record_cycles,
+        seed,
+        out: dir.to_path_buf(),
+        // The caller claims the folder's files (`OutputFolder::claim`).
+        force: true,
+    })?;
+    let set = DataSet::from_files(
+        &DataSetFiles {
+            template: dir.join("template.csv"),
+            points: PointSource::Observations(dir.join("observations.csv")),
+            gains: None,
+        },
+        &LoadOptions::default(),
+    )?;
+    let calibrated =
+        crate::calibration::calibrate::calibrate(&set, &CalibrationOptions::default())?;
+    calibrated.write(&set, &dir.join("calibration.json"), None)?;
+    Ok(())
+}
+
+/// The files [`calibrated_sensor_files`] writes.
+pub(crate) const SENSOR_FILES: [&str; 5] = [
+    "template.csv",
+    "observations.csv",
+    "signals.csv",
+    "truth.json",
+    "calibration.json",
+];
+
+/// Claims the files of a rig of `sensors` sensors in `out` (each sensor's
+/// [`SENSOR_FILES`] in `s<k>/`, and `rig_files`; `force`: any file) and
+/// creates the folder.
+pub(crate) fn claim_rig_folder(
+    out: &std::path::Path,
+    sensors: usize,
+    rig_files: &[&str],
+    force: bool,
+) -> Result<psdcal_io::OutputFolder> {
+    let names: Vec<String> = (1..=sensors)
+        .flat_map(|k| SENSOR_FILES.map(|f| format!("s{k}/{f}")))
+        .chain(rig_files.iter().map(|f| f.to_string()))
+        .collect();
+    let folder = psdcal_io::OutputFolder::claim(out, &names, force)?;
+    std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
+        path: out.to_path_buf(),
+        message: format!("cannot create the output folder {}: {e}", out.display()),
+    })?;
+    Ok(folder)
+}
+
+/// The rig's files.
+const RIG_FILES: [&str; 3] = ["rig.json", "rig_points.csv", "truth.csv"];
+
 /// Simulates, calibrates and writes the rig (module documentation).
 pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig> {
     let out = &request.out;
-    std::fs::create_dir_all(out).map_err(|e| Error::OutputFolder {
-        path: out.clone(),
-        message: format!("cannot create the output folder {}: {e}", out.display()),
-    })?;
     let truth = request.lens.model();
     let geometry = PsdGeometry::default();
     let mut rng = ChaCha8Rng::seed_from_u64(request.seed);
     rng.set_stream(1);
     let room = Room::draw(&request.room, &truth, &geometry, &mut rng)?;
+    let folder = claim_rig_folder(out, room.sensors.len(), &RIG_FILES, request.force)?;
     let mut files = Vec::new();
     let mut sensors_json = Vec::new();
     for (k, pose) in room.sensors.iter().enumerate() {
         let id = format!("s{}", k + 1);
         let dir = out.join(&id);
-        simulate_files(&SimulateRequest {
-            lens: request.lens,
-            snr_db: request.snr_db,
-            imbalance: false,
-            psd_distortion: false,
-            psd_nonlinearity: false,
-            images: request.images,
-            template: TemplateKind::Scatter14,
-            record_cycles: request.record_cycles,
-            seed: request.seed.wrapping_mul(1000).wrapping_add(k as u64 + 1),
-            out: dir.clone(),
-        })?;
-        let set = DataSet::from_files(
-            &DataSetFiles {
-                template: dir.join("template.csv"),
-                points: PointSource::Observations(dir.join("observations.csv")),
-                gains: None,
-            },
-            &LoadOptions::default(),
+        calibrated_sensor_files(
+            request.lens,
+            request.snr_db,
+            request.images,
+            request.record_cycles,
+            request.seed.wrapping_mul(1000).wrapping_add(k as u64 + 1),
+            &dir,
         )?;
-        let calibrated =
-            crate::calibration::calibrate::calibrate(&set, &CalibrationOptions::default())?;
-        calibrated.write(&set, &dir.join("calibration.json"), None)?;
-        for f in [
-            "template.csv",
-            "observations.csv",
-            "signals.csv",
-            "truth.json",
-            "calibration.json",
-        ] {
+        for f in SENSOR_FILES {
             files.push(format!("{id}/{f}"));
         }
         sensors_json.push(serde_json::json!({
@@ -199,7 +250,8 @@ pub fn simulate_positioning(request: &PositioningRequest) -> Result<SimulatedRig
     }
     points.write_to(Some(&out.join("rig_points.csv")))?;
     truth_rows.write_to(Some(&out.join("truth.csv")))?;
-    files.extend(["rig.json", "rig_points.csv", "truth.csv"].map(String::from));
+    files.extend(RIG_FILES.map(String::from));
+    folder.finish()?;
     let r = &request.room;
     Ok(SimulatedRig {
         description: format!(

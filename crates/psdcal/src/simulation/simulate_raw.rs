@@ -56,7 +56,14 @@ pub fn simulate_raw_files(
     request: &SimulateRequest,
     raw: &RawRequest,
 ) -> Result<(SimulatedFiles, Vec<String>)> {
-    let (files, sim) = simulate_and_write(request)?;
+    let raw_name = match raw.format {
+        RawFormat::Npy => "raw.npy",
+        RawFormat::Tdms => "raw.tdms",
+        _ => "raw.csv",
+    };
+    let more = [raw_name, "schedule.csv", "tones.csv"];
+    let more = if raw.fdma { &more[..] } else { &more[..2] };
+    let (files, sim, folder) = simulate_and_write(request, more)?;
     let leds = sim.template.leds.len();
     let tone = |i: usize| {
         if raw.fdma {
@@ -112,11 +119,7 @@ pub fn simulate_raw_files(
     };
     let mut rng = ChaCha8Rng::seed_from_u64(request.seed ^ 0x5241_5752);
     let out = &request.out;
-    let name = match raw.format {
-        RawFormat::Npy => "raw.npy",
-        RawFormat::Tdms => "raw.tdms",
-        _ => "raw.csv",
-    };
+    let name = raw_name;
     let samples = plan.samples() as u64;
     let mut written: u64 = 0;
     let mut failure: Option<SimError> = None;
@@ -181,6 +184,7 @@ pub fn simulate_raw_files(
         )?;
         names.push("tones.csv".to_string());
     }
+    folder.finish()?;
     Ok((files, names))
 }
 

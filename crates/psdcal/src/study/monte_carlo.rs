@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use psdcal_io::{write_atomic, write_atomic_bytes};
+use psdcal_io::{write_atomic, write_atomic_bytes, OutputFolder};
 use psdcal_model::PsdGeometry;
 use psdcal_study::fig9::{figure9, Figure9Map};
 use psdcal_study::render::{csv_rows, markdown, num, CSV_HEADER};
@@ -192,6 +192,9 @@ pub struct StudyRequest {
     pub out: PathBuf,
     /// Folder of study.html, if asked for.
     pub report: Option<PathBuf>,
+    /// Replace files in `out` (and `report`) that psdcal did not write
+    /// there (docs/formats.md, "Output folders").
+    pub force: bool,
 }
 
 /// A checked study, ready to run.
@@ -249,8 +252,11 @@ pub fn plan_study(request: &StudyRequest) -> Result<StudyPlan> {
         .map(|id| table_spec(id).ok_or_else(|| Error::Options(format!("unknown table '{id}'"))))
         .collect::<Result<_>>()?;
     check_output_folder(&request.out)?;
+    // Checked again, with the Figure 9 files, before anything is written.
+    OutputFolder::claim(&request.out, &study_files(&[]), request.force)?;
     if let Some(dir) = &request.report {
         check_output_folder(dir)?;
+        OutputFolder::claim(dir, &[STUDY_PAGE.to_string()], request.force)?;
     }
     let options = StudyOptions {
         trials: request.trials,
@@ -265,6 +271,20 @@ pub fn plan_study(request: &StudyRequest) -> Result<StudyPlan> {
         want_psd_map: request.tables.iter().any(|t| t == PSD_MAP_STUDY),
         options,
     })
+}
+
+/// The study's page in its report folder.
+const STUDY_PAGE: &str = "study.html";
+
+/// The files a study writes into its folder: the tables and one file per
+/// Figure 9 map.
+fn study_files(maps: &[Figure9Map]) -> Vec<String> {
+    let tables = ["study.md", "study.csv", "study.json"].map(String::from);
+    let fig9 = maps
+        .iter()
+        .enumerate()
+        .map(|(k, m)| format!("fig9_lens{}_{}.csv", m.lens, k + 1));
+    tables.into_iter().chain(fig9).collect()
 }
 
 /// Creates the folder and proves it can be written, before any work.
@@ -375,6 +395,15 @@ impl StudyPlan {
         if let Some(seeds) = psd_map {
             report.push_str(&psd_map_markdown(seeds));
         }
+        let folder = OutputFolder::claim(&r.out, &study_files(maps), r.force)?;
+        let page_folder = match &r.report {
+            Some(dir) => Some(OutputFolder::claim(
+                dir,
+                &[STUDY_PAGE.to_string()],
+                r.force,
+            )?),
+            None => None,
+        };
         write_atomic_bytes(r.out.join("study.md"), report.as_bytes())?;
         write_atomic(r.out.join("study.csv"), |w| {
             writeln!(w, "{CSV_HEADER}")?;
@@ -425,12 +454,16 @@ impl StudyPlan {
                     out: &r.out,
                 };
                 let page = study_page(&run, tables, maps)?;
-                let path = dir.join("study.html");
+                let path = dir.join(STUDY_PAGE);
                 write_atomic_bytes(&path, page.render().as_bytes())?;
                 Some(path)
             }
             None => None,
         };
+        folder.finish()?;
+        if let Some(f) = page_folder {
+            f.finish()?;
+        }
         Ok(StudyOutcome {
             markdown: report,
             json,

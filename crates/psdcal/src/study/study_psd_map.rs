@@ -95,6 +95,7 @@ pub(crate) fn fit_map(scan: &Scan, seed: u64) -> Result<(PsdMapOutcome, MapInput
             command: String::new(),
             report: None,
             limits: Default::default(),
+            force: false,
         },
     )?;
     let map = MapInput::in_memory(fitted.file.clone(), &map_name(seed), &geometry)?;
@@ -131,6 +132,7 @@ pub(crate) fn data_set(seed: u64, nonlinearity: bool) -> Result<DataSet> {
         record_cycles: DEFAULT_RECORD_CYCLES,
         seed,
         out: PathBuf::new(),
+        force: false,
     })?;
     let template = Template {
         source: "template.csv".into(),

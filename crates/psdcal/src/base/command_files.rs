@@ -1,4 +1,5 @@
-//! Before any work: the files a command reads and writes, so that no output
+//! Before any work: the files a command-line command reads and writes
+//! (with the `clap` feature), so that no output
 //! replaces an input (psdcal-io's `refuse_overwrite`; exit 2).
 //!
 //! Read off the command's definition, so that every command is covered:
@@ -15,11 +16,11 @@ use clap::{ArgMatches, Command};
 
 /// Refuses a command whose output is one of its inputs (or two outputs that
 /// are one file); `command` is the definition `matches` were parsed with.
-pub fn check(
+pub fn refuse_input_overwrite(
     command: &Command,
     matches: &ArgMatches,
-    limits: psdcal::ReadLimits,
-) -> Result<(), psdcal::IoError> {
+    limits: psdcal_io::ReadLimits,
+) -> Result<(), psdcal_io::IoError> {
     let Some((name, given)) = matches.subcommand() else {
         return Ok(());
     };
@@ -64,7 +65,7 @@ pub fn check(
 
 /// The calibrations a rig file lists (none when it cannot be read: that is
 /// the command's own error, reported when it runs).
-fn listed_calibrations(rig: &Path, limits: psdcal::ReadLimits) -> Vec<(String, PathBuf)> {
+fn listed_calibrations(rig: &Path, limits: psdcal_io::ReadLimits) -> Vec<(String, PathBuf)> {
     psdcal_io::read_rig_with(rig, limits).map_or_else(
         |_| Vec::new(),
         |file| {
