@@ -165,13 +165,14 @@ impl Cli {
                     .fit
                     .as_ref()
                     .map_or(ModelChoice::HeldOut, |_| ModelChoice::Given);
-                let FitList(free, fit_gains) = args
+                let fit = args
                     .fit
-                    .unwrap_or_else(|| FitList(CalibrationOptions::default().free, false));
+                    .unwrap_or_else(|| FitList::of(CalibrationOptions::default().free));
                 let options = CalibrationOptions {
-                    free,
+                    free: fit.params,
                     choice,
-                    fit_gains,
+                    fit_gains: fit.gains,
+                    fit_aspect: fit.aspect,
                     fixed: args.set,
                     focal_guess: args.focal_guess,
                     cost: args.cost,

@@ -38,7 +38,7 @@ fn the_misfit_names_the_missing_term_and_never_a_fitted_one() {
     let dir = tempfile::tempdir().unwrap();
     let cal = dir.path().join("c.json");
     let (t, o) = simulate(dir.path(), "l1", &["--psd-distortion"]);
-    let run = calibrate(&t, &o, &[], &cal);
+    let run = calibrate(&t, &o, &["--fit", "f,cx,cy,k1,k2"], &cal);
     assert!(run.status.success(), "{}", stderr(&run));
     let err = stderr(&run);
     assert!(err.contains("the term l1 explains"), "{err}");
@@ -47,6 +47,14 @@ fn the_misfit_names_the_missing_term_and_never_a_fitted_one() {
     let run = calibrate(&t, &o, &["--fit", "f,cx,cy,k1,k2,l1"], &cal);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(!stderr(&run).contains("model_misfit") && !stderr(&run).contains("l1 to --fit"));
+    // Without --fit the data choose l1 themselves.
+    let run = calibrate(&t, &o, &[], &cal);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(!stderr(&run).contains("model_misfit"), "{}", stderr(&run));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cal).unwrap()).unwrap();
+    let chosen = &json["fit"]["model_choice"]["chosen"];
+    assert!(chosen.as_array().unwrap().iter().any(|n| n == "l1"), "{chosen}");
     // A non-radial non-linearity: no single term is blamed.
     let (t, o) = simulate(dir.path(), "nl", &["--psd-nonlinearity"]);
     let run = calibrate(&t, &o, &[], &cal);

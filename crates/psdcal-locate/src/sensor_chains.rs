@@ -11,7 +11,7 @@
 
 use std::sync::{Arc, RwLock};
 
-use psdcal_model::stages::Aspect;
+use psdcal_model::stages::{with_aspect, Aspect};
 use psdcal_model::{
     ChannelGains, Model, Param, ParameterCovariance, PsdGeometry, SensorModel, Stage,
 };
@@ -123,20 +123,9 @@ fn build(sensor: &SensorState<'_>, chain: Model, key: ChainKey) -> SensorChains 
 }
 
 /// `chain` with the aspect stage `a` before its lens stage (after the
-/// PSD's radial one, docs/model.md §3.3).
+/// PSD's radial one, docs/model.md §3.3); `chain` when it cannot take one.
 pub(crate) fn with_aspect_stage(chain: &Model, a: f64) -> Model {
-    let at = chain
-        .stage_kinds()
-        .iter()
-        .position(|k| *k == "lens")
-        .unwrap_or(0);
-    match chain.with_stage(at, Box::new(Aspect::new())) {
-        Ok(mut with) => {
-            let _ = with.set(Aspect::NAME, a);
-            with
-        }
-        Err(_) => chain.clone(),
-    }
+    with_aspect(chain, a).unwrap_or_else(|_| chain.clone())
 }
 
 impl Clone for ChainCache {

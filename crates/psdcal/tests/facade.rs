@@ -108,6 +108,7 @@ fn the_warnings_alone_are_the_summarys() {
     use psdcal_model::Param::*;
     let options = CalibrationOptions {
         free: vec![F, Cx, Cy, K1, K2, K3, P1, P2],
+        choice: psdcal::ModelChoice::Given,
         ..CalibrationOptions::default()
     };
     let calibrated = calibrate(&set, &options).unwrap();

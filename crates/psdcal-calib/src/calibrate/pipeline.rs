@@ -36,6 +36,11 @@ use crate::uncertainty::profile::profile_at_three_sigma;
 use crate::warning::FitWarning;
 use crate::CalibError;
 
+/// The cost difference, in residual variances σ², under which a second
+/// minimum over `l1` is worth a warning: a likelihood ratio of 3σ (for one
+/// parameter, χ²₁ = 9). A minimum farther up is not a competitor.
+pub const LOCAL_MINIMA_CHI2: f64 = 9.0;
+
 /// Largest relative standard deviation of a freed `f` accepted as a
 /// calibration: beyond it the images do not determine the focal length.
 pub const MAX_RELATIVE_STD_F: f64 = 0.2;
@@ -46,9 +51,11 @@ pub fn calibrate(
     options: &CalibrateOptions,
 ) -> Result<CalibrationResult, CalibError> {
     check_data_in_domain(data, options)?;
-    let mut result = calibrate_as_given(data, options).map_err(|e| blame_misplaced_led(data, e))?;
+    let (mut result, chosen) =
+        calibrate_as_given(data, options).map_err(|e| blame_misplaced_led(data, e))?;
     check_data_in_region(&result, data)?;
-    settle_block(&mut result, data, options)?;
+    // The block is carried into the covariance of the parameters chosen.
+    settle_block(&mut result, data, &chosen)?;
     Ok(result)
 }
 
@@ -74,10 +81,12 @@ fn blame_misplaced_led(data: &CalibrationData, error: CalibError) -> CalibError 
     }
 }
 
+/// The calibration and the options it ended with (the freed parameters
+/// the data chose).
 fn calibrate_as_given(
     data: &CalibrationData,
     options: &CalibrateOptions,
-) -> Result<CalibrationResult, CalibError> {
+) -> Result<(CalibrationResult, CalibrateOptions), CalibError> {
     // The post-fit work's second thread starts now ([`crate::calibrate::helper`]).
     let mut helper = Helper::spawn();
     let init = initialize(data, &options.init)?;
@@ -122,7 +131,7 @@ fn calibrate_as_given(
     let mut diagnosed = after_fit.diagnosed;
     diagnose_uncertainty(&mut diagnosed, &covariance, global.as_ref());
     let diagnostics = result_diagnostics(diagnosed.diagnostics, &linearity, &statistics);
-    Ok(CalibrationResult {
+    let result = CalibrationResult {
         gains: fitted_gains,
         gain_start,
         model: refined.model,
@@ -144,7 +153,8 @@ fn calibrate_as_given(
         diagnostics,
         block: None,
         model_choice,
-    })
+    };
+    Ok((result, options.clone()))
 }
 
 /// With [`ModelChoice::HeldOut`] (and an unweighted, non-robust fit
@@ -181,7 +191,17 @@ fn choose_model(
         ..options.global.clone()
     };
     let cold_aspect = init.report.route != InitRoute::ClosedForm;
-    let chosen = choose(data, refined, global, r, cold_aspect, &global_options)?;
+    let base = (refined.clone(), global.clone());
+    let chosen = match choose(data, refined, global, r, cold_aspect, &global_options) {
+        Ok(chosen) => chosen,
+        // Held-out errors need every image's leave-one-out fit determined:
+        // without it the given parameters are fitted, and the report says why.
+        Err(CalibError::Degenerate { reason }) => {
+            let report = ModelChoiceReport::skipped(r.free_names(), reason);
+            return Ok((base.0, base.1, options.clone(), Some(report)));
+        }
+        Err(e) => return Err(e),
+    };
     let mut chosen_options = options.clone();
     chosen_options.refine = chosen.options;
     Ok((
@@ -361,7 +381,11 @@ fn final_covariance(
         Uncertainty::Linear => Ok((analytic, None)),
         Uncertainty::Jackknife if refined.weights.is_none() && refine_options.robust.is_none() => {
             let at = AtSolution::new(data, refined, refine_options)?;
-            let raised = jackknife_raised(&at, analytic.parameters.matrix())?;
+            // Without every image's leave-one-out fit determined, the
+            // linear covariance, named as such.
+            let Ok(raised) = jackknife_raised(&at, analytic.parameters.matrix()) else {
+                return Ok((analytic, None));
+            };
             let parameters =
                 ParameterCovariance::new(analytic.names().to_vec(), raised).map_err(|e| {
                     CalibError::Numerical {
@@ -427,7 +451,12 @@ fn result_warnings(
         });
     }
     if let Some(g) = global {
-        if g.minima.len() > 1 {
+        // Only when the data hardly tell the next minimum from the kept one:
+        // their cost differs by less than LOCAL_MINIMA_CHI2 residual variances.
+        let close = |g: &GlobalReport| {
+            g.minima[1].cost - g.minima[0].cost < LOCAL_MINIMA_CHI2 * covariance.sigma2
+        };
+        if g.minima.len() > 1 && close(g) {
             warnings.push(FitWarning::LocalMinima {
                 count: g.minima.len(),
                 lowest: g.minima[0].cost,

@@ -12,6 +12,7 @@ use crate::calibrate::result::CalibrationResult;
 use crate::diagnose::fit_statistics::FitStatistics;
 use crate::problem::weighting::NoiseModel;
 use crate::refine::global::GlobalReport;
+use crate::select::choose::ModelChoiceReport;
 use crate::start::initialize::InitRoute;
 use psdcal_model::CostKind;
 use psdcal_solver::solver::{RobustLoss, Termination};
@@ -77,6 +78,12 @@ pub struct CalibrationSummary {
     pub warnings: Vec<String>,
     /// Diagnostics with stable codes (calibration.json's `diagnostics`).
     pub diagnostics: Vec<Diagnostic>,
+    /// How σ was computed: `linear`, `jackknife`, `sandwich` or
+    /// `bootstrap` ([`crate::CovarianceMethod`]).
+    pub uncertainty: &'static str,
+    /// The candidates, their held-out angle errors and the choice, when
+    /// `calibrate` chose the freed parameters (docs/model.md §4.8).
+    pub model_choice: Option<ModelChoiceReport>,
 }
 
 impl CalibrationResult {
@@ -118,6 +125,8 @@ impl CalibrationResult {
             global: self.global.clone(),
             warnings: crate::warning::warning_texts(&self.warnings),
             diagnostics: self.diagnostics.clone(),
+            uncertainty: self.covariance.method.name(),
+            model_choice: self.model_choice.clone(),
         }
     }
 

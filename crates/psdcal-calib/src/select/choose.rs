@@ -15,7 +15,7 @@
 //! best is taken (the simplest within the noise of the best), and rounds
 //! go on until none passes.
 
-use psdcal_model::stages::Aspect;
+use psdcal_model::stages::{with_aspect, Aspect};
 use psdcal_model::{Model, Param};
 use serde::Serialize;
 
@@ -134,7 +134,30 @@ pub struct ModelChoiceReport {
     pub candidates: Vec<CandidateScore>,
     /// The chosen freed parameters.
     pub chosen: Vec<String>,
+    /// Why no candidate was scored, when none was (the given parameters
+    /// were fitted).
+    pub skipped: Option<String>,
 }
+
+impl ModelChoiceReport {
+    /// No choice: `free` fitted as given, for `reason`.
+    pub fn skipped(free: Vec<String>, reason: String) -> Self {
+        Self {
+            rule: RULE,
+            candidates: Vec::new(),
+            chosen: free,
+            skipped: Some(reason),
+        }
+    }
+}
+
+/// A held-out RMS angle under which the fit is exact to the float
+/// precision (degrees; 1.7e-11 rad): no group is judged beside it.
+pub const EXACT_FIT_DEG: f64 = 1e-9;
+
+/// The rule, in words.
+const RULE: &str = "forward selection: a group of parameters is added when it lowers the \
+                    leave-one-image-out angle error by more than one standard error";
 
 /// What the choice returns: the chosen fit, its options, its global
 /// search's report, and the report of the choice.
@@ -190,12 +213,7 @@ fn fit_candidate(
 ) -> Option<Scored> {
     let mut model = current.refined.model.clone();
     if group == Group::Aspect && model.index(Aspect::NAME).is_none() {
-        let at = model
-            .stage_kinds()
-            .iter()
-            .position(|k| *k == "lens")
-            .unwrap_or(0);
-        model = model.with_stage(at, Box::new(Aspect::new())).ok()?;
+        model = with_aspect(&model, 0.0).ok()?;
     }
     let poses = &current.refined.poses;
     let mut fits = vec![refine(data, model.clone(), poses, next)];
@@ -229,7 +247,9 @@ fn fit_candidate(
         .filter_map(Result::ok)
         .filter(|r| r.report.termination.converged() && r.cost.is_finite())
         .min_by(|a, b| a.cost.total_cmp(&b.cost))?;
-    score(data, best, next.clone(), None).ok()
+    // The l1 search's report stays with the fit it found (until `settled`
+    // runs it again).
+    score(data, best, next.clone(), current.global.clone()).ok()
 }
 
 /// A start with aspect `a0`: the initialisation on the data with `y`
@@ -329,6 +349,24 @@ pub(crate) fn choose(
         standard_error_deg2: 0.0,
         accepted: true,
     }];
+    if current.rms_deg <= EXACT_FIT_DEG {
+        // Nothing to gain over a fit at the float precision's noise.
+        return Ok(Chosen {
+            report: ModelChoiceReport {
+                candidates,
+                ..ModelChoiceReport::skipped(
+                    options.free_names(),
+                    format!(
+                        "the given parameters fit exactly (held-out error {:.1e}°)",
+                        current.rms_deg
+                    ),
+                )
+            },
+            refined: current.refined,
+            options: current.options,
+            global: current.global,
+        });
+    }
     let mut remaining: Vec<Group> = GROUPS
         .iter()
         .copied()
@@ -372,10 +410,10 @@ pub(crate) fn choose(
     }
     Ok(Chosen {
         report: ModelChoiceReport {
-            rule: "forward selection: a group of parameters is added when it lowers the \
-                   leave-one-image-out angle error by more than one standard error",
+            rule: RULE,
             candidates,
             chosen: current.options.free_names(),
+            skipped: None,
         },
         refined: current.refined,
         options: current.options,

@@ -25,7 +25,7 @@
 use nalgebra::{Matrix2, Vector2};
 
 use crate::stage::{set_column, ParameterInfo, Stage, StageJacobian};
-use crate::ModelError;
+use crate::{Model, ModelError};
 
 /// The y scale of its own: `y' = cy + (y − cy)/(1 + a)`.
 #[derive(Debug, Clone)]
@@ -69,6 +69,24 @@ impl Aspect {
         }
         Vector2::new(input.x, cy + dy * s)
     }
+}
+
+/// `chain` with an aspect stage of value `a` just before its lens stage
+/// (first when it has none); `chain` with `a` set when it has one already.
+pub fn with_aspect(chain: &Model, a: f64) -> Result<Model, ModelError> {
+    let mut with = match chain.index(Aspect::NAME) {
+        Some(_) => chain.clone(),
+        None => {
+            let at = chain
+                .stage_kinds()
+                .iter()
+                .position(|k| *k == "lens")
+                .unwrap_or(0);
+            chain.with_stage(at, Box::new(Aspect::new()))?
+        }
+    };
+    with.set(Aspect::NAME, a)?;
+    Ok(with)
 }
 
 impl Default for Aspect {

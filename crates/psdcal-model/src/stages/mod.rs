@@ -11,7 +11,7 @@ pub mod pinhole;
 pub mod psd_map;
 pub mod psd_radial;
 
-pub use aspect::Aspect;
+pub use aspect::{with_aspect, Aspect};
 pub use gains::Gains;
 pub use lens::Lens;
 pub use pinhole::Pinhole;

@@ -10,33 +10,61 @@ use psdcal_model::{Param, UnknownParam};
 
 use psdcal_calib::{BootstrapOptions, RobustLoss, Uncertainty};
 
-/// Parameters to estimate and whether the gains are freed too (`--fit`).
+/// What `--fit` frees: standard parameters, the amplifier gains, the
+/// aspect stage's `a` (docs/model.md §3.3).
 #[derive(Debug, Clone, PartialEq)]
-pub struct FitList(pub Vec<Param>, pub bool);
+pub struct FitList {
+    /// The standard parameters.
+    pub params: Vec<Param>,
+    /// The amplifier gains (`gains`).
+    pub gains: bool,
+    /// The y axis's own scale (`a`, `fy = f (1 + a)`).
+    pub aspect: bool,
+}
+
+impl FitList {
+    /// `params` alone.
+    pub fn of(params: Vec<Param>) -> Self {
+        Self {
+            params,
+            gains: false,
+            aspect: false,
+        }
+    }
+}
 
 /// `--fit LIST`: parameter names separated by commas, `gains` for the
-/// amplifier gains; each at most once, at least one parameter.
+/// amplifier gains, `a` for the aspect; each at most once, at least one
+/// standard parameter.
 pub fn parse_fit(text: &str) -> Result<FitList, String> {
-    let mut out: Vec<Param> = Vec::new();
-    let mut gains = false;
+    let mut out = FitList::of(Vec::new());
     for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        if name.eq_ignore_ascii_case("gains") {
-            if gains {
-                return Err("'gains' is listed twice".into());
+        let flag = if name.eq_ignore_ascii_case("gains") {
+            Some(&mut out.gains)
+        } else if name == psdcal_model::stages::Aspect::NAME {
+            Some(&mut out.aspect)
+        } else {
+            None
+        };
+        if let Some(flag) = flag {
+            if *flag {
+                return Err(format!("'{name}' is listed twice"));
             }
-            gains = true;
+            *flag = true;
             continue;
         }
-        let p: Param = name.parse().map_err(|e: UnknownParam| e.to_string())?;
-        if out.contains(&p) {
+        let p: Param = name.parse().map_err(|e: UnknownParam| {
+            format!("{e} (or gains, or a for the y axis's own scale)")
+        })?;
+        if out.params.contains(&p) {
             return Err(format!("'{p}' is listed twice"));
         }
-        out.push(p);
+        out.params.push(p);
     }
-    if out.is_empty() {
+    if out.params.is_empty() {
         return Err("expected at least one parameter, e.g. f,cx,cy,k1,k2".into());
     }
-    Ok(FitList(out, gains))
+    Ok(out)
 }
 
 /// `--robust LOSS:SCALE`: `huber:SCALE` or `cauchy:SCALE`, SCALE in units of

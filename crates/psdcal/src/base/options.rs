@@ -16,6 +16,9 @@ pub struct CalibrationOptions {
     pub choice: ModelChoice,
     /// Also estimate the amplifier gains (needs amplitudes).
     pub fit_gains: bool,
+    /// Also estimate the y axis's own scale `a` (the aspect stage,
+    /// docs/model.md §3.3).
+    pub fit_aspect: bool,
     /// Values of fixed parameters.
     pub fixed: Vec<(Param, f64)>,
     /// Nominal focal length, mm (narrows the start's search).
@@ -47,6 +50,7 @@ impl Default for CalibrationOptions {
             free: vec![Param::F, Param::Cx, Param::Cy, Param::K1, Param::K2],
             choice: ModelChoice::HeldOut,
             fit_gains: false,
+            fit_aspect: false,
             fixed: Vec::new(),
             focal_guess: None,
             cost: CostKind::Template,

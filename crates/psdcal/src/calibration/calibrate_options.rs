@@ -11,7 +11,7 @@ use psdcal_model::PsdGeometry;
 
 use crate::base::option_text::{
     parse_assignment, parse_fit, parse_robust, parse_switch, parse_uncertainty, positive_mm,
-    side_mm, FitList,
+    side_mm,
 };
 use crate::base::options::CalibrationOptions;
 use crate::dataset::data_set::LoadOptions;
@@ -70,9 +70,10 @@ pub fn calibrate_settings(pairs: &[(String, Vec<String>)]) -> Result<CalibrateSe
         let o = &mut s.options;
         match name.as_str() {
             "fit" => {
-                let FitList(free, gains) = parse_fit(one()?).map_err(named)?;
-                o.free = free;
-                o.fit_gains = gains;
+                let fit = parse_fit(one()?).map_err(named)?;
+                o.free = fit.params;
+                o.fit_gains = fit.gains;
+                o.fit_aspect = fit.aspect;
                 o.choice = psdcal_calib::ModelChoice::Given;
             }
             "focal_guess" => o.focal_guess = Some(positive_mm(one()?).map_err(named)?),

@@ -16,11 +16,11 @@ use psdcal_io::{
 };
 use psdcal_locate::CalibratedSensor;
 use psdcal_model::stages::gains::GAIN_NAMES;
-use psdcal_model::stages::Aspect;
-use psdcal_model::{Amplitudes, Param, SensorModel};
+use psdcal_model::stages::{with_aspect, Aspect};
+use psdcal_model::{Amplitudes, Model, Param, SensorModel};
 
 use crate::base::options::CalibrationOptions;
-use crate::calibration::fit_report::{FitReport, GlobalSearch, ImageRow, ParameterRow};
+use crate::calibration::fit_report::{ChoiceRows, FitReport, GlobalSearch, ImageRow, ParameterRow};
 use crate::calibration::loaded_checks::check_loaded;
 use crate::dataset::data_set::DataSet;
 
@@ -115,6 +115,13 @@ pub fn calibrate_options(options: &CalibrationOptions) -> CalibrateOptions {
     for &(p, value) in &options.fixed {
         base.set(p, value);
     }
+    let mut base: Model = base.into();
+    let mut free_stage_parameters = Vec::new();
+    if options.fit_aspect {
+        // The stage is built from a standard chain: it always takes it.
+        base = with_aspect(&base, 0.0).unwrap_or(base);
+        free_stage_parameters.push(Aspect::NAME.to_string());
+    }
     CalibrateOptions {
         init: InitOptions {
             preliminary: options.preliminary,
@@ -128,9 +135,10 @@ pub fn calibrate_options(options: &CalibrationOptions) -> CalibrateOptions {
             free: options.free.clone(),
             fit_gains: options.fit_gains,
             robust: options.robust,
+            free_stage_parameters,
             ..RefineOptions::default()
         },
-        base: base.into(),
+        base,
         uncertainty: options.uncertainty,
         choice: options.choice,
         ..CalibrateOptions::default()
@@ -216,6 +224,12 @@ pub fn record(
 /// The printable view of a result.
 pub fn fit_report(r: &CalibrationResult) -> FitReport {
     let s = &r.statistics;
+    let aspect = r.model.get(Aspect::NAME).map(|a| ParameterRow {
+        name: Aspect::NAME,
+        value: a,
+        std: r.covariance.parameters.std(Aspect::NAME),
+        unit: "1",
+    });
     let parameters = Param::ALL
         .iter()
         .map(|&p| ParameterRow {
@@ -224,6 +238,7 @@ pub fn fit_report(r: &CalibrationResult) -> FitReport {
             std: r.covariance.std(p),
             unit: p.unit(),
         })
+        .chain(aspect)
         .collect();
     let gains = match (&r.gains, r.covariance.gain_std()) {
         (Some(g), Some(sd)) => GAIN_NAMES
@@ -285,6 +300,20 @@ pub fn fit_report(r: &CalibrationResult) -> FitReport {
             .collect(),
         warnings: psdcal_calib::warning_texts(&r.warnings),
         diagnostics: r.diagnostics.clone(),
+        uncertainty: r.covariance.method.name(),
+        model_choice: r.model_choice.as_ref().map(|c| ChoiceRows {
+            candidates: c
+                .candidates
+                .iter()
+                .map(|k| {
+                    let free = k.free.join(",");
+                    let (d, se) = (k.difference_deg2, k.standard_error_deg2);
+                    (free, k.held_out_rms_deg, d, se, k.accepted)
+                })
+                .collect(),
+            chosen: c.chosen.join(","),
+            skipped: c.skipped.clone(),
+        }),
     }
 }
 

@@ -84,6 +84,24 @@ pub struct FitReport {
     /// What the fit noticed about itself, with stable codes (docs/formats.md;
     /// calibration.json's `diagnostics`).
     pub diagnostics: Vec<psdcal_model::Diagnostic>,
+    /// How σ was computed (`jackknife`, `linear`, …).
+    pub uncertainty: &'static str,
+    /// The model choice, when `calibrate` chose the freed parameters.
+    pub model_choice: Option<ChoiceRows>,
+}
+
+/// The model choice's candidates (docs/model.md §4.8).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChoiceRows {
+    /// Per candidate, in the order tried: its freed parameters, its RMS
+    /// held-out angle error (degrees), the mean per-image difference of
+    /// squared held-out angles against the set it was compared with and its
+    /// standard error (deg²), whether it was taken.
+    pub candidates: Vec<(String, f64, f64, f64, bool)>,
+    /// The chosen freed parameters.
+    pub chosen: String,
+    /// Why no candidate was scored, when none was.
+    pub skipped: Option<String>,
 }
 
 impl fmt::Display for FitReport {
@@ -163,6 +181,10 @@ impl fmt::Display for FitReport {
             "iterations:       {} ({})",
             r.iterations, r.termination
         )?;
+        writeln!(out, "σ:                {}", uncertainty_words(r.uncertainty))?;
+        if let Some(choice) = &r.model_choice {
+            write_choice(out, choice)?;
+        }
         if let Some(g) = &r.global {
             writeln!(
                 out,
@@ -188,4 +210,44 @@ impl fmt::Display for FitReport {
         }
         writeln!(out)
     }
+}
+
+/// The σ method in words.
+fn uncertainty_words(method: &str) -> String {
+    match method {
+        "jackknife" => "linear, raised to the jackknife over images where that is larger".into(),
+        "linear" => "linear (from the fit's linearisation and its residual noise)".into(),
+        other => other.to_string(),
+    }
+}
+
+/// The model choice's table.
+fn write_choice(out: &mut fmt::Formatter<'_>, choice: &ChoiceRows) -> fmt::Result {
+    if let Some(reason) = &choice.skipped {
+        return writeln!(
+            out,
+            "model:            {} (no choice by held-out error: {reason})",
+            choice.chosen
+        );
+    }
+    writeln!(
+        out,
+        "model chosen:     {} (by leave-one-image-out angle error)",
+        choice.chosen
+    )?;
+    writeln!(
+        out,
+        "  {:<34} {:>12}   {:>22}",
+        "candidate", "held-out", "Δ per image (deg²)"
+    )?;
+    for (k, (free, rms_deg, diff, se, taken)) in choice.candidates.iter().enumerate() {
+        let delta = if k == 0 {
+            "base".to_string()
+        } else {
+            format!("{diff:+.2e} ± {se:.1e}")
+        };
+        let mark = if *taken && k > 0 { "  taken" } else { "" };
+        writeln!(out, "  {free:<34} {rms_deg:>11.5}°   {delta:>22}{mark}")?;
+    }
+    Ok(())
 }

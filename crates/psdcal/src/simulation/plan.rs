@@ -21,6 +21,7 @@ use serde_json::json;
 use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 use crate::base::option_text::FitList;
+use psdcal_model::stages::{with_aspect, Aspect};
 use crate::simulation::simulate::{chain_with_record, DEFAULT_RECORD_CYCLES};
 
 /// What to plan.
@@ -105,16 +106,20 @@ fn setup(request: &PlanRequest) -> Result<(PlanSetup, Option<LoadedSensor>)> {
     }
     let gains = psdcal_model::stages::gains::GAIN_NAMES;
     let free: Vec<String> = match (&request.fit, &loaded) {
-        (Some(FitList(fit, with_gains)), _) => fit
+        (Some(fit), _) => fit
+            .params
             .iter()
             .map(|p| p.name())
-            .chain(gains.into_iter().filter(|_| *with_gains))
+            .chain(gains.into_iter().filter(|_| fit.gains))
+            .chain(Some(Aspect::NAME).filter(|_| fit.aspect))
             .map(str::to_string)
             .collect(),
         (None, Some(l)) => {
             let names = l.sensor.covariance.names();
             let standard = names.iter().filter(|n| n.parse::<Param>().is_ok());
-            let fitted = names.iter().filter(|n| gains.contains(&n.as_str()));
+            let fitted = names
+                .iter()
+                .filter(|n| gains.contains(&n.as_str()) || n.as_str() == Aspect::NAME);
             standard.chain(fitted).cloned().collect()
         }
         (None, None) => psdcal_calib::RefineOptions::default().free_names(),
@@ -129,6 +134,12 @@ fn setup(request: &PlanRequest) -> Result<(PlanSetup, Option<LoadedSensor>)> {
         Model::standard_with_gains(&sensor, geometry, &nominal.unwrap_or(ChannelGains::UNIT))
     } else {
         Model::standard(&sensor)
+    };
+    let model = if free.iter().any(|n| n == Aspect::NAME) {
+        let a = loaded.as_ref().and_then(|l| l.sensor.aspect).unwrap_or(0.0);
+        with_aspect(&model, a)?
+    } else {
+        model
     };
     model.validate()?;
     Ok((
