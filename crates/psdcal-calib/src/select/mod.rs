@@ -1,7 +1,11 @@
 //! The model the data choose (docs/model.md §4.8): each image's influence on
 //! a fit from its linearisation ([`influence`]: leave-one-image-out
-//! estimates and held-out angle errors without refitting), and the choice
-//! among nested parameter sets by their held-out error ([`choose`]).
+//! estimates and held-out angle errors without refitting), the score test
+//! that spares refitting a group the data do not ask for ([`screen`]), a
+//! candidate group's fit and score ([`candidate`]), and the choice among
+//! nested parameter sets by their held-out error ([`choose`]).
 
+pub mod candidate;
 pub mod choose;
 pub mod influence;
+pub mod screen;

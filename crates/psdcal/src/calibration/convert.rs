@@ -307,8 +307,11 @@ pub fn fit_report(r: &CalibrationResult) -> FitReport {
                 .iter()
                 .map(|k| {
                     let free = k.free.join(",");
-                    let (d, se) = (k.difference_deg2, k.standard_error_deg2);
-                    (free, k.held_out_rms_deg, d, se, k.accepted)
+                    let held_out = k.held_out_rms_deg.map(|rms| {
+                        let l = k.log_ratio.unwrap_or(0.0);
+                        (rms, l, k.log_ratio_se.unwrap_or(0.0))
+                    });
+                    (free, k.score_statistic, held_out, k.accepted)
                 })
                 .collect(),
             chosen: c.chosen.join(","),

@@ -90,14 +90,19 @@ pub struct FitReport {
     pub model_choice: Option<ChoiceRows>,
 }
 
+/// One candidate: freed parameters, score statistic, (held-out RMS, mean
+/// log ratio, standard error) when refitted, taken.
+pub type CandidateRow = (String, Option<f64>, Option<(f64, f64, f64)>, bool);
+
 /// The model choice's candidates (docs/model.md §4.8).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChoiceRows {
-    /// Per candidate, in the order tried: its freed parameters, its RMS
-    /// held-out angle error (degrees), the mean per-image difference of
-    /// squared held-out angles against the set it was compared with and its
-    /// standard error (deg²), whether it was taken.
-    pub candidates: Vec<(String, f64, f64, f64, bool)>,
+    /// Per candidate, in the order tried: its freed parameters, its score
+    /// statistic, when refitted its RMS held-out angle error (degrees) and
+    /// the mean per-image log ratio of squared held-out angles against the
+    /// set it was compared with with its standard error, whether it was
+    /// taken.
+    pub candidates: Vec<CandidateRow>,
     /// The chosen freed parameters.
     pub chosen: String,
     /// Why no candidate was scored, when none was.
@@ -237,17 +242,18 @@ fn write_choice(out: &mut fmt::Formatter<'_>, choice: &ChoiceRows) -> fmt::Resul
     )?;
     writeln!(
         out,
-        "  {:<34} {:>12}   {:>22}",
-        "candidate", "held-out", "Δ per image (deg²)"
+        "  {:<34} {:>8} {:>12}   {:>22}",
+        "candidate", "score", "held-out", "ln ratio per image"
     )?;
-    for (k, (free, rms_deg, diff, se, taken)) in choice.candidates.iter().enumerate() {
-        let delta = if k == 0 {
-            "base".to_string()
-        } else {
-            format!("{diff:+.2e} ± {se:.1e}")
+    for (k, (free, lm, held_out, taken)) in choice.candidates.iter().enumerate() {
+        let lm = lm.map_or_else(String::new, |v| format!("{v:.1}"));
+        let (rms, delta) = match held_out {
+            Some((rms, _, _)) if k == 0 => (format!("{rms:.5}°"), "base".to_string()),
+            Some((rms, l, se)) => (format!("{rms:.5}°"), format!("{l:+.3} ± {se:.3}")),
+            None => (String::new(), "not refitted (score ≤ k)".to_string()),
         };
         let mark = if *taken && k > 0 { "  taken" } else { "" };
-        writeln!(out, "  {free:<34} {rms_deg:>11.5}°   {delta:>22}{mark}")?;
+        writeln!(out, "  {free:<34} {lm:>8} {rms:>12}   {delta:>22}{mark}")?;
     }
     Ok(())
 }
