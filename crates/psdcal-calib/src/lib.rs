@@ -65,8 +65,8 @@ pub use refine::{
     refine, CalibrationProblem, CostKind, FitState, RefineOptions, RefineReport, Refined,
     RobustLoss, Termination,
 };
-pub use select::choose::{CandidateScore, ModelChoice, ModelChoiceReport};
-pub use select::influence::ImageInfluence;
+pub use select::choose::{CandidateScore, ModelChoice, ModelChoiceReport, NeighbourScore};
+pub use select::influence::{influence, ImageInfluence};
 pub use start::homography::{fit_homography, Homography, HomographyFit, HomographyOptions};
 pub use start::initialize::{initialize, InitOptions, InitReport, InitRoute, Initialization};
 pub use start::preliminary::{

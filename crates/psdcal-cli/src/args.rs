@@ -43,9 +43,10 @@ pub struct CalibrateArgs {
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
     /// Parameters to estimate, exactly these, comma-separated (the others
-    /// stay fixed); add `gains` to self-calibrate the amplifier gains (needs
-    /// --signals). Without it: f,cx,cy,k1,k2 and whichever of k3; p1,p2;
-    /// l1; skew lower the held-out angle error beyond its noise
+    /// stay fixed); `a` frees the y axis's own scale (fy = f (1 + a)); add
+    /// `gains` to self-calibrate the amplifier gains (needs --signals).
+    /// Without it the data choose: f,cx,cy,k1,k2 and whichever of a; k3;
+    /// p1,p2; l1; skew lower the held-out angle error beyond its noise
     #[arg(long, value_name = "LIST", value_parser = parse_fit)]
     pub fit: Option<FitList>,
     /// Nominal focal length of the lens, mm (narrows the start's search)

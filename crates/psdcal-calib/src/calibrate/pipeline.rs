@@ -24,6 +24,7 @@ use crate::refine::refined::Refined;
 use crate::refine::robust_scale::{absolute, residual_noise, RESCALE_TOLERANCE};
 use crate::refine::solve::refine;
 use crate::select::choose::{choose, ModelChoice, ModelChoiceReport};
+use crate::select::choice_spread::{choice_covariance, Neighbour};
 use crate::select::influence::jackknife_raised;
 use crate::start::initialize::{initialize, InitRoute, Initialization};
 use crate::start::misplaced::misplaced_led;
@@ -99,7 +100,7 @@ fn calibrate_as_given(
     let (refined, at_solution) = rescale_robust(data, options, at_start, refined)?;
     let options = &at_solution;
     check_converged(&refined)?;
-    let (refined, global, chosen_options, model_choice) =
+    let (refined, global, chosen_options, model_choice, neighbours) =
         choose_model(data, options, &init, refined, global)?;
     let options = &chosen_options;
     let (refined, refine_options) = match &options.prior {
@@ -118,6 +119,7 @@ fn calibrate_as_given(
         options,
         after_fit.covariance,
     )?;
+    let covariance = with_choice_spread(covariance, &neighbours)?;
     let linearity = profiled_linearity(
         data,
         &refined,
@@ -167,6 +169,7 @@ type ChosenFit = (
     Option<GlobalReport>,
     CalibrateOptions,
     Option<ModelChoiceReport>,
+    Vec<Neighbour>,
 );
 
 fn choose_model(
@@ -184,7 +187,7 @@ fn choose_model(
         && refined.weights.is_none()
         && data.images.len() >= 3;
     if !eligible {
-        return Ok((refined, global, options.clone(), None));
+        return Ok((refined, global, options.clone(), None, Vec::new()));
     }
     let global_options = GlobalOptions {
         init: options.init,
@@ -198,7 +201,7 @@ fn choose_model(
         // without it the given parameters are fitted, and the report says why.
         Err(CalibError::Degenerate { reason }) => {
             let report = ModelChoiceReport::skipped(r.free_names(), reason);
-            return Ok((base.0, base.1, options.clone(), Some(report)));
+            return Ok((base.0, base.1, options.clone(), Some(report), Vec::new()));
         }
         Err(e) => return Err(e),
     };
@@ -209,7 +212,29 @@ fn choose_model(
         chosen.global,
         chosen_options,
         Some(chosen.report),
+        chosen.neighbours,
     ))
+}
+
+/// The default covariance widened by the models the data could as well have
+/// chosen ([`crate::select::choice_spread`]); any other method as it is.
+fn with_choice_spread(
+    covariance: Covariance,
+    neighbours: &[Neighbour],
+) -> Result<Covariance, CalibError> {
+    if covariance.method != CovarianceMethod::Jackknife || neighbours.is_empty() {
+        return Ok(covariance);
+    }
+    let names = covariance.names().to_vec();
+    let widened = covariance.parameters.matrix() + choice_covariance(neighbours, &names);
+    let parameters = ParameterCovariance::new(names, widened).map_err(|e| CalibError::Numerical {
+        stage: "covariance",
+        reason: e.to_string(),
+    })?;
+    Ok(Covariance {
+        parameters,
+        ..covariance
+    })
 }
 
 /// `options` with the robust loss (given in units of the residuals' noise)

@@ -33,7 +33,10 @@
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 
 use crate::problem::calibration_problem::point_error;
+use crate::data::CalibrationData;
 use crate::refine::linearization::AtSolution;
+use crate::refine::options::RefineOptions;
+use crate::refine::refined::Refined;
 use crate::CalibError;
 
 /// What each image does to the fit ([module documentation](self)).
@@ -225,4 +228,15 @@ pub(crate) fn jackknife_raised(
     Ok(DMatrix::from_fn(p, p, |i, j| {
         analytic[(i, j)] * d[i] * d[j]
     }))
+}
+
+/// Each image's influence on the fit `refined` of `data` under `options`
+/// (freed parameters and cost), from the linearisation at its solution
+/// ([module documentation](self)).
+pub fn influence(
+    data: &CalibrationData,
+    refined: &Refined,
+    options: &RefineOptions,
+) -> Result<ImageInfluence, CalibError> {
+    image_influence(&AtSolution::new(data, refined, options)?)
 }
