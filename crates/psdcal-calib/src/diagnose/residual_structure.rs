@@ -389,7 +389,9 @@ fn structure(
                  ({:.0} % of the residual, F = {:.1} on {} and {} degrees of freedom) that the \
                  model cannot follow ({tried}): distortion beyond the model's stages (a \
                  wide-angle lens, a non-radial PSD non-linearity: measure a PSD map with \
-                 psdcal psd-map) or errors in the template's coordinates",
+                 psdcal psd-map) or errors in the template's coordinates; σ covers the \
+                 noise, not this structure: f and the centre may differ from another \
+                 model's by more than 3σ",
                 100.0 * t.explained,
                 t.f,
                 t.df1,

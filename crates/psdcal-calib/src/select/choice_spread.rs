@@ -2,17 +2,15 @@
 //! parameters' covariance widened by the neighbouring models the data could
 //! as well have chosen.
 //!
-//! A neighbour is a model one group away from the chosen one: the set
-//! without a group the choice took, or with a group of the last round it
-//! refitted and did not take. Its estimate differs from the chosen one by
-//! `δ_k` (over the chosen parameters; a parameter the neighbour does not
-//! free counts at the value it is held at, zero). Another data set from the
-//! same sensor would choose it with about the probability
+//! A neighbour is the chosen model without one of the groups the choice
+//! took. Its estimate differs from the chosen one by `δ_k` (over the chosen
+//! parameters; a parameter the neighbour does not free counts at the value
+//! it is held at, zero). Another data set from the same sensor would not
+//! take the group with about the probability
 //!
 //! ```text
-//! p_k = P(T > 1) · P(LM > c_k)            (a group not taken)
-//! p_k = 1 − P(T > 1) · P(LM > c_k)        (a group taken)
-//! P(T > 1) = Φ(t − 1),   P(LM > c_k) = Φ(√LM − √c_k)
+//! p_k = 1 − P(T > 1) · P(LM > c_k),    P(T > 1) = Φ(t − 1),
+//! P(LM > c_k) = Φ(√LM − √c_k)
 //! ```
 //!
 //! with `t` the held-out test's statistic in standard errors (the larger of
@@ -37,12 +35,17 @@ use crate::select::candidate::Scored;
 pub(crate) struct Neighbour {
     /// The group's freed parameters (for the report).
     pub free: Vec<String>,
-    /// `(parameter, chosen − neighbour)` for each parameter the neighbour
-    /// or the chosen model frees.
+    /// `(parameter, chosen − neighbour)` for each chosen parameter.
     pub delta: Vec<(String, f64)>,
     /// `p_k`.
     pub probability: f64,
 }
+
+/// The least probability of a neighbour that counts. The normal
+/// approximations are not accurate in their far tails, and a neighbour the
+/// data reject that strongly is no alternative: without the aspect on 2:1
+/// pixels (`p` about 1e-5), its `δ_f` of millimetres doubled σ(f).
+pub const PLAUSIBLE: f64 = 0.01;
 
 /// The standard normal distribution function (Abramowitz–Stegun 7.1.26 on
 /// erfc; absolute error below 1.5e-7).
@@ -61,7 +64,8 @@ pub(crate) fn normal_cdf(z: f64) -> f64 {
 }
 
 /// The probability that another data set passes the group:
-/// `Φ(t − pass) · Φ(√LM − √c)` (no score statistic: the held-out part only).
+/// `Φ(t − pass) · Φ(√LM − √c)` (no score statistic: the held-out part
+/// only).
 pub(crate) fn pass_probability(t: f64, pass: f64, lm: Option<f64>, threshold: f64) -> f64 {
     let held_out = normal_cdf(t - pass);
     let evidence = lm.map_or(1.0, |lm| normal_cdf(lm.max(0.0).sqrt() - threshold.sqrt()));
@@ -84,7 +88,7 @@ pub(crate) fn difference_of(a: &Scored, b: &Scored, names: &[String]) -> Vec<(St
 pub(crate) fn choice_covariance(neighbours: &[Neighbour], names: &[String]) -> DMatrix<f64> {
     let p = names.len();
     let mut c = DMatrix::zeros(p, p);
-    for n in neighbours {
+    for n in neighbours.iter().filter(|n| n.probability >= PLAUSIBLE) {
         let d = DVector::from_iterator(
             p,
             names.iter().map(|name| {
@@ -125,9 +129,15 @@ mod tests {
                 delta: vec![("f".into(), 1.0)],
                 probability: 0.5,
             },
+            Neighbour {
+                free: vec!["a".into()],
+                delta: vec![("f".into(), 1e3)],
+                probability: 1e-5,
+            },
         ];
         let c = choice_covariance(&neighbours, &names);
-        // 0.25 (4, −2; −2, 1) + 0.5 (1, 0; 0, 0).
+        // 0.25 (4, −2; −2, 1) + 0.5 (1, 0; 0, 0); the implausible third
+        // not counted.
         assert_eq!(c, DMatrix::from_row_slice(2, 2, &[1.5, -0.5, -0.5, 0.25]));
     }
 }

@@ -119,20 +119,18 @@ pub struct ModelChoiceReport {
     /// Why no candidate was scored, when none was (the given parameters
     /// were fitted).
     pub skipped: Option<String>,
-    /// The models one group away (the group taken away or added) and the
-    /// probability that another data set would choose them, whose spread
-    /// the default σ includes ([`crate::select::choice_spread`]).
+    /// The models without one of the groups taken and the probability
+    /// that another data set would choose them, whose spread the default σ
+    /// includes ([`crate::select::choice_spread`]).
     pub neighbours: Vec<NeighbourScore>,
 }
 
 /// A neighbouring model in the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NeighbourScore {
-    /// The group taken away or added.
+    /// The group taken, which the neighbour lacks.
     pub group: Vec<String>,
-    /// Whether the choice took the group (the neighbour is without it).
-    pub taken: bool,
-    /// The probability that another data set would choose the neighbour.
+    /// The probability that another data set would not take it.
     pub probability: f64,
 }
 
@@ -306,10 +304,8 @@ pub(crate) fn choose(
     // Per candidate, the probability another data set would pass it.
     let mut pass: Vec<f64> = vec![1.0];
     let mut taken: Vec<Neighbour> = Vec::new();
-    let mut last_round: Vec<Neighbour> = Vec::new();
     loop {
         let mut passing: Vec<(usize, Scored, Group)> = Vec::new();
-        last_round.clear();
         // l1 last in a round: its global search runs when another group
         // passed (the model misses something), local refinements otherwise.
         let order = remaining
@@ -357,13 +353,6 @@ pub(crate) fn choose(
             pass.push(pass_probability(t, PASS_SE, lm, threshold));
             if evidence && mean < 0.0 && held_out && log_ratio.is_finite() {
                 passing.push((candidates.len() - 1, scored, group));
-            } else {
-                let names = scored.options.free_names();
-                last_round.push(Neighbour {
-                    free: group.names(),
-                    delta: difference_of(&current, &scored, &names),
-                    probability: pass[candidates.len() - 1],
-                });
             }
         }
         let best = simplest_near_best(passing);
@@ -385,15 +374,11 @@ pub(crate) fn choose(
     }
     let neighbours: Vec<NeighbourScore> = taken
         .iter()
-        .map(|n| (n, true))
-        .chain(last_round.iter().map(|n| (n, false)))
-        .map(|(n, taken)| NeighbourScore {
+        .map(|n| NeighbourScore {
             group: n.free.clone(),
-            taken,
             probability: n.probability,
         })
         .collect();
-    taken.append(&mut last_round);
     Ok(Chosen {
         report: ModelChoiceReport {
             rule: RULE,
