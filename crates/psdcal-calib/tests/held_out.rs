@@ -87,7 +87,10 @@ fn one_step_is_the_refit_without_the_image() {
         // The jackknife σ from the steps: measured within 0.1–4 % of the
         // refits'.
         for (refit, step) in sigmas {
-            assert!((step / refit - 1.0).abs() < 0.1, "jackknife σ {step} vs refits' {refit}");
+            assert!(
+                (step / refit - 1.0).abs() < 0.1,
+                "jackknife σ {step} vs refits' {refit}"
+            );
         }
     }
 }

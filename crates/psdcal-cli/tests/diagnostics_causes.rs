@@ -54,7 +54,10 @@ fn the_misfit_names_the_missing_term_and_never_a_fitted_one() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&cal).unwrap()).unwrap();
     let chosen = &json["fit"]["model_choice"]["chosen"];
-    assert!(chosen.as_array().unwrap().iter().any(|n| n == "l1"), "{chosen}");
+    assert!(
+        chosen.as_array().unwrap().iter().any(|n| n == "l1"),
+        "{chosen}"
+    );
     // A non-radial non-linearity: no single term is blamed.
     let (t, o) = simulate(dir.path(), "nl", &["--psd-nonlinearity"]);
     let run = calibrate(&t, &o, &[], &cal);

@@ -107,9 +107,7 @@ fn build(sensor: &SensorState<'_>, chain: Model, key: ChainKey) -> SensorChains 
         Some(a) => with_aspect_stage(&standard, *a),
         None => standard,
     };
-    let aspect_columns = standard
-        .index(Aspect::NAME)
-        .zip(chain.index(Aspect::NAME));
+    let aspect_columns = standard.index(Aspect::NAME).zip(chain.index(Aspect::NAME));
     SensorChains {
         standard,
         aspect_columns,

@@ -10,8 +10,8 @@
 use std::path::{Path, PathBuf};
 
 use nalgebra::Vector2;
-use psdcal::{calibrate, sensor_of, CalibrationOptions, DataSet, DataSetFiles, LoadOptions};
 use psdcal::PointSource;
+use psdcal::{calibrate, sensor_of, CalibrationOptions, DataSet, DataSetFiles, LoadOptions};
 use psdcal_locate::{LocateOptions, Measurement};
 use psdcal_model::{DiagnosticCode, PsdGeometry};
 
@@ -30,7 +30,10 @@ fn real_sets() -> Vec<PathBuf> {
 
 fn load(dir: &Path) -> DataSet {
     let size = std::fs::read_to_string(dir.join("sensor.txt")).expect("sensor.txt");
-    let lengths: Vec<f64> = size.split_whitespace().map(|v| v.parse().unwrap()).collect();
+    let lengths: Vec<f64> = size
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect();
     let files = DataSetFiles {
         template: dir.join("template.csv"),
         points: PointSource::Observations(dir.join("observations.csv")),
@@ -61,8 +64,16 @@ fn in_pixels(
     [
         (f / PITCH_MM, var("f", "f").sqrt() / PITCH_MM, "fx"),
         (f * (1.0 + a) / PITCH_MM, var_fy.sqrt() / PITCH_MM, "fy"),
-        (px(get("cx"), geometry.lx / 2.0), var("cx", "cx").sqrt() / PITCH_MM, "cx"),
-        (px(get("cy"), geometry.ly / 2.0), var("cy", "cy").sqrt() / PITCH_MM, "cy"),
+        (
+            px(get("cx"), geometry.lx / 2.0),
+            var("cx", "cx").sqrt() / PITCH_MM,
+            "cx",
+        ),
+        (
+            px(get("cy"), geometry.ly / 2.0),
+            var("cy", "cy").sqrt() / PITCH_MM,
+            "cy",
+        ),
     ]
 }
 

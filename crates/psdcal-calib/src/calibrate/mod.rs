@@ -34,6 +34,7 @@
 mod finish;
 mod gain_starts;
 mod helper;
+mod model_choice;
 mod options;
 mod pipeline;
 mod result;

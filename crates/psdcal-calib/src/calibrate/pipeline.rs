@@ -9,6 +9,7 @@ use std::sync::Arc;
 use crate::calibrate::finish::{check_data_in_domain, check_data_in_region, settle_block};
 use crate::calibrate::gain_starts::refine_from_gain_starts;
 use crate::calibrate::helper::Helper;
+use crate::calibrate::model_choice::{choose_model, with_choice_spread};
 use crate::calibrate::options::{seeded_base, CalibrateOptions, Uncertainty};
 use crate::calibrate::result::CalibrationResult;
 use crate::data::CalibrationData;
@@ -23,10 +24,8 @@ use crate::refine::options::RefineOptions;
 use crate::refine::refined::Refined;
 use crate::refine::robust_scale::{absolute, residual_noise, RESCALE_TOLERANCE};
 use crate::refine::solve::refine;
-use crate::select::choose::{choose, ModelChoice, ModelChoiceReport};
-use crate::select::choice_spread::{choice_covariance, Neighbour};
 use crate::select::influence::jackknife_raised;
-use crate::start::initialize::{initialize, InitRoute, Initialization};
+use crate::start::initialize::{initialize, Initialization};
 use crate::start::misplaced::misplaced_led;
 use crate::uncertainty::bootstrap::{bootstrap_covariance, BootstrapReport};
 use crate::uncertainty::covariance::{
@@ -157,84 +156,6 @@ fn calibrate_as_given(
         model_choice,
     };
     Ok((result, options.clone()))
-}
-
-/// With [`ModelChoice::HeldOut`] (and an unweighted, non-robust fit
-/// without gains or prior), the freed parameters grown by held-out error
-/// from the base fit ([`crate::select::choose`]); otherwise the base fit.
-/// Returns the fit, its global search's report, the options with the
-/// chosen freed parameters and the choice's report.
-type ChosenFit = (
-    Refined,
-    Option<GlobalReport>,
-    CalibrateOptions,
-    Option<ModelChoiceReport>,
-    Vec<Neighbour>,
-);
-
-fn choose_model(
-    data: &CalibrationData,
-    options: &CalibrateOptions,
-    init: &Initialization,
-    refined: Refined,
-    global: Option<GlobalReport>,
-) -> Result<ChosenFit, CalibError> {
-    let r = &options.refine;
-    let eligible = options.choice == ModelChoice::HeldOut
-        && !r.fit_gains
-        && r.robust.is_none()
-        && options.prior.is_none()
-        && refined.weights.is_none()
-        && data.images.len() >= 3;
-    if !eligible {
-        return Ok((refined, global, options.clone(), None, Vec::new()));
-    }
-    let global_options = GlobalOptions {
-        init: options.init,
-        ..options.global.clone()
-    };
-    let cold_aspect = init.report.route != InitRoute::ClosedForm;
-    let base = (refined.clone(), global.clone());
-    let chosen = match choose(data, refined, global, r, cold_aspect, &global_options) {
-        Ok(chosen) => chosen,
-        // Held-out errors need every image's leave-one-out fit determined:
-        // without it the given parameters are fitted, and the report says why.
-        Err(CalibError::Degenerate { reason }) => {
-            let report = ModelChoiceReport::skipped(r.free_names(), reason);
-            return Ok((base.0, base.1, options.clone(), Some(report), Vec::new()));
-        }
-        Err(e) => return Err(e),
-    };
-    let mut chosen_options = options.clone();
-    chosen_options.refine = chosen.options;
-    Ok((
-        chosen.refined,
-        chosen.global,
-        chosen_options,
-        Some(chosen.report),
-        chosen.neighbours,
-    ))
-}
-
-/// The default covariance widened by the models the data could as well have
-/// chosen ([`crate::select::choice_spread`]); any other method as it is.
-fn with_choice_spread(
-    covariance: Covariance,
-    neighbours: &[Neighbour],
-) -> Result<Covariance, CalibError> {
-    if covariance.method != CovarianceMethod::Jackknife || neighbours.is_empty() {
-        return Ok(covariance);
-    }
-    let names = covariance.names().to_vec();
-    let widened = covariance.parameters.matrix() + choice_covariance(neighbours, &names);
-    let parameters = ParameterCovariance::new(names, widened).map_err(|e| CalibError::Numerical {
-        stage: "covariance",
-        reason: e.to_string(),
-    })?;
-    Ok(Covariance {
-        parameters,
-        ..covariance
-    })
 }
 
 /// `options` with the robust loss (given in units of the residuals' noise)

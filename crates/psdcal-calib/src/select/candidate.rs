@@ -225,7 +225,7 @@ pub(crate) enum Outcome {
     /// Not refitted: its score statistic (at most its parameter count).
     Screened(f64),
     /// Refitted from the current fit: its score statistic and its scores.
-    Fitted(Option<f64>, Scored),
+    Fitted(Option<f64>, Box<Scored>),
     /// Its fit failed.
     Failed,
 }
@@ -251,7 +251,7 @@ pub(crate) fn evaluate(
     // Other starts of l1 only on strong evidence for it.
     let strong = lm.is_none_or(|(lm, _)| lm > STRONG_SCORE);
     match fit_candidate(data, current, group, &next, (cold_aspect, strong), global) {
-        Some(scored) => Outcome::Fitted(lm.map(|(lm, _)| lm), scored),
+        Some(scored) => Outcome::Fitted(lm.map(|(lm, _)| lm), Box::new(scored)),
         None => Outcome::Failed,
     }
 }
@@ -275,4 +275,3 @@ pub(crate) fn searched_l1(
         _ => scored,
     }
 }
-

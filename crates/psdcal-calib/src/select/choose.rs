@@ -34,10 +34,10 @@ use crate::data::CalibrationData;
 use crate::refine::global::{GlobalOptions, GlobalReport};
 use crate::refine::options::RefineOptions;
 use crate::refine::refined::Refined;
-use crate::select::choice_spread::{difference_of, pass_probability, Neighbour};
 use crate::select::candidate::{
     evaluate, score, searched_l1, settled, Group, Outcome, Scored, GROUPS, L1,
 };
+use crate::select::choice_spread::{difference_of, pass_probability, Neighbour};
 use crate::CalibError;
 
 /// Whether [`calibrate`](fn@crate::calibrate) fits the parameters it is
@@ -205,7 +205,13 @@ fn on_two_threads<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> 
         let mut mine = mine.into_iter();
         let mut theirs = theirs.into_iter();
         (0..items.len())
-            .filter_map(|k| if k % 2 == 0 { mine.next() } else { theirs.next() })
+            .filter_map(|k| {
+                if k % 2 == 0 {
+                    mine.next()
+                } else {
+                    theirs.next()
+                }
+            })
             .collect()
     })
 }
@@ -325,7 +331,7 @@ pub(crate) fn choose(
                     pass.push(0.0);
                     continue;
                 }
-                Outcome::Fitted(lm, scored) => (lm, scored),
+                Outcome::Fitted(lm, scored) => (lm, *scored),
             };
             // l1's global search when another group passed in this round.
             let scored = if group == L1 && !passing.is_empty() {
@@ -349,7 +355,8 @@ pub(crate) fn choose(
             let evidence = lm.is_none_or(|lm| lm > threshold);
             let held_out = mean < -PASS_SE * se || log_ratio < -PASS_SE * log_se;
             // The held-out test's statistic, in standard errors.
-            let t = (-mean / se.max(f64::MIN_POSITIVE)).max(-log_ratio / log_se.max(f64::MIN_POSITIVE));
+            let t =
+                (-mean / se.max(f64::MIN_POSITIVE)).max(-log_ratio / log_se.max(f64::MIN_POSITIVE));
             pass.push(pass_probability(t, PASS_SE, lm, threshold));
             if evidence && mean < 0.0 && held_out && log_ratio.is_finite() {
                 passing.push((candidates.len() - 1, scored, group));

@@ -32,8 +32,8 @@
 
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 
-use crate::problem::calibration_problem::point_error;
 use crate::data::CalibrationData;
+use crate::problem::calibration_problem::point_error;
 use crate::refine::linearization::AtSolution;
 use crate::refine::options::RefineOptions;
 use crate::refine::refined::Refined;

@@ -108,8 +108,8 @@ mod tests {
         let without = refine(&data, Model::standard(&m0), &p0, &base).expect("converges");
         let mut next = base.clone();
         next.free.push(Param::L1);
-        let (lm, k) = score_statistic(&data, &without, &next, &["l1".to_string()])
-            .expect("a statistic");
+        let (lm, k) =
+            score_statistic(&data, &without, &next, &["l1".to_string()]).expect("a statistic");
         assert_eq!(k, 1);
         let with = refine(&data, without.model.clone(), &without.poses, &next).expect("converges");
         let dof = 2 * data.point_count() - (6 + 6 * data.images.len());

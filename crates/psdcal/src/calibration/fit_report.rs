@@ -186,7 +186,11 @@ impl fmt::Display for FitReport {
             "iterations:       {} ({})",
             r.iterations, r.termination
         )?;
-        writeln!(out, "σ:                {}", uncertainty_words(r.uncertainty))?;
+        writeln!(
+            out,
+            "σ:                {}",
+            uncertainty_words(r.uncertainty)
+        )?;
         if let Some(choice) = &r.model_choice {
             write_choice(out, choice)?;
         }

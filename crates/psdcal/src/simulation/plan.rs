@@ -21,8 +21,8 @@ use serde_json::json;
 use crate::answer::loaded_sensor::LoadedSensor;
 use crate::base::error::{Error, Result};
 use crate::base::option_text::FitList;
-use psdcal_model::stages::{with_aspect, Aspect};
 use crate::simulation::simulate::{chain_with_record, DEFAULT_RECORD_CYCLES};
+use psdcal_model::stages::{with_aspect, Aspect};
 
 /// What to plan.
 #[derive(Debug, Clone, PartialEq)]
