@@ -23,16 +23,20 @@ pub enum DiagnosticCode {
     /// Points fall where the measured → ideal map is not one-to-one
     /// (docs/model.md §8.2).
     OutsideValidRegion,
+    /// `f` or the centre moves by more than 3σ with a group the model
+    /// choice took: a model without it disagrees (docs/model.md §4.8).
+    ModelDependent,
 }
 
 impl DiagnosticCode {
     /// Every code, in documentation order.
-    pub const ALL: [DiagnosticCode; 5] = [
+    pub const ALL: [DiagnosticCode; 6] = [
         DiagnosticCode::LocalMinimumSuspected,
         DiagnosticCode::ModelMisfit,
         DiagnosticCode::GainImbalanceSuspected,
         DiagnosticCode::UncertaintyUnreliable,
         DiagnosticCode::OutsideValidRegion,
+        DiagnosticCode::ModelDependent,
     ];
 
     /// The code as written in files and JSON.
@@ -43,6 +47,7 @@ impl DiagnosticCode {
             DiagnosticCode::GainImbalanceSuspected => "gain_imbalance_suspected",
             DiagnosticCode::UncertaintyUnreliable => "uncertainty_unreliable",
             DiagnosticCode::OutsideValidRegion => "outside_valid_region",
+            DiagnosticCode::ModelDependent => "model_dependent",
         }
     }
 }

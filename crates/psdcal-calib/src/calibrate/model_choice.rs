@@ -3,13 +3,13 @@
 //! ([`crate::select::choose`]), and the default covariance widened by the
 //! choice's own spread ([`crate::select::choice_spread`]).
 
-use psdcal_model::ParameterCovariance;
+use psdcal_model::{Diagnostic, DiagnosticCode, ParameterCovariance};
 
 use crate::calibrate::options::CalibrateOptions;
 use crate::data::CalibrationData;
 use crate::refine::global::{GlobalOptions, GlobalReport};
 use crate::refine::refined::Refined;
-use crate::select::choice_spread::{choice_covariance, Neighbour};
+use crate::select::choice_spread::{choice_covariance, Neighbour, PLAUSIBLE};
 use crate::select::choose::{choose, ModelChoice, ModelChoiceReport};
 use crate::start::initialize::{InitRoute, Initialization};
 use crate::uncertainty::covariance::{Covariance, CovarianceMethod};
@@ -91,5 +91,44 @@ pub(crate) fn with_choice_spread(
     Ok(Covariance {
         parameters,
         ..covariance
+    })
+}
+
+/// An information diagnostic when `f`, `cx` or `cy` moves by more than 3σ
+/// with a group the choice took narrowly (a plausible neighbour,
+/// `model_dependent`): a model without the group (another program's
+/// default, a fit with `--fit`) disagrees beyond σ, by design.
+pub(crate) fn model_dependence(
+    neighbours: &[Neighbour],
+    covariance: &Covariance,
+) -> Option<Diagnostic> {
+    let moves: Vec<String> = neighbours
+        .iter()
+        .filter(|n| n.probability >= PLAUSIBLE)
+        .flat_map(|n| {
+            n.delta.iter().filter_map(move |(name, d)| {
+                let sigma = covariance.parameters.std(name)?;
+                let key = ["f", "cx", "cy"].contains(&name.as_str());
+                (key && d.abs() > 3.0 * sigma).then(|| {
+                    format!(
+                        "{name} by {:+.4} mm ({:.1}σ) with {}",
+                        d,
+                        d / sigma,
+                        n.free.join(",")
+                    )
+                })
+            })
+        })
+        .collect();
+    (!moves.is_empty()).then(|| {
+        Diagnostic::info(
+            DiagnosticCode::ModelDependent,
+            format!(
+                "the estimate depends on the model chosen beyond its σ: {}; a model without \
+                 these terms (another program's default, --fit without them) will disagree by \
+                 as much",
+                moves.join("; ")
+            ),
+        )
     })
 }

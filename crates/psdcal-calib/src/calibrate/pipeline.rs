@@ -9,7 +9,7 @@ use std::sync::Arc;
 use crate::calibrate::finish::{check_data_in_domain, check_data_in_region, settle_block};
 use crate::calibrate::gain_starts::refine_from_gain_starts;
 use crate::calibrate::helper::Helper;
-use crate::calibrate::model_choice::{choose_model, with_choice_spread};
+use crate::calibrate::model_choice::{choose_model, model_dependence, with_choice_spread};
 use crate::calibrate::options::{seeded_base, CalibrateOptions, Uncertainty};
 use crate::calibrate::result::CalibrationResult;
 use crate::data::CalibrationData;
@@ -131,7 +131,8 @@ fn calibrate_as_given(
     let warnings = result_warnings(&covariance, &init, &statistics, global.as_ref());
     let mut diagnosed = after_fit.diagnosed;
     diagnose_uncertainty(&mut diagnosed, &covariance, global.as_ref());
-    let diagnostics = result_diagnostics(diagnosed.diagnostics, &linearity, &statistics);
+    let mut diagnostics = result_diagnostics(diagnosed.diagnostics, &linearity, &statistics);
+    diagnostics.extend(model_dependence(&neighbours, &covariance));
     let result = CalibrationResult {
         gains: fitted_gains,
         gain_start,
