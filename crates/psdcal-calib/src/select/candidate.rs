@@ -14,7 +14,7 @@ use crate::refine::options::RefineOptions;
 use crate::refine::refined::Refined;
 use crate::refine::solve::refine;
 use crate::select::influence::image_influence;
-use crate::select::screen::score_statistic;
+use crate::select::screen::{evidence_threshold, score_statistic};
 use crate::start::initialize::initialize;
 use crate::CalibError;
 
@@ -222,7 +222,7 @@ pub(crate) fn settled(
 
 /// What became of a candidate group in a round.
 pub(crate) enum Outcome {
-    /// Not refitted: its score statistic (at most its parameter count).
+    /// Not refitted: its score statistic (at most the evidence threshold).
     Screened(f64),
     /// Refitted from the current fit: its score statistic and its scores.
     Fitted(Option<f64>, Box<Scored>),
@@ -244,7 +244,7 @@ pub(crate) fn evaluate(
     let lm = score_statistic(data, &current.refined, &next, &group.names()).ok();
     let cold = cold_aspect && group == Group::Aspect;
     if let (Some((lm, k)), false) = (lm, cold) {
-        if lm <= k as f64 {
+        if lm <= evidence_threshold(k) {
             return Outcome::Screened(lm);
         }
     }

@@ -4,8 +4,8 @@
 //! From the base fit (`f, cx, cy, k1, k2`, or what the options free), each
 //! group not yet chosen — `a`; `k3`; `p1, p2`; `l1`; `skew` — is screened
 //! by its score statistic ([`crate::select::screen`]: a group whose
-//! statistic is at most its parameter count cannot lower the held-out
-//! error) and otherwise added and the fit refined from the current one
+//! statistic is under the evidence threshold cannot pass) and otherwise
+//! added and the fit refined from the current one
 //! ([`crate::select::candidate`]; with `l1`, by the global search over
 //! `l1`, as an explicit fit does). The candidates of a round are fitted on
 //! two threads, with the same answers as on one. Each candidate is scored by
@@ -13,7 +13,7 @@
 //! ([`crate::select::influence`]): per image `i` the sum `s_i` of its
 //! points' squared held-out angles. A candidate replaces the current set
 //! when (1) its score statistic is beyond the 3σ point of χ²_k (the data
-//! themselves show the group is not noise: [`evidence_threshold`]), (2) it
+//! themselves show the group is not noise: `evidence_threshold`), (2) it
 //! lowers the total held-out error `Σ s_i`, and (3) it does so beyond the
 //! noise of the images: the mean of the per-image differences
 //! `d_i = s_i(candidate) − s_i(current)` or of the per-image log ratios
@@ -38,6 +38,7 @@ use crate::select::candidate::{
     evaluate, score, searched_l1, settled, Group, Outcome, Scored, GROUPS, L1,
 };
 use crate::select::choice_spread::{difference_of, pass_probability, Neighbour};
+use crate::select::screen::evidence_threshold;
 use crate::CalibError;
 
 /// Whether [`calibrate`](fn@crate::calibrate) fits the parameters it is
@@ -70,7 +71,7 @@ pub struct CandidateScore {
     pub free: Vec<String>,
     /// The score statistic of the group added, in noise variances
     /// ([`crate::select::screen`]; `None` for the base): a candidate whose
-    /// statistic is at most its parameter count is not refitted.
+    /// statistic is at most the evidence threshold is not refitted.
     pub score_statistic: Option<f64>,
     /// RMS held-out angle error over every point, degrees (`None`: not
     /// refitted).
@@ -151,21 +152,6 @@ impl ModelChoiceReport {
 /// a group must lower the held-out error by to be added: one, the noise of
 /// the held-out error (docs/model.md §4.8).
 pub const PASS_SE: f64 = 1.0;
-
-/// The score statistic a group of `k` parameters must exceed to be added:
-/// the 3σ point of χ²_k (9.0 for one parameter, 11.8 for two), evidence
-/// in the data themselves that the group is not noise. Without it the
-/// held-out test at one standard error added a group on 16 % of 400
-/// simulated data sets whose model was exact (lenses 1 and 2, 9–20 images,
-/// 40 dB), and the extra terms made the default's angles 1.6 times worse
-/// than the plain fit's on lens 1; with it, on 1 of 400.
-fn evidence_threshold(k: usize) -> f64 {
-    match k {
-        0 | 1 => 9.0,
-        2 => 11.8,
-        _ => 14.2,
-    }
-}
 
 /// A held-out RMS angle under which the fit is exact to the float
 /// precision (degrees; 1.7e-11 rad): no group is judged beside it.

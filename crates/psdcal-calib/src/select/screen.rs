@@ -13,12 +13,15 @@
 //! ```
 //!
 //! the first-order drop of the cost, in noise variances, that freeing the
-//! group would bring. Leaving one image out costs a freed parameter about
-//! twice its share of the noise, so a group whose `LM ≤ k` would make the
-//! held-out error worse by about `(2k − LM) σ²` and is not refitted. With
-//! residuals correlated within an image (real data) `σ²` understates the
-//! held-out penalty and `LM` overstates the gain: the screen then refits
-//! more groups, never fewer.
+//! group would bring. A group is added only when `LM` is beyond the 3σ
+//! point of χ²_k ([`evidence_threshold`]: the data themselves show it is
+//! not noise), so a group under it is not refitted: it could not pass. (By
+//! itself, leaving one image out costs a freed parameter about twice its
+//! share of the noise, so a group with `LM ≤ k` would make the held-out
+//! error worse by about `(2k − LM) σ²` anyway.) With residuals correlated
+//! within an image (real data) `σ²` understates the held-out penalty and
+//! `LM` overstates the gain: the screen then refits more groups, never
+//! fewer.
 
 use nalgebra::DVector;
 use psdcal_model::stages::{with_aspect, Aspect};
@@ -30,6 +33,21 @@ use crate::refine::linearization::AtSolution;
 use crate::refine::options::RefineOptions;
 use crate::refine::refined::Refined;
 use crate::CalibError;
+
+/// The score statistic a group of `k` parameters must exceed to be added:
+/// the 3σ point of χ²_k (9.0 for one parameter, 11.8 for two), evidence
+/// in the data themselves that the group is not noise. Without it the
+/// held-out test at one standard error added a group on 16 % of 400
+/// simulated data sets whose model was exact (lenses 1 and 2, 9–20 images,
+/// 40 dB), and the extra terms made the default's angles 1.6 times worse
+/// than the plain fit's on lens 1; with it, on 1 of 400.
+pub(crate) fn evidence_threshold(k: usize) -> f64 {
+    match k {
+        0 | 1 => 9.0,
+        2 => 11.8,
+        _ => 14.2,
+    }
+}
 
 /// The score statistic `LM` of the parameters `added` (freed in `next`,
 /// held at zero in `current`), and their count `k`.

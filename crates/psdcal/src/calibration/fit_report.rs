@@ -254,7 +254,7 @@ fn write_choice(out: &mut fmt::Formatter<'_>, choice: &ChoiceRows) -> fmt::Resul
         let (rms, delta) = match held_out {
             Some((rms, _, _)) if k == 0 => (format!("{rms:.5}°"), "base".to_string()),
             Some((rms, l, se)) => (format!("{rms:.5}°"), format!("{l:+.3} ± {se:.3}")),
-            None => (String::new(), "not refitted (score ≤ k)".to_string()),
+            None => (String::new(), "not refitted (score)".to_string()),
         };
         let mark = if *taken && k > 0 { "  taken" } else { "" };
         writeln!(out, "  {free:<34} {lm:>8} {rms:>12}   {delta:>22}{mark}")?;
