@@ -231,6 +231,8 @@ pub struct CalibrationReport {
     pub sources: Vec<String>,
     /// Parameters ± σ.
     pub parameters: Table,
+    /// The model choice's candidates, when the data chose the model.
+    pub model_choice: Option<Table>,
     /// Fit summary.
     pub fit: Table,
     /// The plots.
@@ -274,6 +276,10 @@ pub fn calibration_page(report: &CalibrationReport, svgs: &[String]) -> Page {
             values: values.clone(),
         });
     }
+    if let Some(t) = &report.model_choice {
+        page.push(Block::Heading("The model".into()));
+        page.push(Block::Table(t.clone()));
+    }
     page.push(Block::Table(report.fit.clone()));
     if let Some(t) = &report.provenance {
         page.push(Block::Table(t.clone()));
@@ -311,6 +317,7 @@ mod tests {
             title: "t".into(),
             sources: Vec::new(),
             parameters: table.clone(),
+            model_choice: None,
             fit: table.clone(),
             plots: Vec::new(),
             images: table,

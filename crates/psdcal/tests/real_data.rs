@@ -118,7 +118,11 @@ fn every_real_set_calibrates_answers_and_agrees_with_opencv_or_says_why() {
         let says_why = result.diagnostics.iter().any(|d| {
             d.code == DiagnosticCode::ModelMisfit || d.code == DiagnosticCode::ModelDependent
         });
-        let limit = if name == "niftycal_lap_left" { 3.5 } else { 3.0 };
+        let limit = if name == "niftycal_lap_left" {
+            3.5
+        } else {
+            3.0
+        };
         for (value, sigma, what) in in_pixels(result, &set.options.geometry) {
             let reference = opencv[format!("{what}_px")].as_f64().unwrap();
             let z = (value - reference) / sigma;

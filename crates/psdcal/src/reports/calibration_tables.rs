@@ -8,6 +8,7 @@ use psdcal_model::{Param, SensorModel};
 use psdcal_report::{num, value_with_sigma, CalibrationReport, Plot, Table};
 
 use crate::calibration::residuals::ResidualTable;
+use crate::reports::choice_table::choice_table;
 
 /// How many points the worst-points table lists.
 pub(crate) const WORST_POINTS: usize = 10;
@@ -233,6 +234,19 @@ pub(crate) fn tables(
                     .to_string(),
                 ]
             })
+            .chain(calibration.aspect.map(|a| {
+                let sigma = calibration.std.get("a");
+                vec![
+                    "y axis's own scale a (fy = f (1 + a))".to_string(),
+                    value_with_sigma(a.a, sigma, "1"),
+                    if a.estimated {
+                        "estimated"
+                    } else {
+                        "held fixed"
+                    }
+                    .to_string(),
+                ]
+            }))
             .collect(),
     };
     let fit = &calibration.fit;
@@ -289,6 +303,7 @@ pub(crate) fn tables(
         title: format!("psdcal calibration report: {short}"),
         sources,
         parameters,
+        model_choice: choice_table(calibration.fit.model_choice.as_ref()),
         fit,
         plots,
         images,
