@@ -84,16 +84,7 @@ pub trait Stage: Send + Sync + fmt::Debug {
 
     /// Checks a parameter block (finite values and the stage's own domain).
     fn validate(&self, params: &[f64]) -> Result<(), ModelError> {
-        for (info, v) in self.parameters().iter().zip(params) {
-            if !v.is_finite() {
-                return Err(ModelError::InvalidStageParameter {
-                    name: info.name.clone(),
-                    value: *v,
-                    reason: "must be finite",
-                });
-            }
-        }
-        Ok(())
+        check_finite(self.parameters(), params)
     }
 
     /// Whether the stage is defined at `input` (its own domain: a map fitted
@@ -143,4 +134,19 @@ impl Clone for Box<dyn Stage> {
 pub fn set_column(jac: &mut [f64], k: usize, column: Vector2<f64>) {
     jac[2 * k] = column.x;
     jac[2 * k + 1] = column.y;
+}
+
+/// `Ok` when every value of `params` is finite; otherwise the first
+/// non-finite one, named by `parameters` (every stage's first check).
+pub fn check_finite(parameters: &[ParameterInfo], params: &[f64]) -> Result<(), ModelError> {
+    for (info, v) in parameters.iter().zip(params) {
+        if !v.is_finite() {
+            return Err(ModelError::InvalidStageParameter {
+                name: info.name.clone(),
+                value: *v,
+                reason: "must be finite",
+            });
+        }
+    }
+    Ok(())
 }

@@ -24,7 +24,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 
-use crate::stage::{set_column, ParameterInfo, Stage, StageJacobian};
+use crate::stage::{check_finite, set_column, ParameterInfo, Stage, StageJacobian};
 use crate::{Model, ModelError};
 
 /// The y scale of its own: `y' = cy + (y − cy)/(1 + a)`.
@@ -119,15 +119,7 @@ impl Stage for Aspect {
     }
 
     fn validate(&self, params: &[f64]) -> Result<(), ModelError> {
-        for (info, v) in self.parameters.iter().zip(params) {
-            if !v.is_finite() {
-                return Err(ModelError::InvalidStageParameter {
-                    name: info.name.clone(),
-                    value: *v,
-                    reason: "must be finite",
-                });
-            }
-        }
+        check_finite(&self.parameters, params)?;
         if params[0] <= -1.0 {
             return Err(ModelError::InvalidStageParameter {
                 name: Self::NAME.into(),

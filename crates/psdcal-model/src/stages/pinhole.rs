@@ -12,7 +12,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 
-use crate::stage::{set_column, ParameterInfo, Stage, StageJacobian};
+use crate::stage::{check_finite, set_column, ParameterInfo, Stage, StageJacobian};
 use crate::ModelError;
 
 /// Intrinsics of the pinhole stage, in block order.
@@ -101,15 +101,7 @@ impl Stage for Pinhole {
     }
 
     fn validate(&self, params: &[f64]) -> Result<(), ModelError> {
-        for (info, v) in self.parameters.iter().zip(params) {
-            if !v.is_finite() {
-                return Err(ModelError::InvalidStageParameter {
-                    name: info.name.clone(),
-                    value: *v,
-                    reason: "must be finite",
-                });
-            }
-        }
+        check_finite(&self.parameters, params)?;
         if params[0] <= 0.0 {
             return Err(ModelError::InvalidStageParameter {
                 name: "f".into(),
