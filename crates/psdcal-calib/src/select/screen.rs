@@ -14,7 +14,7 @@
 //!
 //! the first-order drop of the cost, in noise variances, that freeing the
 //! group would bring. A group is added only when `LM` is beyond the 3σ
-//! point of χ²_k ([`evidence_threshold`]: the data themselves show it is
+//! point of χ²_k (`evidence_threshold`: the data themselves show it is
 //! not noise), so a group under it is not refitted: it could not pass. (By
 //! itself, leaving one image out costs a freed parameter about twice its
 //! share of the noise, so a group with `LM ≤ k` would make the held-out
