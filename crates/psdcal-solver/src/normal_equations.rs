@@ -394,6 +394,28 @@ impl NormalEquations {
         Some(Step { da, db })
     }
 
+    /// The decrease of the cost the linear model predicts for `step`:
+    /// `‖r‖² − ‖r + Jδ‖² = −2 gᵀδ − δᵀ JᵀJ δ` from the blocks of the normal
+    /// equations (`g = Jᵀr`).
+    pub fn predicted_decrease(&self, step: &Step) -> f64 {
+        let da = &step.da;
+        let mut g_dot = self.g_a.dot(da);
+        let mut quad = (&self.u * da).dot(da);
+        for (i, db) in step.db.iter().enumerate() {
+            g_dot += self.g_b[i].dot(db);
+            quad += db.dot(&(self.v[i] * db));
+            if !da.is_empty() {
+                quad += 2.0
+                    * (self.w[i].transpose() * da)
+                        .iter()
+                        .zip(db.iter())
+                        .map(|(a, b)| a * b)
+                        .sum::<f64>();
+            }
+        }
+        -2.0 * g_dot - quad
+    }
+
     /// The undamped covariance factors: `S⁻¹` (p × p) and, per image, the
     /// 6 × 6 marginal `V_i⁻¹ + V_i⁻¹ W_iᵀ S⁻¹ W_i V_i⁻¹` (both to be scaled by
     /// σ²). `None` when the information matrix is singular.

@@ -331,7 +331,7 @@ pub fn solve<P: Problem>(
         if nu == 2.0
             && lambda <= 1e-2
             && (accepted == 0 || settled)
-            && predicted_decrease(&ne, &step) <= options.cost_tolerance * cost_now
+            && ne.predicted_decrease(&step) <= options.cost_tolerance * cost_now
         {
             break Termination::CostConverged;
         }
@@ -388,28 +388,6 @@ pub fn solve<P: Problem>(
         },
         normal_equations: current.then_some(ne),
     })
-}
-
-/// The decrease of the cost the linear model predicts for `step`:
-/// `‖r‖² − ‖r + Jδ‖² = −2 gᵀδ − δᵀ JᵀJ δ` from the blocks of the normal
-/// equations (`g = Jᵀr`).
-fn predicted_decrease(ne: &NormalEquations, step: &Step) -> f64 {
-    let da = &step.da;
-    let mut g_dot = ne.g_a.dot(da);
-    let mut quad = (&ne.u * da).dot(da);
-    for (i, db) in step.db.iter().enumerate() {
-        g_dot += ne.g_b[i].dot(db);
-        quad += db.dot(&(ne.v[i] * db));
-        if !da.is_empty() {
-            quad += 2.0
-                * (ne.w[i].transpose() * da)
-                    .iter()
-                    .zip(db.iter())
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>();
-        }
-    }
-    -2.0 * g_dot - quad
 }
 
 /// Whether a step is negligible: the change it makes to the residuals,

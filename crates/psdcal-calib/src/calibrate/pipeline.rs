@@ -36,11 +36,6 @@ use crate::uncertainty::profile::profile_at_three_sigma;
 use crate::warning::FitWarning;
 use crate::CalibError;
 
-/// The cost difference, in residual variances σ², under which a second
-/// minimum over `l1` is worth a warning: a likelihood ratio of 3σ (for one
-/// parameter, χ²₁ = 9). A minimum farther up is not a competitor.
-pub const LOCAL_MINIMA_CHI2: f64 = 9.0;
-
 /// Largest relative standard deviation of a freed `f` accepted as a
 /// calibration: beyond it the images do not determine the focal length.
 pub const MAX_RELATIVE_STD_F: f64 = 0.2;
@@ -398,12 +393,9 @@ fn result_warnings(
         });
     }
     if let Some(g) = global {
-        // Only when the data hardly tell the next minimum from the kept one:
-        // their cost differs by less than LOCAL_MINIMA_CHI2 residual variances.
-        let close = |g: &GlobalReport| {
-            g.minima[1].cost - g.minima[0].cost < LOCAL_MINIMA_CHI2 * covariance.sigma2
-        };
-        if g.minima.len() > 1 && close(g) {
+        // Only when the data hardly tell the next minimum from the kept one
+        // (the diagnostic's rule, `local_minimum_suspected`).
+        if g.competing(covariance.sigma2) {
             warnings.push(FitWarning::LocalMinima {
                 count: g.minima.len(),
                 lowest: g.minima[0].cost,

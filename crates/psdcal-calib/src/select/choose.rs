@@ -7,8 +7,8 @@
 //! statistic is under the evidence threshold cannot pass) and otherwise
 //! added and the fit refined from the current one
 //! ([`crate::select::candidate`]; with `l1`, by the global search over
-//! `l1`, as an explicit fit does). The candidates of a round are fitted on
-//! two threads, with the same answers as on one. Each candidate is scored by
+//! `l1`, as an explicit fit does). The candidates of a round are fitted in
+//! parallel (rayon, in order: the same answers on any number of threads). Each candidate is scored by
 //! its leave-one-image-out angle error from the linearisation
 //! ([`crate::select::influence`]): per image `i` the sum `s_i` of its
 //! points' squared held-out angles. A candidate replaces the current set
@@ -28,6 +28,7 @@
 //! is taken (the simplest within the noise of the best), and rounds go on
 //! until none passes.
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::data::CalibrationData;
@@ -176,32 +177,6 @@ pub(crate) struct Chosen {
     pub neighbours: Vec<Neighbour>,
 }
 
-/// `f` of every item, on this thread and one other (alternate items), in
-/// the items' order: the same answers as on one thread.
-fn on_two_threads<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    if items.len() < 2 {
-        return items.iter().map(&f).collect();
-    }
-    std::thread::scope(|scope| {
-        let other = scope.spawn(|| items.iter().skip(1).step_by(2).map(&f).collect::<Vec<R>>());
-        let mine: Vec<R> = items.iter().step_by(2).map(&f).collect();
-        let theirs = other
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        let mut mine = mine.into_iter();
-        let mut theirs = theirs.into_iter();
-        (0..items.len())
-            .filter_map(|k| {
-                if k % 2 == 0 {
-                    mine.next()
-                } else {
-                    theirs.next()
-                }
-            })
-            .collect()
-    })
-}
-
 /// Among the candidates that passed, the one with the fewest parameters
 /// (the first in [`GROUPS`] order among equals) whose per-image sums are
 /// within one standard error of the best's (their mean log ratio).
@@ -305,9 +280,10 @@ pub(crate) fn choose(
             .filter(|g| **g != L1)
             .chain(remaining.iter().filter(|g| **g == L1));
         let groups: Vec<Group> = order.copied().collect();
-        let outcomes = on_two_threads(&groups, |&group| {
-            evaluate(data, &current, group, cold_aspect, global)
-        });
+        let outcomes: Vec<Outcome> = groups
+            .par_iter()
+            .map(|&group| evaluate(data, &current, group, cold_aspect, global))
+            .collect();
         for (group, outcome) in groups.into_iter().zip(outcomes) {
             let free = group.added_to(&current.options).free_names();
             let (lm, scored) = match outcome {

@@ -13,7 +13,11 @@
 //! ```
 //!
 //! the first-order drop of the cost, in noise variances, that freeing the
-//! group would bring. A group is added only when `LM` is beyond the 3σ
+//! group would bring. The other freed parameters' reduced gradient is zero
+//! at the current fit, so this is the decrease the linear model predicts
+//! for the undamped Gauss–Newton step (`−2gᵀδ − δᵀJᵀJδ = gᵀ(JᵀJ)⁻¹g`), and
+//! the solver's own step and prediction give it
+//! ([`NormalEquations::predicted_decrease`]). A group is added only when `LM` is beyond the 3σ
 //! point of χ²_k (`evidence_threshold`: the data themselves show it is
 //! not noise), so a group under it is not refitted: it could not pass. (By
 //! itself, leaving one image out costs a freed parameter about twice its
@@ -23,10 +27,10 @@
 //! `LM` overstates the gain: the screen then refits more groups, never
 //! fewer.
 
-use nalgebra::DVector;
 use psdcal_model::stages::{with_aspect, Aspect};
 use psdcal_model::Model;
-use psdcal_solver::inverse_scaled;
+#[cfg(doc)]
+use psdcal_solver::NormalEquations;
 
 use crate::data::CalibrationData;
 use crate::refine::linearization::AtSolution;
@@ -63,29 +67,13 @@ pub(crate) fn score_statistic(
         ..current.clone()
     };
     let at = AtSolution::new(data, &extended, next)?;
-    let names = next.free_names();
-    let ne = &at.ne;
-    let undetermined = || CalibError::Degenerate {
+    let step = at.ne.solve(0.0).ok_or_else(|| CalibError::Degenerate {
         reason: "the candidate's parameters are not determined by the data".into(),
-    };
-    let s = ne.schur_complement().ok_or_else(undetermined)?;
-    let s_inv = inverse_scaled(&s).ok_or_else(undetermined)?;
-    let mut g = ne.g_a.clone();
-    for (w, (v, g_b)) in ne.w.iter().zip(ne.v.iter().zip(&ne.g_b)) {
-        let v_inv = v.try_inverse().ok_or_else(undetermined)?;
-        g -= w * (v_inv * g_b);
-    }
-    let at_group: Vec<usize> = added
-        .iter()
-        .filter_map(|n| names.iter().position(|m| m == n))
-        .collect();
-    let g_g = DVector::from_iterator(at_group.len(), at_group.iter().map(|&k| g[k]));
-    let m = s_inv.select_rows(&at_group).select_columns(&at_group);
-    let parameters = names.len() + 6 * current.poses.len();
+    })?;
+    let parameters = next.free_names().len() + 6 * current.poses.len();
     let dof = (2 * data.point_count()).saturating_sub(parameters).max(1);
     let sigma2 = current.cost / dof as f64;
-    let lm = (g_g.transpose() * m * &g_g)[(0, 0)] / sigma2;
-    Ok((lm, at_group.len()))
+    Ok((at.ne.predicted_decrease(&step) / sigma2, added.len()))
 }
 
 /// `model` with the aspect stage added at `a = 0` when `added` names it
